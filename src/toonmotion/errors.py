@@ -1,0 +1,41 @@
+"""Errors a user can cause.
+
+Every error raised for bad input is a :class:`ToonmotionError`. Its message is one line that
+says what was wrong and what to do about it; the CLI prints it and exits with status 2.
+"""
+
+
+class ToonmotionError(Exception):
+    """Base of every error caused by input the user can fix."""
+
+
+class ImageReadError(ToonmotionError):
+    """An image file is missing, unreadable, truncated or not an image."""
+
+
+class ImageTooLargeError(ToonmotionError):
+    """An image has more pixels than the configured limit."""
+
+
+class MaskError(ToonmotionError):
+    """A mask is empty, covers the whole image, or does not fit the image."""
+
+
+class SkeletonError(ToonmotionError):
+    """A skeleton is malformed: unknown parents, cycles, duplicate names, joints far away."""
+
+
+class MeshError(ToonmotionError):
+    """A silhouette cannot be meshed with the requested settings."""
+
+
+class ProjectError(ToonmotionError):
+    """A project file is missing, malformed or inconsistent."""
+
+
+class ProjectVersionError(ProjectError):
+    """A project file was written by a version of toonmotion this one cannot read."""
+
+
+class SettingsError(ToonmotionError):
+    """An option has a value outside its valid range."""

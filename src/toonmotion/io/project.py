@@ -1,0 +1,372 @@
+"""Project folders: ``project.json`` beside the drawing's image assets.
+
+A project is a folder::
+
+    hero/
+      project.json            versioned, human-readable; everything but the pixels
+      texture-<hash>.png      the drawing (RGBA)
+      mask-<hash>.png         the figure's mask
+
+Saving is safe at every moment: image assets are named by their content and written first,
+``project.json`` is written to a temporary file and renamed over the old one last, and only then
+are assets no longer referenced removed. Other files in the folder are left alone. Loading
+validates the schema (pydantic) and the cross-references (indices, sizes), and a save followed
+by a load gives back exactly the same arrays, so a second save writes the same bytes.
+"""
+
+import hashlib
+import json
+import re
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from toonmotion import __version__
+from toonmotion.errors import ProjectError, ProjectVersionError, ToonmotionError
+from toonmotion.io.atomic import write_bytes, write_text
+from toonmotion.io.image import load_image, png_bytes
+from toonmotion.io.skeleton_json import skeleton_from_dict, skeleton_to_dict
+from toonmotion.rig.binding import Correction, binding_from_bones
+from toonmotion.rig.character import Character, RigSettings
+from toonmotion.shape.curve_skeleton import NODE_KINDS, CurveSkeleton
+from toonmotion.shape.mesh import Mesh, check_mesh
+from toonmotion.shape.silhouette import Part, Silhouette
+
+FORMAT = "toonmotion.project"
+VERSION = 1
+PROJECT_FILE = "project.json"
+
+Point = tuple[float, float]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class _Part(_Model):
+    outer: list[Point]
+    holes: list[list[Point]] = []
+
+
+class _Silhouette(_Model):
+    tolerance: float = Field(ge=0)
+    parts: list[_Part]
+
+
+class _Node(_Model):
+    position: Point
+    kind: Literal[NODE_KINDS]  # type: ignore[valid-type]
+    radius: float = Field(ge=0)
+
+
+class _Branch(_Model):
+    nodes: tuple[int, int]
+    path: list[Point] = Field(min_length=2)
+
+
+class _CurveSkeleton(_Model):
+    nodes: list[_Node]
+    branches: list[_Branch]
+
+
+class _Joint(_Model):
+    name: str = Field(min_length=1)
+    parent: str | None
+    position: Point
+
+
+class _Skeleton(_Model):
+    joints: list[_Joint] = Field(min_length=1)
+
+
+class _Mesh(_Model):
+    spacing: float = Field(gt=0)
+    vertices: list[Point] = Field(min_length=3)
+    triangles: list[tuple[int, int, int]] = Field(min_length=1)
+    boundary: list[list[int]] = Field(min_length=1)
+
+
+class _Correction(_Model):
+    bone: str
+    curve: list[Point] = Field(min_length=3)
+
+
+class _Binding(_Model):
+    bones: list[str]
+    vertex_bone: list[int]
+    fallback: list[int] = []
+    corrections: list[_Correction] = []
+
+
+class _Settings(_Model):
+    spacing: float | None = None
+    vertices: int | None = None
+    tolerance: float | None = None
+    refine_joints: bool = False
+    largest_only: bool = False
+    min_part: float = 0.01
+    prune: float = 0.5
+    max_bone: float | None = None
+    segmentation: str = "auto"
+
+
+class _Project(_Model):
+    format: Literal["toonmotion.project"]
+    version: Literal[1]
+    toonmotion: str
+    width: int = Field(gt=0)
+    height: int = Field(gt=0)
+    texture: str
+    mask: str
+    settings: _Settings
+    silhouette: _Silhouette
+    curve_skeleton: _CurveSkeleton
+    skeleton: _Skeleton
+    mesh: _Mesh
+    binding: _Binding
+
+
+def save_project(path, character):
+    """Save a character as a project folder (created if needed).
+
+    Parameters
+    ----------
+    path : str or Path
+        The project folder. If it exists it must be a folder; a project in it is replaced.
+    character : Character
+    """
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise ProjectError(f"{folder} is a file; a project is a folder, so give a folder path")
+    folder.mkdir(parents=True, exist_ok=True)
+    old = _referenced_assets(folder)
+    assets = {}
+    for kind, array in (("texture", character.texture), ("mask", character.mask)):
+        data = png_bytes(array)
+        name = f"{kind}-{hashlib.sha256(data).hexdigest()[:16]}.png"
+        if not (folder / name).is_file():
+            write_bytes(folder / name, data)
+        assets[kind] = name
+    text = _dumps(_to_dict(character, assets))
+    write_text(folder / PROJECT_FILE, text)
+    for name in old - set(assets.values()):
+        (folder / name).unlink(missing_ok=True)
+
+
+def load_project(path):
+    """Load a project folder (or its ``project.json``) as a :class:`Character`."""
+    path = Path(path)
+    file = path / PROJECT_FILE if path.is_dir() else path
+    folder = file.parent
+    data = _read_json(file)
+    _check_version(data, file)
+    try:
+        model = _Project.model_validate(data)
+    except ValidationError as error:
+        first = error.errors()[0]
+        where = ".".join(str(p) for p in first["loc"])
+        raise ProjectError(f"{file} is not a valid project: {where}: {first['msg']}") from None
+    try:
+        return _from_model(model, folder)
+    except ProjectError:
+        raise
+    except ToonmotionError as error:
+        raise ProjectError(f"{file} is not a valid project: {error}") from None
+
+
+def _read_json(file):
+    if not file.is_file():
+        raise ProjectError(f"no project at {file}: give a project folder made by 'toonmotion rig'")
+    try:
+        return json.loads(file.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise ProjectError(f"cannot read {file}: {error}") from None
+
+
+def _check_version(data, file):
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise ProjectError(f"{file} is not a toonmotion project (no 'format': {FORMAT!r})")
+    version = data.get("version")
+    if version == VERSION:
+        return
+    if isinstance(version, int) and version > VERSION:
+        raise ProjectVersionError(
+            f"{file} is project version {version}, newer than this toonmotion "
+            f"{__version__} reads (version {VERSION}); upgrade toonmotion"
+        )
+    raise ProjectVersionError(
+        f"{file} has unknown project version {version!r}; this toonmotion reads version {VERSION}"
+    )
+
+
+_NUMBER_LIST = re.compile(r"\[\s+([-+0-9.eE,\s]+?)\s+\]")
+
+
+def _dumps(data):
+    """Indented JSON with every innermost list of numbers on one line (a point per line)."""
+    text = json.dumps(data, indent=1, allow_nan=False)
+    return _NUMBER_LIST.sub(lambda m: "[" + " ".join(m.group(1).split()) + "]", text) + "\n"
+
+
+def _referenced_assets(folder):
+    file = folder / PROJECT_FILE
+    try:
+        data = json.loads(file.read_text(encoding="utf-8"))
+        return {data["texture"], data["mask"]} & {p.name for p in folder.glob("*.png")}
+    except (OSError, ValueError, KeyError, TypeError):
+        return set()
+
+
+def _points(array):
+    return np.asarray(array, dtype=float).tolist()
+
+
+def _to_dict(ch, assets):
+    s = ch.settings
+    bone_names = ch.skeleton.bone_names
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "toonmotion": __version__,
+        "width": ch.size[0],
+        "height": ch.size[1],
+        "texture": assets["texture"],
+        "mask": assets["mask"],
+        "settings": {
+            "spacing": s.spacing,
+            "vertices": s.vertices,
+            "tolerance": s.tolerance,
+            "refine_joints": s.refine_joints,
+            "largest_only": s.largest_only,
+            "min_part": s.min_part,
+            "prune": s.prune,
+            "max_bone": s.max_bone,
+            "segmentation": s.segmentation,
+        },
+        "silhouette": {
+            "tolerance": ch.silhouette.tolerance,
+            "parts": [
+                {"outer": _points(p.outer), "holes": [_points(h) for h in p.holes]}
+                for p in ch.silhouette.parts
+            ],
+        },
+        "curve_skeleton": {
+            "nodes": [
+                {"position": _points(xy), "kind": kind, "radius": float(r)}
+                for xy, kind, r in zip(
+                    ch.curve_skeleton.nodes,
+                    ch.curve_skeleton.kinds,
+                    ch.curve_skeleton.radius,
+                    strict=True,
+                )
+            ],
+            "branches": [
+                {"nodes": [int(a), int(b)], "path": _points(path)}
+                for (a, b), path in zip(
+                    ch.curve_skeleton.branches, ch.curve_skeleton.paths, strict=True
+                )
+            ],
+        },
+        "skeleton": {"joints": skeleton_to_dict(ch.skeleton)},
+        "mesh": {
+            "spacing": ch.mesh.spacing,
+            "vertices": _points(ch.mesh.V),
+            "triangles": ch.mesh.F.tolist(),
+            "boundary": [loop.tolist() for loop in ch.mesh.boundary],
+        },
+        "binding": {
+            "bones": list(bone_names),
+            "vertex_bone": ch.binding.bone.tolist(),
+            "fallback": np.flatnonzero(ch.binding.fallback).tolist(),
+            "corrections": [
+                {"bone": c.bone, "curve": _points(c.curve)} for c in ch.binding.corrections
+            ],
+        },
+    }
+
+
+def _from_model(m, folder):
+    size = (m.width, m.height)
+    texture = load_image(folder / m.texture)
+    mask = load_image(folder / m.mask)[..., 0] >= 128
+    for name, shape in (("texture", texture.shape), ("mask", mask.shape)):
+        if (shape[1], shape[0]) != size:
+            raise ProjectError(
+                f"the project's {name} is {shape[1]}x{shape[0]} but the project says "
+                f"{size[0]}x{size[1]}; the folder's images were changed or mixed up"
+            )
+    silhouette = Silhouette(
+        parts=tuple(
+            Part(outer=np.array(p.outer, dtype=float), holes=tuple(np.array(h) for h in p.holes))
+            for p in m.silhouette.parts
+        ),
+        tolerance=m.silhouette.tolerance,
+    )
+    curve_skeleton = _curve_skeleton(m.curve_skeleton)
+    skeleton = skeleton_from_dict([j.model_dump() for j in m.skeleton.joints])
+    mesh = _mesh(m.mesh)
+    binding = _binding(m.binding, mesh, skeleton)
+    return Character(
+        texture=texture,
+        mask=mask,
+        silhouette=silhouette,
+        curve_skeleton=curve_skeleton,
+        skeleton=skeleton,
+        mesh=mesh,
+        binding=binding,
+        settings=RigSettings(**m.settings.model_dump()),
+    )
+
+
+def _curve_skeleton(m):
+    k = len(m.nodes)
+    if any(not (0 <= i < k) for b in m.branches for i in b.nodes):
+        raise ProjectError("a curve-skeleton branch names a node that does not exist")
+    return CurveSkeleton(
+        nodes=np.array([n.position for n in m.nodes], dtype=float).reshape(-1, 2),
+        kinds=tuple(n.kind for n in m.nodes),
+        radius=np.array([n.radius for n in m.nodes], dtype=float),
+        branches=np.array([b.nodes for b in m.branches], dtype=np.int64).reshape(-1, 2),
+        paths=tuple(np.array(b.path, dtype=float) for b in m.branches),
+    )
+
+
+def _mesh(m):
+    V = np.array(m.vertices, dtype=float)
+    F = np.array(m.triangles, dtype=np.int64)
+    boundary = tuple(np.array(loop, dtype=np.int64) for loop in m.boundary)
+    n_outline = sum(len(loop) for loop in boundary)
+    if F.min() < 0 or F.max() >= len(V):
+        raise ProjectError("a mesh triangle names a vertex that does not exist")
+    if not np.array_equal(np.concatenate(boundary), np.arange(n_outline)):
+        raise ProjectError("the mesh outline loops must list vertices 0, 1, 2, ... in order")
+    mesh = Mesh(V=V, F=F, boundary=boundary, spacing=m.spacing)
+    problems = check_mesh(mesh)
+    if problems:
+        raise ProjectError(f"the project's mesh is broken: {problems[0]}")
+    return mesh
+
+
+def _binding(m, mesh, skeleton):
+    if tuple(m.bones) != skeleton.bone_names:
+        raise ProjectError("the binding's bone list does not match the skeleton's bones")
+    bone = np.array(m.vertex_bone, dtype=np.int64)
+    if len(bone) != len(mesh.V):
+        raise ProjectError(
+            f"the binding has {len(bone)} vertices but the mesh has {len(mesh.V)}"
+        )
+    if len(bone) and (bone.min() < 0 or bone.max() >= len(m.bones)):
+        raise ProjectError("the binding names a bone that does not exist")
+    fallback = np.zeros(len(bone), dtype=bool)
+    if m.fallback and not all(0 <= i < len(bone) for i in m.fallback):
+        raise ProjectError("the binding's fallback list names a vertex that does not exist")
+    fallback[m.fallback] = True
+    corrections = tuple(
+        Correction(curve=np.array(c.curve, dtype=float), bone=c.bone) for c in m.corrections
+    )
+    for c in corrections:
+        if c.bone not in m.bones:
+            raise ProjectError(f"a correction names an unknown bone {c.bone!r}")
+    return binding_from_bones(mesh, bone, fallback, corrections)

@@ -1,0 +1,1 @@
+"""Rasterising: overview pictures of a rig."""

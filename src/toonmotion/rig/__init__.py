@@ -1,0 +1,1 @@
+"""Skeleton, binding (decomposition) and the rigged Character."""

@@ -1,0 +1,217 @@
+"""Decomposition: which bone each mesh vertex follows (thesis 3.3, eq. 3.1, fig. 3.6; 6.3a).
+
+Each vertex attaches to the nearest bone whose connecting segment (from the vertex to its
+closest point on the bone) stays inside the silhouette, so an arm never grabs the body across
+the gap between them. When no bone can be reached that way (annotated bones often run just
+outside a thin limb) the vertex takes the bone that minimises its distance plus
+``OUTSIDE_PENALTY`` times the length of the segment outside the figure, and
+:attr:`Binding.fallback` records it.
+
+Triangles whose three vertices share a bone are *interior* triangles, the rest *joint*
+triangles. Vertices are *silhouette* (on the outline), *interior* (every triangle around them
+is interior) or *joint* vertices.
+
+Corrections (6.3a) attach every vertex inside a closed curve to a chosen bone. A binding keeps
+its corrections, not only their result, so they can be replayed on a new mesh.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from toonmotion.errors import SkeletonError, ToonmotionError
+from toonmotion.geometry.polygon import points_in_polygon
+from toonmotion.geometry.segments import closest_points_on_segments
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+
+SILHOUETTE, INTERIOR, JOINT = 0, 1, 2
+VERTEX_KINDS = ("silhouette", "interior", "joint")
+
+# Segment samples this close (pixels) to the vertex are not tested: outline vertices may sit a
+# fraction of a pixel outside the mask's pixel centres.
+_VERTEX_SLACK = 1.5
+
+# Pixels of segment outside the figure count this many times their length in a fallback choice.
+OUTSIDE_PENALTY = 4.0
+
+
+class CorrectionError(ToonmotionError):
+    """A decomposition correction is malformed."""
+
+
+@dataclass(frozen=True, eq=False)
+class Correction:
+    """Attach every vertex inside ``curve`` (a closed ``(k, 2)`` polyline) to bone ``bone``."""
+
+    curve: np.ndarray
+    bone: str
+
+
+@dataclass(frozen=True, eq=False)
+class Binding:
+    """Vertex-to-bone attachment and the classification that follows from it.
+
+    Attributes
+    ----------
+    bone : (n,) int
+        Bone of each vertex, an index into ``skeleton.bones``.
+    fallback : (n,) bool
+        Vertices that could reach no bone without crossing the outline and took the nearest.
+    corrections : tuple of Correction
+        Corrections applied after the automatic decomposition, in order.
+    joint_triangle : (m,) bool
+        True for joint triangles (vertices on more than one bone).
+    vertex_kind : (n,) int
+        :data:`SILHOUETTE`, :data:`INTERIOR` or :data:`JOINT`.
+    joint_area : (n,) bool
+        Vertices of joint triangles (joint vertices and the silhouette vertices among them):
+        the joint areas that stage two of the deformation works on.
+    """
+
+    bone: np.ndarray
+    fallback: np.ndarray
+    corrections: tuple
+    joint_triangle: np.ndarray
+    vertex_kind: np.ndarray
+    joint_area: np.ndarray
+
+    def __post_init__(self):
+        for array in (self.bone, self.fallback, self.joint_triangle, self.vertex_kind,
+                      self.joint_area):
+            array.setflags(write=False)
+
+
+def decompose(mesh, skeleton, mask, *, corrections=()):
+    """Attach every vertex of ``mesh`` to a bone of ``skeleton`` (eq. 3.1).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    skeleton : Skeleton
+    mask : (h, w) bool
+        The silhouette's mask, used to test that a connecting segment stays inside.
+    corrections : sequence of Correction
+        Applied in order after the automatic decomposition.
+
+    Returns
+    -------
+    Binding
+    """
+    A, B, usable = _bone_segments(skeleton)
+    closest, distance = closest_points_on_segments(mesh.V, A[usable], B[usable])
+    order = np.argsort(distance, axis=1, kind="stable")
+    n = len(mesh.V)
+    chosen = np.full(n, -1)
+    for rank in range(order.shape[1]):
+        todo = np.flatnonzero(chosen < 0)
+        if len(todo) == 0:
+            break
+        candidate = order[todo, rank]
+        reach = _outside_length(mesh.V[todo], closest[todo, candidate], mask) == 0
+        chosen[todo[reach]] = candidate[reach]
+    fallback = np.flatnonzero(chosen < 0)
+    if len(fallback):
+        k = closest.shape[1]
+        outside = _outside_length(
+            np.repeat(mesh.V[fallback], k, axis=0), closest[fallback].reshape(-1, 2), mask
+        ).reshape(-1, k)
+        chosen[fallback] = np.argmin(distance[fallback] + OUTSIDE_PENALTY * outside, axis=1)
+    bone = np.flatnonzero(usable)[chosen]
+    binding = binding_from_bones(mesh, bone, np.isin(np.arange(n), fallback), ())
+    for correction in corrections:
+        binding = attach_inside(binding, mesh, skeleton, correction.curve, correction.bone)
+    return binding
+
+
+def attach_inside(binding, mesh, skeleton, curve, bone):
+    """Attach every vertex inside a closed curve to one bone (decomposition correction, 6.3a).
+
+    Parameters
+    ----------
+    binding : Binding
+    mesh : Mesh
+    skeleton : Skeleton
+    curve : (k, 2) float
+        Closed polyline (the last point joins the first), k >= 3.
+    bone : str
+        Name of the bone, i.e. of its child joint.
+
+    Returns
+    -------
+    Binding
+        A new binding with the correction appended to ``corrections``.
+    """
+    curve = np.asarray(curve, dtype=float)
+    if curve.ndim != 2 or curve.shape[1] != 2 or len(curve) < 3:
+        raise CorrectionError("a correction curve needs at least 3 (x, y) points")
+    if not np.all(np.isfinite(curve)):
+        raise CorrectionError("a correction curve has non-finite coordinates")
+    names = skeleton.bone_names
+    if bone not in names:
+        raise SkeletonError(f"no bone is called {bone!r}; the bones are: {', '.join(names)}")
+    new_bone = binding.bone.copy()
+    new_bone[points_in_polygon(mesh.V, [curve])] = names.index(bone)
+    corrections = (*binding.corrections, Correction(curve=curve, bone=bone))
+    return binding_from_bones(mesh, new_bone, binding.fallback, corrections)
+
+
+def classify(mesh, bone):
+    """Joint triangles and vertex kinds for a vertex-to-bone map (fig. 3.6).
+
+    Returns
+    -------
+    joint_triangle : (m,) bool
+    vertex_kind : (n,) int
+    """
+    b = bone[mesh.F]
+    joint_triangle = (b[:, 0] != b[:, 1]) | (b[:, 1] != b[:, 2])
+    kind = np.full(len(mesh.V), INTERIOR, dtype=np.int8)
+    kind[np.unique(mesh.F[joint_triangle])] = JOINT
+    kind[: mesh.n_outline] = SILHOUETTE
+    return joint_triangle, kind
+
+
+def binding_from_bones(mesh, bone, fallback, corrections=()):
+    """A :class:`Binding` from a vertex-to-bone map, classified (used when loading)."""
+    joint_triangle, kind = classify(mesh, bone)
+    joint_area = np.zeros(len(bone), dtype=bool)
+    joint_area[mesh.F[joint_triangle].ravel()] = True
+    return Binding(
+        bone=np.array(bone, dtype=np.int64),
+        fallback=np.array(fallback, dtype=bool),
+        corrections=tuple(corrections),
+        joint_triangle=joint_triangle,
+        vertex_kind=kind,
+        joint_area=joint_area,
+    )
+
+
+def _bone_segments(skeleton):
+    bones = skeleton.bones
+    A = skeleton.positions[bones[:, 0]]
+    B = skeleton.positions[bones[:, 1]]
+    usable = np.linalg.norm(B - A, axis=1) > MIN_BONE_LENGTH
+    if not usable.any():
+        raise SkeletonError(
+            "the skeleton has no bone of non-zero length; give at least two joints at "
+            "different places, one the parent of the other"
+        )
+    return A, B, usable
+
+
+def _outside_length(start, end, mask):
+    """For each segment start -> end, about how many pixels of it lie outside the mask."""
+    h, w = mask.shape
+    length = np.linalg.norm(end - start, axis=1)
+    count = np.ceil(length).astype(np.int64) + 1
+    seg = np.repeat(np.arange(len(start)), count)
+    offset = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+    t = offset / np.maximum(np.repeat(count - 1, count), 1)
+    p = start[seg] + t[:, None] * (end[seg] - start[seg])
+    tested = t * np.repeat(length, count) > _VERTEX_SLACK
+    x = np.rint(p[:, 0]).astype(np.int64)
+    y = np.rint(p[:, 1]).astype(np.int64)
+    on_image = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+    inside = np.zeros(len(p), dtype=bool)
+    inside[on_image] = mask[y[on_image], x[on_image]]
+    return np.bincount(seg[tested & ~inside], minlength=len(start))

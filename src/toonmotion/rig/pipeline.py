@@ -1,0 +1,166 @@
+"""Rigging a drawing, start to finish: mask, silhouette, curve skeleton, skeleton, mesh, binding.
+
+This is the one place the steps are put in order; each step lives in its own module.
+"""
+
+import numpy as np
+
+from toonmotion.errors import MaskError, SettingsError, SkeletonError
+from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
+from toonmotion.rig.binding import decompose
+from toonmotion.rig.character import Character, RigSettings
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+from toonmotion.shape.curve_skeleton import curve_skeleton
+from toonmotion.shape.mesh import choose_spacing, triangulate
+from toonmotion.shape.segment import (
+    METHODS,
+    check_mask,
+    clean_mask,
+    mask_from_alpha,
+    segment_foreground,
+)
+from toonmotion.shape.silhouette import trace_silhouette
+
+STAGES = ("mask", "silhouette", "curve skeleton", "skeleton", "mesh", "binding")
+
+# How far (as a fraction of the figure's bounding-box diagonal, at least _FAR_MIN_PX) a joint
+# may lie from the figure before the skeleton is taken to belong to another drawing.
+_FAR_FRACTION = 0.1
+_FAR_MIN_PX = 8.0
+_BASE_TOLERANCE = 1.0
+
+
+def rig_drawing(texture, *, mask=None, skeleton=None, settings=None, progress=None):
+    """Rig a drawing.
+
+    Parameters
+    ----------
+    texture : (h, w, 4) or (h, w, 3) uint8
+        The drawing. A non-opaque alpha channel is the mask.
+    mask : (h, w) bool, optional
+        The figure's pixels; overrides alpha. Without either, the figure is segmented from
+        its background automatically.
+    skeleton : Skeleton, optional
+        The animation skeleton; built from the curve skeleton when not given.
+    settings : RigSettings, optional
+    progress : callable, optional
+        Called as ``progress(stage, index, count)`` before each of :data:`STAGES`.
+
+    Returns
+    -------
+    Character
+    """
+    settings = settings or RigSettings()
+    _check_settings(settings)
+    report = progress or (lambda stage, index, count: None)
+    texture = _as_rgba(texture)
+
+    report("mask", 0, len(STAGES))
+    mask = _figure_mask(texture, mask, settings)
+
+    report("silhouette", 1, len(STAGES))
+    silhouette = trace_silhouette(mask, tolerance=settings.tolerance or _BASE_TOLERANCE)
+
+    report("curve skeleton", 2, len(STAGES))
+    cskel = curve_skeleton(mask, prune=settings.prune)
+
+    report("skeleton", 3, len(STAGES))
+    if skeleton is None:
+        skeleton = skeleton_from_curve_skeleton(cskel, max_bone=settings.max_bone)
+    else:
+        check_skeleton_on_figure(skeleton, mask)
+
+    report("mesh", 4, len(STAGES))
+    refine = _meeting_joints(skeleton) if settings.refine_joints else None
+    spacing = settings.spacing
+    if spacing is None:
+        target = settings.vertices or 1500
+        spacing = choose_spacing(silhouette, target, refine_points=refine)
+        if settings.tolerance is None and spacing / 10 > _BASE_TOLERANCE:
+            silhouette = trace_silhouette(mask, tolerance=spacing / 10)
+            spacing = choose_spacing(silhouette, target, refine_points=refine)
+    elif settings.tolerance is None and spacing / 10 > _BASE_TOLERANCE:
+        silhouette = trace_silhouette(mask, tolerance=spacing / 10)
+    mesh = triangulate(silhouette, spacing=spacing, refine_points=refine)
+
+    report("binding", 5, len(STAGES))
+    binding = decompose(mesh, skeleton, mask)
+    return Character(
+        texture=texture,
+        mask=mask,
+        silhouette=silhouette,
+        curve_skeleton=cskel,
+        skeleton=skeleton,
+        mesh=mesh,
+        binding=binding,
+        settings=settings,
+    )
+
+
+def check_skeleton_on_figure(skeleton, mask):
+    """Raise :class:`SkeletonError` when a joint lies far from the figure."""
+    from scipy import ndimage as ndi
+
+    rows, cols = np.nonzero(mask)
+    diagonal = float(np.hypot(np.ptp(rows) + 1, np.ptp(cols) + 1))
+    limit = max(_FAR_MIN_PX, _FAR_FRACTION * diagonal)
+    h, w = mask.shape
+    to_figure = ndi.distance_transform_edt(~mask)
+    for name, (x, y) in zip(skeleton.names, skeleton.positions, strict=True):
+        xi, yi = int(np.clip(np.rint(x), 0, w - 1)), int(np.clip(np.rint(y), 0, h - 1))
+        off_image = float(np.hypot(x - xi, y - yi))
+        distance = to_figure[yi, xi] + off_image
+        if distance > limit:
+            raise SkeletonError(
+                f"joint {name!r} at ({x:.0f}, {y:.0f}) is {distance:.0f} px from the figure "
+                f"(more than {limit:.0f} px); is the skeleton for this drawing and at its scale?"
+            )
+
+
+def _check_settings(settings):
+    if settings.segmentation not in METHODS:
+        raise SettingsError(
+            f"segmentation must be one of {', '.join(METHODS)}, got {settings.segmentation!r}"
+        )
+    if settings.spacing is not None and settings.vertices is not None:
+        raise SettingsError("give either a spacing or a vertex count, not both")
+    if settings.tolerance is not None and not 0 <= settings.tolerance <= 100:
+        raise SettingsError(f"tolerance must be between 0 and 100 px, got {settings.tolerance}")
+    if not 0 <= settings.min_part < 1:
+        raise SettingsError(f"min_part must be in [0, 1), got {settings.min_part}")
+
+
+def _as_rgba(texture):
+    texture = np.asarray(texture)
+    if texture.ndim != 3 or texture.shape[2] not in (3, 4) or texture.dtype != np.uint8:
+        raise ValueError("texture must be an (h, w, 3|4) uint8 array")
+    if texture.shape[2] == 3:
+        alpha = np.full(texture.shape[:2] + (1,), 255, dtype=np.uint8)
+        texture = np.concatenate([texture, alpha], axis=2)
+    return np.ascontiguousarray(texture)
+
+
+def _figure_mask(texture, mask, settings):
+    if mask is not None:
+        mask = np.asarray(mask, dtype=bool)
+        if mask.shape != texture.shape[:2]:
+            raise MaskError(
+                f"the mask is {mask.shape[1]}x{mask.shape[0]} but the drawing is "
+                f"{texture.shape[1]}x{texture.shape[0]}; give a mask of the same size"
+            )
+        what = "mask"
+    else:
+        mask = mask_from_alpha(texture[..., 3])
+        what = "alpha channel"
+        if mask is None:
+            mask = segment_foreground(texture[..., :3], method=settings.segmentation)
+            what = "figure found on the background"
+    check_mask(mask, what=what)
+    return clean_mask(mask, min_fraction=settings.min_part, largest_only=settings.largest_only)
+
+
+def _meeting_joints(skeleton):
+    """Positions of joints where two or more bones of non-zero length meet."""
+    bones = skeleton.bones[skeleton.bone_lengths > MIN_BONE_LENGTH]
+    degree = np.bincount(bones.ravel(), minlength=len(skeleton))
+    return skeleton.positions[degree >= 2]

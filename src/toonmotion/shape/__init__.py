@@ -1,0 +1,1 @@
+"""Image to mask to silhouette to mesh; the curve skeleton."""
