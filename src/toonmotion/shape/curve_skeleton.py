@@ -62,7 +62,8 @@ def curve_skeleton(mask, *, prune=0.5, min_spur=3.0):
     prune : float
         A branch from a junction to an end point is a spur, and removed, when it reaches less
         than ``prune`` times the junction's radius (plus ``min_spur`` pixels) beyond the
-        junction's inscribed circle. 0 keeps every branch.
+        junction's inscribed circle. With 0, only spurs shorter than ``min_spur`` go; with
+        both 0, every branch is kept.
     min_spur : float
         Spurs shorter than this many pixels beyond the inscribed circle are always removed.
 
@@ -285,7 +286,8 @@ def _trace(pixels, distance):
         node_of[k] = node
         if neighbours[k]:
             _, path = walk(k, neighbours[k][0])
-            path.append(k)
+            if path[-1] != k:  # the walk ends on the loop's node when it closes the loop
+                path.append(k)
             branches.append((node, node))
             paths.append(path)
 

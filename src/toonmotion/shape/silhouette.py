@@ -127,9 +127,15 @@ def _to_xy(contour, x0, y0):
 
 
 def _simplify(outer, holes, tolerance):
-    polygon = shapely.Polygon(outer, holes)
+    rings = [outer, *holes]
     if tolerance > 0:
-        polygon = polygon.simplify(tolerance, preserve_topology=True)
+        # Simplify the rings as closed lines, whose first point GEOS keeps. On a polygon's
+        # rings GEOS (>= 3.12) may also drop that point, checking it only against the
+        # already simplified ring, and the outline then moves up to ~1.6 tolerances.
+        closed = shapely.MultiLineString([np.concatenate([r, r[:1]]) for r in rings])
+        lines = closed.simplify(tolerance, preserve_topology=True)
+        rings = [np.asarray(line.coords) for line in shapely.get_parts(lines)]
+    polygon = shapely.Polygon(rings[0], rings[1:])
     pieces = getattr(polygon, "geoms", [polygon])
     return [
         Part(

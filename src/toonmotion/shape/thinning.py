@@ -69,7 +69,7 @@ def hilditch_thin(mask):
     --------
     >>> bar = np.zeros((7, 12), bool); bar[2:5, 1:11] = True
     >>> hilditch_thin(bar).astype(int)[3].tolist()
-    [0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 0]
+    [0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 0, 0]
     """
     mask = np.asarray(mask, dtype=bool)
     out = np.zeros_like(mask)
