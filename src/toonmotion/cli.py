@@ -61,14 +61,14 @@ def rig(
     ] = None,
     vertices: Annotated[
         int | None,
-        typer.Option("--vertices", help="Target mesh vertex count [default: 1500].", min=3),
+        typer.Option("--vertices", help="Target mesh vertex count \\[default: 1500].", min=3),
     ] = None,
     refine_joints: Annotated[
         bool, typer.Option("--refine-joints", help="Denser mesh around joints.")
     ] = False,
     tolerance: Annotated[
         float | None,
-        typer.Option("--tolerance", help="Outline simplification in pixels [default: auto].", min=0),
+        typer.Option("--tolerance", help="Outline simplification in pixels \\[default: auto].", min=0),
     ] = None,
     largest_only: Annotated[
         bool, typer.Option("--largest-only", help="Keep only the largest part of the figure.")
@@ -136,6 +136,11 @@ def sample(
     ] = None,
 ):
     """Write toonmotion's bundled sample character (and its skeleton) to try things on."""
+    if skeleton is not None and skeleton.suffix.lower() not in (".json", ".yaml", ".yml"):
+        raise SettingsError(
+            f"give a skeleton file ending in .json or .yaml (so 'rig' can read it back), "
+            f"not {skeleton.name}"
+        )
     rgba, bones = sample_character()
     save_png(output, rgba)
     if skeleton is not None:
@@ -165,6 +170,9 @@ def main(argv=None):
     try:
         app(args=argv, prog_name="toonmotion", standalone_mode=True)
     except ToonmotionError as error:
+        print(f"toonmotion: error: {error}", file=sys.stderr)
+        sys.exit(2)
+    except OSError as error:  # an output path that cannot be written, a full disk, ...
         print(f"toonmotion: error: {error}", file=sys.stderr)
         sys.exit(2)
 

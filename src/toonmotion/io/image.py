@@ -31,7 +31,7 @@ def load_image(path, *, max_pixels=DEFAULT_MAX_PIXELS):
         if image.mode in ("I;16", "I;16B", "I;16L", "I"):
             grey = np.asarray(image, dtype=np.float64)
             scale = 255.0 / max(float(grey.max()), 1.0)
-            image = Image.fromarray(np.clip(grey * scale, 0, 255).astype(np.uint8), "L")
+            image = Image.fromarray(np.clip(np.rint(grey * scale), 0, 255).astype(np.uint8), "L")
         return np.asarray(image.convert("RGBA")).copy()
 
 

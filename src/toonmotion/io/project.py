@@ -142,15 +142,22 @@ def save_project(path, character):
         raise ProjectError(f"{folder} is a file; a project is a folder, so give a folder path")
     folder.mkdir(parents=True, exist_ok=True)
     old = _referenced_assets(folder)
-    assets = {}
-    for kind, array in (("texture", character.texture), ("mask", character.mask)):
-        data = png_bytes(array)
-        name = f"{kind}-{hashlib.sha256(data).hexdigest()[:16]}.png"
-        if not (folder / name).is_file():
-            write_bytes(folder / name, data)
-        assets[kind] = name
-    text = _dumps(_to_dict(character, assets))
-    write_text(folder / PROJECT_FILE, text)
+    assets, written, saved = {}, [], False
+    try:
+        for kind, array in (("texture", character.texture), ("mask", character.mask)):
+            data = png_bytes(array)
+            name = f"{kind}-{hashlib.sha256(data).hexdigest()[:16]}.png"
+            if not (folder / name).is_file():
+                write_bytes(folder / name, data)
+                written.append(folder / name)
+            assets[kind] = name
+        text = _dumps(_to_dict(character, assets))
+        write_text(folder / PROJECT_FILE, text)
+        saved = True
+    finally:
+        if not saved:  # leave the folder as it was: no assets nothing refers to
+            for file in written:
+                file.unlink(missing_ok=True)
     for name in old - set(assets.values()):
         (folder / name).unlink(missing_ok=True)
 
@@ -219,6 +226,10 @@ def _referenced_assets(folder):
         return set()
 
 
+def _float_or_none(value):
+    return None if value is None else float(value)
+
+
 def _points(array):
     return np.asarray(array, dtype=float).tolist()
 
@@ -234,16 +245,17 @@ def _to_dict(ch, assets):
         "height": ch.size[1],
         "texture": assets["texture"],
         "mask": assets["mask"],
+        # Typed as loading types them, so an int spacing is saved as 4.0 the first time too.
         "settings": {
-            "spacing": s.spacing,
-            "vertices": s.vertices,
-            "tolerance": s.tolerance,
-            "refine_joints": s.refine_joints,
-            "largest_only": s.largest_only,
-            "min_part": s.min_part,
-            "prune": s.prune,
-            "max_bone": s.max_bone,
-            "segmentation": s.segmentation,
+            "spacing": _float_or_none(s.spacing),
+            "vertices": None if s.vertices is None else int(s.vertices),
+            "tolerance": _float_or_none(s.tolerance),
+            "refine_joints": bool(s.refine_joints),
+            "largest_only": bool(s.largest_only),
+            "min_part": float(s.min_part),
+            "prune": float(s.prune),
+            "max_bone": _float_or_none(s.max_bone),
+            "segmentation": str(s.segmentation),
         },
         "silhouette": {
             "tolerance": ch.silhouette.tolerance,

@@ -52,7 +52,12 @@ def load_skeleton_json(path):
             f"{path} is skeleton format version {data.get('version')!r}; this toonmotion reads "
             f"version {VERSION}"
         )
-    size = (int(data["width"]), int(data["height"])) if "width" in data else None
+    size = None
+    if "width" in data or "height" in data:
+        try:
+            size = (int(data["width"]), int(data["height"]))
+        except (KeyError, TypeError, ValueError):
+            raise SkeletonError(f"{path}: width and height must be whole numbers") from None
     return skeleton_from_dict(data.get("joints"), where=str(path)), size
 
 

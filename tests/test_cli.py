@@ -1,0 +1,320 @@
+"""Tests for the toonmotion command line (toonmotion.cli)."""
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import typer.main
+from PIL import Image
+
+from toonmotion.cli import app, main
+from toonmotion.io.image import load_image, load_mask, png_bytes
+from toonmotion.io.project import PROJECT_FILE, load_project
+from toonmotion.io.skeleton_json import load_skeleton_file
+from toonmotion.rig.pipeline import rig_drawing
+
+
+def run(argv, capsys):
+    """Run the CLI in-process; return (exit code, stdout, stderr)."""
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as info:
+        main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    code = info.value.code
+    return (0 if code is None else code), out, err
+
+
+def assert_user_error(result, message):
+    code, out, err = result
+    assert code == 2, (code, out, err)
+    assert "Traceback" not in err and "Traceback" not in out
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("toonmotion: error: "), err
+    assert re.search(message, lines[0]), lines[0]
+
+
+def _drawing(tmp_path, name="figure.png"):
+    """A small RGBA drawing: an opaque blob on a transparent background."""
+    mask = np.zeros((48, 40), dtype=bool)
+    mask[8:40, 10:30] = True
+    mask[20:26, 2:38] = True
+    rgba = np.zeros((48, 40, 4), dtype=np.uint8)
+    rgba[mask] = (180, 90, 40, 255)
+    path = tmp_path / name
+    path.write_bytes(png_bytes(rgba))
+    return path
+
+
+@pytest.fixture(scope="module")
+def shared_project(tmp_path_factory):
+    """char2 rigged through the CLI with its mask and char_cfg skeleton."""
+    from tests.conftest import DRAWINGS_DIR, _require
+
+    folder = _require(DRAWINGS_DIR) / "char2"
+    out = tmp_path_factory.mktemp("cli") / "char2-project"
+    with pytest.raises(SystemExit) as info:
+        main([
+            "rig", str(folder / "texture.png"), "--mask", str(folder / "mask.png"),
+            "--skeleton", str(folder / "char_cfg.yaml"), "--vertices", "500", "-o", str(out),
+        ])
+    assert info.value.code in (0, None)
+    return folder, out
+
+
+def test_rig_writes_a_loadable_project(shared_project):
+    folder, out = shared_project
+    character = load_project(out)
+    texture = load_image(folder / "texture.png")
+    np.testing.assert_array_equal(character.texture, texture)
+    np.testing.assert_array_equal(character.mask, load_mask(folder / "mask.png"))
+    expected = load_skeleton_file(folder / "char_cfg.yaml")
+    assert character.skeleton.names == expected.names
+    np.testing.assert_array_equal(character.skeleton.positions, expected.positions)
+    assert abs(len(character.mesh.V) - 500) <= 25
+    assert character.settings.vertices == 500 and character.settings.spacing is None
+    n = len(character.mesh.V)
+    assert character.binding.bone.shape == (n,)
+
+
+def test_rig_reports_what_it_wrote(tmp_path, capsys):
+    code, out, err = run(["rig", _drawing(tmp_path), "-o", tmp_path / "p", "--spacing", "4"],
+                         capsys)
+    assert code == 0, err
+    assert re.fullmatch(r"rigged figure.png: \d+ vertices, \d+ triangles, \d+ joints -> .*p\n",
+                        out), out
+    assert err == ""
+    assert load_project(tmp_path / "p").mesh.spacing == 4.0
+
+
+def test_show_writes_a_png(shared_project, tmp_path, capsys):
+    _, project = shared_project
+    target = tmp_path / "overview.png"
+    code, out, err = run(["show", project, "-o", target, "--height", "200"], capsys)
+    assert code == 0, err
+    assert out.strip() == f"wrote {target}"
+    with Image.open(target) as image:
+        assert image.format == "PNG" and image.mode == "RGB"
+        assert 200 < image.height < 260
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["overview.png"]
+
+
+@pytest.mark.parametrize("suffix", [".json", ".yaml"])
+def test_sample_writes_a_drawing_and_skeleton_that_rig(tmp_path, capsys, suffix):
+    png, skeleton = tmp_path / "x.png", tmp_path / f"x{suffix}"
+    code, out, err = run(["sample", "-o", png, "--skeleton", skeleton], capsys)
+    assert code == 0, err
+    assert out.strip() == f"wrote {png} and {skeleton}"
+    rgba = load_image(png)
+    assert rgba.shape[2] == 4 and rgba[..., 3].min() < 255  # transparent background
+    bones = load_skeleton_file(skeleton, image_size=(rgba.shape[1], rgba.shape[0]))
+    assert len(bones.bones) >= 1
+    # The pair rigs, through the library ...
+    character = rig_drawing(rgba, skeleton=bones)
+    assert character.binding.bone.shape == (len(character.mesh.V),)
+    # ... and through the CLI.
+    code, out, err = run(["rig", png, "--skeleton", skeleton, "--vertices", "400",
+                          "-o", tmp_path / "proj"], capsys)
+    assert code == 0, err
+    assert load_project(tmp_path / "proj").skeleton.names == bones.names
+
+
+def test_sample_without_skeleton(tmp_path, capsys):
+    code, out, err = run(["sample", "-o", tmp_path / "only.png"], capsys)
+    assert code == 0, err
+    assert out.strip() == f"wrote {tmp_path / 'only.png'}"
+    assert [p.name for p in tmp_path.iterdir()] == ["only.png"]
+
+
+def _options(command):
+    return {opt for param in command.params for opt in (*param.opts, *param.secondary_opts)}
+
+
+@pytest.mark.parametrize("command", [None, "rig", "show", "sample"])
+def test_help_exits_zero_and_names_only_real_options(capsys, command):
+    argv = ["--help"] if command is None else [command, "--help"]
+    code, out, err = run(argv, capsys)
+    assert code == 0, err
+    group = typer.main.get_command(app)
+    known = _options(group if command is None else group.commands[command]) | {"--help"}
+    named = set(re.findall(r"(?<![\w-])(--?[A-Za-z][\w-]*)", out))
+    assert named, out
+    assert named <= known, f"help names options that do not exist: {named - known}"
+    if command is None:
+        assert {"rig", "show", "sample"} <= set(re.findall(r"\w+", out))
+
+
+def test_rig_help_mentions_the_main_options(capsys):
+    code, out, _ = run(["rig", "--help"], capsys)
+    assert code == 0
+    for option in ("--mask", "--skeleton", "--spacing", "--vertices", "-o", "--output"):
+        assert re.search(rf"(?<![\w-]){option}(?![\w-])", out), option
+    # The defaults stated in the help text are shown, not swallowed as markup.
+    assert "[default: 1500]" in re.sub(r"[\s│]+", " ", out)
+
+
+def test_version(capsys):
+    from toonmotion import __version__
+
+    code, out, _ = run(["--version"], capsys)
+    assert code == 0 and out.strip() == f"toonmotion {__version__}"
+
+
+# --- user errors: exit 2, one line, no traceback -------------------------------------------------
+
+
+def test_missing_image(tmp_path, capsys):
+    result = run(["rig", tmp_path / "nope.png", "-o", tmp_path / "p"], capsys)
+    assert_user_error(result, r"cannot read .*nope.png: no such file")
+    assert not (tmp_path / "p").exists()
+
+
+def test_truncated_image(tmp_path, capsys):
+    data = _drawing(tmp_path).read_bytes()
+    (tmp_path / "cut.png").write_bytes(data[: len(data) // 2])
+    result = run(["rig", tmp_path / "cut.png", "-o", tmp_path / "p"], capsys)
+    assert_user_error(result, r"cut.png: the file is damaged or truncated")
+
+
+def test_empty_mask(tmp_path, capsys):
+    image = _drawing(tmp_path)
+    Image.fromarray(np.zeros((48, 40), dtype=np.uint8)).save(tmp_path / "mask.png")
+    result = run(["rig", image, "--mask", tmp_path / "mask.png", "-o", tmp_path / "p"], capsys)
+    assert_user_error(result, r"the mask is empty")
+
+
+def test_mask_of_the_wrong_size(tmp_path, capsys):
+    image = _drawing(tmp_path)
+    Image.fromarray(np.full((40, 48), 255, dtype=np.uint8)).save(tmp_path / "mask.png")
+    result = run(["rig", image, "--mask", tmp_path / "mask.png", "-o", tmp_path / "p"], capsys)
+    assert_user_error(result, r"mask mask.png is 48x40 but the drawing is 40x48")
+
+
+def _cycle_yaml(tmp_path):
+    path = tmp_path / "cycle.yaml"
+    path.write_text(
+        "width: 40\nheight: 48\nskeleton:\n"
+        "- {name: a, parent: b, loc: [20, 10]}\n"
+        "- {name: b, parent: a, loc: [20, 30]}\n"
+    )
+    return path
+
+
+def test_skeleton_with_a_cycle(tmp_path, capsys):
+    result = run(["rig", _drawing(tmp_path), "--skeleton", _cycle_yaml(tmp_path),
+                  "-o", tmp_path / "p"], capsys)
+    assert_user_error(result, r"the skeleton has a cycle through joints a, b")
+
+
+def test_spacing_and_vertices_together(tmp_path, capsys):
+    result = run(["rig", _drawing(tmp_path), "--spacing", "4", "--vertices", "300",
+                  "-o", tmp_path / "p"], capsys)
+    assert_user_error(result, r"give either --spacing or --vertices, not both")
+
+
+def test_unknown_background(tmp_path, capsys):
+    rgb = np.full((30, 30, 3), 255, dtype=np.uint8)
+    rgb[10:20, 10:20] = 0
+    Image.fromarray(rgb).save(tmp_path / "rgb.png")
+    result = run(["rig", tmp_path / "rgb.png", "--background", "sky", "-o", tmp_path / "p"],
+                 capsys)
+    assert_user_error(result, r"segmentation must be one of auto, flat, paper, got 'sky'")
+
+
+def test_image_over_max_pixels(tmp_path, capsys):
+    result = run(["rig", _drawing(tmp_path), "--max-pixels", "100", "-o", tmp_path / "p"],
+                 capsys)
+    assert_user_error(result, r"over the limit of 100; .*--max-pixels")
+
+
+@pytest.mark.parametrize(
+    ("version", "message"),
+    [(99, r"is project version 99, newer .*; upgrade toonmotion"),
+     ("two", r"has unknown project version 'two'")],
+    ids=["newer", "unknown"],
+)
+def test_show_a_project_of_another_version(tmp_path, capsys, version, message):
+    folder = tmp_path / "proj"
+    folder.mkdir()
+    (folder / PROJECT_FILE).write_text(
+        json.dumps({"format": "toonmotion.project", "version": version})
+    )
+    result = run(["show", folder, "-o", tmp_path / "o.png"], capsys)
+    assert_user_error(result, message)
+    assert not (tmp_path / "o.png").exists()
+
+
+def test_show_a_missing_project(tmp_path, capsys):
+    result = run(["show", tmp_path / "nothing", "-o", tmp_path / "o.png"], capsys)
+    assert_user_error(result, r"no project at")
+
+
+def test_show_to_a_non_png(shared_project, tmp_path, capsys):
+    _, project = shared_project
+    result = run(["show", project, "-o", tmp_path / "overview.jpg"], capsys)
+    assert_user_error(result, r"give an output ending in .png, not overview.jpg")
+    assert not (tmp_path / "overview.jpg").exists()
+
+
+def test_failed_rig_leaves_an_existing_project_untouched(tmp_path, capsys):
+    image = _drawing(tmp_path)
+    project = tmp_path / "p"
+    code, _, err = run(["rig", image, "-o", project, "--vertices", "200"], capsys)
+    assert code == 0, err
+    before = {p.name: p.read_bytes() for p in project.iterdir()}
+    Image.fromarray(np.zeros((48, 40), dtype=np.uint8)).save(tmp_path / "empty.png")
+    for argv in (
+        ["--mask", tmp_path / "empty.png"],
+        ["--skeleton", _cycle_yaml(tmp_path)],
+        ["--spacing", "3", "--vertices", "300"],
+    ):
+        result = run(["rig", image, "-o", project, *argv], capsys)
+        assert_user_error(result, ".")
+        assert {p.name: p.read_bytes() for p in project.iterdir()} == before
+
+
+def test_rig_into_a_file_is_a_user_error(tmp_path, capsys):
+    (tmp_path / "taken").write_text("x")
+    result = run(["rig", _drawing(tmp_path), "-o", tmp_path / "taken", "--vertices", "200"],
+                 capsys)
+    assert_user_error(result, r"is a file; a project is a folder")
+    assert (tmp_path / "taken").read_text() == "x"
+
+
+def test_error_exit_code_in_a_real_process(tmp_path):
+    script = Path(sys.executable).parent / "toonmotion"
+    command = [str(script)] if script.is_file() else [sys.executable, "-m", "toonmotion.cli"]
+    completed = subprocess.run(
+        [*command, "rig", str(tmp_path / "missing.png"), "-o", str(tmp_path / "p")],
+        capture_output=True, text=True, timeout=60, cwd=tmp_path,
+    )
+    assert completed.returncode == 2, completed
+    lines = completed.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("toonmotion: error: cannot read"), lines
+    assert "Traceback" not in completed.stderr
+    module = subprocess.run(
+        [sys.executable, "-m", "toonmotion.cli", "show", str(tmp_path), "-o", "x.gif"],
+        capture_output=True, text=True, timeout=60, cwd=tmp_path,
+    )
+    assert module.returncode == 2
+    assert module.stderr.startswith("toonmotion: error: the overview is a PNG")
+
+
+def test_unwritable_output_is_a_user_error(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    result = run(["rig", _drawing(tmp_path), "-o", tmp_path / "file" / "p", "--vertices", "200"],
+                 capsys)
+    assert_user_error(result, r"\[Errno \d+\] .*file")
+    result = run(["sample", "-o", tmp_path / "file" / "s.png"], capsys)
+    assert_user_error(result, r"\[Errno \d+\] .*file")
+    assert (tmp_path / "file").read_text() == "x"
+
+
+def test_sample_refuses_a_skeleton_file_rig_cannot_read(tmp_path, capsys):
+    result = run(["sample", "-o", tmp_path / "s.png", "--skeleton", tmp_path / "s.txt"], capsys)
+    assert_user_error(result, r"ending in .json or .yaml .*not s.txt")
+    assert list(tmp_path.iterdir()) == []
