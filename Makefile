@@ -16,16 +16,26 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	mkdir -p demo
-	$(BIN)/toonmotion sample -o demo/hero.png --skeleton demo/hero.json
+	$(BIN)/toonmotion sample -o demo/hero.png --skeleton demo/hero.json --keys demo/keys.json
 	$(BIN)/toonmotion rig demo/hero.png --skeleton demo/hero.json -o demo/hero
 	$(BIN)/toonmotion show demo/hero -o demo/overview.png
+	$(BIN)/toonmotion depth demo/hero right_elbow=1 right_hand=1
+	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo.gif
+	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo.mp4
 
 test: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/python -m pytest
 
-bench: $(STAMP)
+BENCH_STAMP := $(VENV)/.installed-bench
+
+$(BENCH_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[dev,bench]'
+	touch $(BENCH_STAMP)
+
+bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/rig.py
+	$(BIN)/python benchmarks/deform.py
 
 clean:
 	rm -rf $(VENV) demo

@@ -108,7 +108,7 @@ def test_sample_writes_a_drawing_and_skeleton_that_rig(tmp_path, capsys, suffix)
     png, skeleton = tmp_path / "x.png", tmp_path / f"x{suffix}"
     code, out, err = run(["sample", "-o", png, "--skeleton", skeleton], capsys)
     assert code == 0, err
-    assert out.strip() == f"wrote {png} and {skeleton}"
+    assert out.strip() == f"wrote {png}, {skeleton}"
     rgba = load_image(png)
     assert rgba.shape[2] == 4 and rgba[..., 3].min() < 255  # transparent background
     bones = load_skeleton_file(skeleton, image_size=(rgba.shape[1], rgba.shape[0]))
@@ -318,3 +318,94 @@ def test_sample_refuses_a_skeleton_file_rig_cannot_read(tmp_path, capsys):
     result = run(["sample", "-o", tmp_path / "s.png", "--skeleton", tmp_path / "s.txt"], capsys)
     assert_user_error(result, r"ending in .json or .yaml .*not s.txt")
     assert list(tmp_path.iterdir()) == []
+
+
+# --- pose, animate, depth (issue 3) ------------------------------------------------------------
+
+
+def _run(*argv):
+    """Run the CLI in-process; return the exit code (output goes where pytest captures it)."""
+    try:
+        main([str(a) for a in argv])
+    except SystemExit as stop:
+        return 0 if stop.code is None else stop.code
+    return 0
+
+
+@pytest.fixture(scope="module")
+def posable(tmp_path_factory):
+    """The sample character rigged into a project, with its key-frames and a pose file."""
+    from toonmotion.io.pose_json import save_pose
+    from toonmotion.rig.pose import Pose, rotate_about
+
+    folder = tmp_path_factory.mktemp("posable")
+    png, skeleton_file, keys = folder / "hero.png", folder / "hero.json", folder / "keys.json"
+    assert _run("sample", "-o", str(png), "--skeleton", str(skeleton_file), "--keys", str(keys)) == 0
+    assert _run("rig", str(png), "--skeleton", str(skeleton_file), "-o", str(folder / "hero")) == 0
+    skeleton = load_project(folder / "hero").skeleton
+    bent = rotate_about(skeleton, skeleton.positions, "right_elbow", 1.0)
+    save_pose(folder / "pose.json", skeleton, Pose(bent))
+    return folder
+
+
+def test_pose_writes_a_frame_of_the_asked_size(posable, tmp_path, capsys):
+    out = tmp_path / "posed.png"
+    code = _run("pose", str(posable / "hero"), str(posable / "pose.json"), "-o", str(out),
+                "--size", "200x300", "--overlay", "skeleton,rest")
+    assert code == 0
+    image = Image.open(out)
+    assert image.size == (200, 300) and image.mode == "RGBA"
+    assert "stage two" in capsys.readouterr().out
+
+
+def test_animate_writes_every_frame_of_the_timeline(posable, tmp_path):
+    out = tmp_path / "anim.gif"
+    assert _run("animate", str(posable / "hero"), str(posable / "keys.json"), "-o", str(out),
+                "--size", "84x120", "--fps", "24") == 0
+    gif = Image.open(out)
+    assert gif.n_frames == 37  # the built-in key-frames end at frame 36
+    assert gif.size == (84, 120)
+
+
+def test_animate_to_png_frames(posable, tmp_path):
+    out = tmp_path / "frames"
+    assert _run("animate", str(posable / "hero"), str(posable / "keys.json"), "-o", str(out),
+                "--size", "42x60") == 0
+    assert len(list(out.glob("*.png"))) == 37
+
+
+def test_depth_sets_a_region_by_name_and_by_point_and_saves_it(posable, tmp_path, capsys):
+    import shutil
+
+    project = tmp_path / "hero"
+    shutil.copytree(posable / "hero", project)
+    hand = load_project(project).skeleton.positions[load_project(project).skeleton.index("right_hand")]
+    assert _run("depth", str(project), "left_elbow=2", f"@{hand[0]},{hand[1]}=-1") == 0
+    character = load_project(project)
+    names = character.skeleton.bone_names
+    assert character.depth[names.index("left_elbow")] == 2
+    assert -1 in character.depth.tolist()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["pose", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.jpg"], "give an output ending in .png"),
+        (["pose", "{p}/hero", "{p}/missing.json", "-o", "{t}/x.png"], "no such file"),
+        (["pose", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.png", "--size", "0x5"], "--size takes WxH"),
+        (["pose", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.png", "--weights", "1,2"], "--weights takes 3"),
+        (["pose", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.png", "--overlay", "bones"], "unknown overlay"),
+        (["pose", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.png", "--background", "mauve"], "--background"),
+        (["animate", "{p}/hero", "{p}/keys.json", "-o", "{t}/x.avi"], "give a .gif or .mp4 file"),
+        (["animate", "{p}/hero", "{p}/keys.json", "-o", "{t}/x.gif", "--ease", "bouncy"], "ease must be"),
+        (["animate", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.gif"], "is not a key-frames file"),
+        (["depth", "{p}/hero", "tail=1"], "no bone is called 'tail'"),
+        (["depth", "{p}/hero", "left_elbow=up"], "whole-number depth"),
+    ],
+)
+def test_posing_errors_are_one_line_and_exit_2(posable, tmp_path, capsys, args, message):
+    args = [a.format(p=posable, t=tmp_path) for a in args]
+    assert _run(*args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("toonmotion: error: ") and "\n" not in err
+    assert message in err

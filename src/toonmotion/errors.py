@@ -39,3 +39,15 @@ class ProjectVersionError(ProjectError):
 
 class SettingsError(ToonmotionError):
     """An option has a value outside its valid range."""
+
+
+class PoseError(ToonmotionError):
+    """A pose is malformed: unknown or missing joints, non-finite positions, collapsed bones."""
+
+
+class KeyframeError(ToonmotionError):
+    """Key-frames are malformed: no keys, repeated or negative frame numbers, bad frame rate."""
+
+
+class ExportError(ToonmotionError):
+    """An animation or image cannot be written in the requested format."""

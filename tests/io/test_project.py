@@ -222,15 +222,15 @@ def test_json_that_is_not_an_object(saved):
 
 
 def test_newer_version_says_upgrade(saved):
-    _edit(saved, lambda d: d.update(version=2))
-    error = _expect(saved, ProjectVersionError, r"is project version 2, newer than this toonmotion")
+    _edit(saved, lambda d: d.update(version=3))
+    error = _expect(saved, ProjectVersionError, r"is project version 3, newer than this toonmotion")
     assert str(error).endswith("upgrade toonmotion")
 
 
 @pytest.mark.parametrize("version", [0, "1", None])
 def test_unknown_version(saved, version):
     _edit(saved, lambda d: d.update(version=version))
-    _expect(saved, ProjectVersionError, r"has unknown project version .*reads version 1")
+    _expect(saved, ProjectVersionError, r"has unknown project version .*reads versions 1, 2")
 
 
 def _first_triangle_out_of_range(data):
@@ -327,3 +327,25 @@ def test_failed_save_leaves_the_previous_project(character, saved, monkeypatch):
         assert (saved / name).read_bytes() == data
     _assert_same(load_project(saved), character)
     assert not any(p.name.endswith(".tmp") for p in saved.iterdir())
+
+
+def test_version_1_loads_with_every_region_at_depth_0(saved):
+    """Projects written before depth layers existed still load."""
+    def to_v1(data):
+        data["version"] = 1
+        del data["depth"]
+
+    _edit(saved, to_v1)
+    assert not load_project(saved).depth.any()
+
+
+def test_depth_layers_round_trip(tmp_path, saved):
+    character = load_project(saved)
+    depth = np.arange(len(character.depth)) % 3 - 1
+    save_project(tmp_path / "p", dataclasses.replace(character, depth=depth))
+    assert load_project(tmp_path / "p").depth.tolist() == depth.tolist()
+
+
+def test_depth_naming_an_unknown_bone(saved):
+    _edit(saved, lambda d: d["depth"].update(tail=2))
+    _expect(saved, ProjectError, "unknown bone 'tail'")

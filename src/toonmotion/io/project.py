@@ -35,7 +35,9 @@ from toonmotion.shape.mesh import Mesh, check_mesh
 from toonmotion.shape.silhouette import Part, Silhouette
 
 FORMAT = "toonmotion.project"
-VERSION = 1
+VERSION = 2
+# Version 1 had no depth layers; it loads with every region at depth 0.
+READABLE = (1, 2)
 PROJECT_FILE = "project.json"
 
 Point = tuple[float, float]
@@ -114,7 +116,7 @@ class _Settings(_Model):
 
 class _Project(_Model):
     format: Literal["toonmotion.project"]
-    version: Literal[1]
+    version: Literal[1, 2]
     toonmotion: str
     width: int = Field(gt=0)
     height: int = Field(gt=0)
@@ -126,6 +128,7 @@ class _Project(_Model):
     skeleton: _Skeleton
     mesh: _Mesh
     binding: _Binding
+    depth: dict[str, int] = {}
 
 
 def save_project(path, character):
@@ -196,7 +199,7 @@ def _check_version(data, file):
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ProjectError(f"{file} is not a toonmotion project (no 'format': {FORMAT!r})")
     version = data.get("version")
-    if version == VERSION:
+    if version in READABLE:
         return
     if isinstance(version, int) and version > VERSION:
         raise ProjectVersionError(
@@ -204,7 +207,8 @@ def _check_version(data, file):
             f"{__version__} reads (version {VERSION}); upgrade toonmotion"
         )
     raise ProjectVersionError(
-        f"{file} has unknown project version {version!r}; this toonmotion reads version {VERSION}"
+        f"{file} has unknown project version {version!r}; this toonmotion reads versions "
+        f"{', '.join(map(str, READABLE))}"
     )
 
 
@@ -296,6 +300,7 @@ def _to_dict(ch, assets):
                 {"bone": c.bone, "curve": _points(c.curve)} for c in ch.binding.corrections
             ],
         },
+        "depth": {name: int(d) for name, d in zip(bone_names, ch.depth, strict=True)},
     }
 
 
@@ -320,6 +325,9 @@ def _from_model(m, folder):
     skeleton = skeleton_from_dict([j.model_dump() for j in m.skeleton.joints])
     mesh = _mesh(m.mesh)
     binding = _binding(m.binding, mesh, skeleton)
+    unknown = set(m.depth) - set(skeleton.bone_names)
+    if unknown:
+        raise ProjectError(f"the depth layers name an unknown bone {sorted(unknown)[0]!r}")
     return Character(
         texture=texture,
         mask=mask,
@@ -329,6 +337,7 @@ def _from_model(m, folder):
         mesh=mesh,
         binding=binding,
         settings=RigSettings(**m.settings.model_dump()),
+        depth=[m.depth.get(name, 0) for name in skeleton.bone_names],
     )
 
 

@@ -60,6 +60,8 @@ class Character:
     binding : Binding
     settings : RigSettings
         What was asked for; ``mesh.spacing`` and ``silhouette.tolerance`` say what was used.
+    depth : (b,) int
+        Depth layer of each bone's region, higher in front (thesis 3.5); all 0 by default.
     """
 
     texture: np.ndarray
@@ -70,6 +72,16 @@ class Character:
     mesh: object
     binding: object
     settings: RigSettings = field(default_factory=RigSettings)
+    depth: np.ndarray = None
+
+    def __post_init__(self):
+        bones = len(self.skeleton.bones)
+        depth = np.zeros(bones) if self.depth is None else self.depth
+        depth = np.array(depth, dtype=np.int64)
+        if depth.shape != (bones,):
+            raise ValueError(f"depth needs one value per bone ({bones}), got shape {depth.shape}")
+        depth.setflags(write=False)
+        object.__setattr__(self, "depth", depth)
 
     @property
     def size(self):

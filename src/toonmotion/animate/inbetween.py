@@ -1,0 +1,90 @@
+"""In-betweens: a deformed mesh for every frame of a timeline (thesis 3.6, eq. 3.11).
+
+Eq. 3.11 splits each in-between into the skeleton-driven part and the stage-two part: the
+skeleton is interpolated (bones turn by slerp, see ``timeline.interpolate_pose``) and deformed
+by the needle model, and stage two's displacement (final minus stage-one position of every
+vertex) is interpolated linearly between the two keys. We interpolate that displacement in each
+vertex's bone frame rather than the image frame, so a displacement on a limb that swings round
+swings with it; the thesis' three-frame scheme is the case of two keys. Key frames are the
+keys' own solved meshes, exactly.
+
+``method="solve"`` instead runs stage two on every frame, warm-started from the previous one:
+slower, but every in-between is itself a minimum of the stage-two energy.
+"""
+
+import numpy as np
+
+from toonmotion.animate.timeline import interpolate_pose, segment_at
+from toonmotion.errors import SettingsError
+from toonmotion.geometry.coordinates import as_complex, as_points
+from toonmotion.rig.pose import bone_angles
+
+METHODS = ("interpolate", "solve")
+
+
+def solve_keys(deformer, timeline):
+    """Deform every key pose (stage one and two), each warm-started from the one before."""
+    results, previous = [], None
+    for key in timeline.keys:
+        previous = deformer.deform(key.pose, previous=previous)
+        results.append(previous)
+    return results
+
+
+def animate_frames(deformer, timeline, *, method="interpolate", keys=None):
+    """Yield ``(frame, U)`` for every frame from 0 to the last key.
+
+    Parameters
+    ----------
+    deformer : Deformer
+    timeline : Timeline
+    method : str
+        ``"interpolate"`` (eq. 3.11) or ``"solve"`` (stage two on every frame).
+    keys : list of Deformation, optional
+        The keys already solved by :func:`solve_keys`.
+
+    Yields
+    ------
+    frame : int
+    U : (n, 2) float
+        The deformed vertices.
+    """
+    if method not in METHODS:
+        raise SettingsError(f"the in-between method must be one of {', '.join(METHODS)}, got {method!r}")
+    keys = solve_keys(deformer, timeline) if keys is None else keys
+    return _frames(deformer, timeline, method, keys)
+
+
+def _frames(deformer, timeline, method, keys):
+    skeleton = deformer.character.skeleton
+    bone = deformer.needles.bone
+    rest_angle, _ = bone_angles(skeleton, skeleton.positions)
+    local = [_turn(solved.U, solved.stage_one, bone, -_bone_turn(skeleton, key.pose, rest_angle))
+             for solved, key in zip(keys, timeline.keys, strict=True)]
+    previous = None
+    for frame in range(timeline.frame_count):
+        i, t = segment_at(timeline, frame)
+        if t == 0:
+            previous = keys[i]
+            yield frame, keys[i].U
+            continue
+        pose = interpolate_pose(skeleton, timeline.keys[i].pose, timeline.keys[i + 1].pose, t)
+        if method == "solve":
+            previous = deformer.deform(pose, previous=previous)
+            yield frame, previous.U
+            continue
+        U1 = deformer.stage_one(pose)
+        displacement = (1 - t) * local[i] + t * local[i + 1]
+        turn = np.exp(1j * _bone_turn(skeleton, pose, rest_angle))
+        yield frame, U1 + as_points(turn[bone] * displacement)
+
+
+def _bone_turn(skeleton, pose, rest_angle):
+    """How far each bone has turned from rest in ``pose`` (radians, ``(b,)``)."""
+    angle, _ = bone_angles(skeleton, pose.positions)
+    return angle - rest_angle
+
+
+def _turn(U, U1, bone, angle):
+    """Stage two's displacement ``U - U1`` turned by each vertex's bone angle, complex ``(n,)``."""
+    return np.exp(1j * angle)[bone] * (as_complex(U) - as_complex(U1))

@@ -1,0 +1,134 @@
+"""Deform a rigged character into a pose: stage one, then stage two (thesis 3.4).
+
+A :class:`Deformer` is built once per character and settings (it holds the needle model and
+stage two's factorisation); :meth:`Deformer.deform` then runs per pose or frame.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from toonmotion.deform.joint_solve import JointSolver, joint_area
+from toonmotion.deform.needles import needle_model, stage_one
+from toonmotion.errors import SettingsError
+from toonmotion.rig.pose import check_pose
+
+
+@dataclass(frozen=True)
+class DeformSettings:
+    """How a pose deforms the drawing.
+
+    Attributes
+    ----------
+    preserve_area : bool
+        Needles shorten as their bone stretches (fig. 3.8), keeping the figure's area.
+    weights : tuple of 3 floats
+        Stage two's ``w1, w2, w3`` (RSI Laplacian, mean value, edge length), normalised.
+    joint_width : float
+        How far around each joint stage two works, in multiples of the figure's half-thickness
+        there; 0 keeps to the thesis' band of joint triangles (see ``joint_area``).
+    max_iterations : int
+        Gauss-Newton iterations at most; the thesis reports about 35 on average.
+    tolerance : float
+        Stop iterating when an iteration lowers the energy by less than this fraction.
+    stage_two : bool
+        Run stage two at all (off shows the needle model alone, as in fig. 3.9e).
+    edge_term : str
+        ``"rigid"``: each joint triangle's edges keep their lengths *and* their orientation
+        (the edges of a triangle turn together), so triangles do not flip; ``"length"``: the
+        thesis' edge-length term (eq. 3.7), which cannot tell a triangle from its mirror image.
+    """
+
+    preserve_area: bool = True
+    weights: tuple = (1.0, 1.0, 1.0)
+    joint_width: float = 1.5
+    max_iterations: int = 100
+    tolerance: float = 1e-4
+    stage_two: bool = True
+    edge_term: str = "rigid"
+
+    def __post_init__(self):
+        if isinstance(self.max_iterations, bool) or not (
+            isinstance(self.max_iterations, int) and self.max_iterations >= 1
+        ):
+            raise SettingsError(f"max_iterations must be a whole number >= 1, got {self.max_iterations!r}")
+        if not (isinstance(self.tolerance, (int, float)) and np.isfinite(self.tolerance)
+                and self.tolerance > 0):
+            raise SettingsError(f"the stage-two tolerance must be a number > 0, got {self.tolerance!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class Deformation:
+    """A deformed mesh and how it was reached.
+
+    Attributes
+    ----------
+    U : (n, 2) float
+        Deformed vertices.
+    stage_one : (n, 2) float
+        The needle model's result, before stage two.
+    iterations : int
+        Stage-two iterations (0 when stage two is off).
+    energy_start, energy : float
+        Stage two's energy (eq. 3.8) where it started and where it ended.
+    converged : bool
+    """
+
+    U: np.ndarray
+    stage_one: np.ndarray
+    iterations: int
+    energy_start: float
+    energy: float
+    converged: bool
+
+
+class Deformer:
+    """Everything precomputed to deform one character; build once, call :meth:`deform` per frame.
+
+    Attributes
+    ----------
+    character : Character
+    settings : DeformSettings
+    needles : NeedleModel
+    free : (n,) bool
+        The joint-area vertices stage two moves.
+    solver : JointSolver
+    """
+
+    def __init__(self, character, settings=None):
+        self.character = character
+        self.settings = settings = settings or DeformSettings()
+        mesh = character.mesh
+        self.needles = needle_model(mesh.V, character.skeleton, character.binding.bone)
+        self.free = joint_area(mesh, character.skeleton, character.binding, character.mask,
+                               width=settings.joint_width)
+        self.solver = JointSolver(mesh, self.free, weights=settings.weights,
+                                  edge_term=settings.edge_term)
+
+    def stage_one(self, pose):
+        """The needle model alone for ``pose``: ``(n, 2)``."""
+        check_pose(self.character.skeleton, pose)
+        return stage_one(self.needles, pose.positions, preserve_area=self.settings.preserve_area)
+
+    def deform(self, pose, *, previous=None):
+        """Deform the character into ``pose``.
+
+        Parameters
+        ----------
+        pose : Pose
+        previous : Deformation, optional
+            The previous frame's result; stage two then starts from its displacement carried
+            onto this frame (used only when that start is better than stage one's).
+        """
+        U1 = self.stage_one(pose)
+        s = self.settings
+        if not s.stage_two:
+            energy = self.solver.energy(U1)
+            return Deformation(U=U1, stage_one=U1, iterations=0, energy_start=energy,
+                               energy=energy, converged=True)
+        initial = None if previous is None else U1 + (previous.U - previous.stage_one)
+        result = self.solver.solve(U1, initial=initial, max_iterations=s.max_iterations,
+                                   tolerance=s.tolerance)
+        return Deformation(U=result.U, stage_one=U1, iterations=result.iterations,
+                           energy_start=result.energy_start, energy=result.energy,
+                           converged=result.converged)

@@ -1,0 +1,308 @@
+"""Stage two: nonlinear least squares over the joint areas (thesis 3.4.3, eq. 3.2-3.10).
+
+Only the *free* vertices move (the joint areas, see :func:`joint_area`); every other vertex
+keeps its stage-one position. The energy (eq. 3.8) is the weighted sum of
+
+* ``E1``, rotation- and scale-invariant curve Laplacians of the free outline vertices (3.3);
+* ``E2``, mean value coordinates of the free inner vertices (3.6);
+* ``E3``, squared changes of the lengths of edges that touch a free vertex (3.7).
+
+E1 and E2 are linear in the positions. E3 is linearised the Gauss-Newton way of eq. 3.9: the
+edge vector ``u_i - u_j`` should equal its rest length times its current direction. The matrix
+of that linear system depends on the rest mesh only, so its normal matrix is factorised once
+(:class:`JointSolver`), and each iteration is a sparse product and two triangular solves.
+Each iteration fixes the edge directions at their best values for the current positions and
+then solves exactly for the positions, so the energy never goes up.
+
+Points are complex numbers ``x + iy`` here: the RSI Laplacian's rotation-and-scale factor is
+then one complex coefficient and the whole system is one ``m x m`` complex solve.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.ndimage import distance_transform_edt
+from scipy.sparse.linalg import splu
+
+from toonmotion.errors import SettingsError
+from toonmotion.geometry.coordinates import (
+    as_complex,
+    as_points,
+    mean_value_weights,
+    rsi_laplacian_coefficients,
+)
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+from toonmotion.shape.mesh import unique_edges
+
+# Added to the normal matrix's diagonal, relative to its mean, pulling free vertices that no
+# fixed vertex anchors (a joint area that is a whole part) towards their starting positions.
+_REGULARISE = 1e-9
+
+EDGE_TERMS = ("rigid", "length")
+
+
+@dataclass(frozen=True, eq=False)
+class SolveResult:
+    """Outcome of one stage-two solve.
+
+    Attributes
+    ----------
+    U : (n, 2) float
+        All vertices: the free ones solved, the rest as given.
+    iterations : int
+        Gauss-Newton iterations run.
+    energy_start, energy : float
+        Eq. 3.8 at the starting positions and at the result (pixels squared).
+    converged : bool
+        The last iteration lowered the energy by less than the tolerance (a fraction).
+    """
+
+    U: np.ndarray
+    iterations: int
+    energy_start: float
+    energy: float
+    converged: bool
+
+
+def joint_area(mesh, skeleton, binding, mask, *, width=1.5):
+    """Vertices that stage two moves: the joint areas, ``(n,) bool``.
+
+    The thesis' joint area is the vertices of joint triangles (those spanning two bones), a
+    band about one triangle wide. On a sharply bent elbow the two limb regions overlap on the
+    inside of the bend by about the limb's half-thickness, and a one-triangle band cannot
+    unfold that. So around every joint where two or more bones meet we also free the vertices
+    of those bones within ``width`` times the thinner bone's half-thickness (the figure's
+    distance to its outline along the bone's middle). ``width=0`` gives the thesis' band alone.
+    """
+    if not (np.isfinite(width) and width >= 0):
+        raise SettingsError(f"the joint area width must be a finite number >= 0, got {width}")
+    free = binding.joint_area.copy()
+    if width == 0 or len(mesh.V) == 0:
+        return free
+    bones = skeleton.bones
+    usable = skeleton.bone_lengths > MIN_BONE_LENGTH
+    thickness = _bone_half_thickness(skeleton, mask, floor=mesh.spacing)
+    for joint in skeleton.positions:
+        # Joints at the same place (AD's root and hip) count as one joint.
+        here = np.flatnonzero(np.hypot(*(skeleton.positions - joint).T) <= MIN_BONE_LENGTH)
+        meeting = np.flatnonzero(usable & (np.isin(bones[:, 0], here) | np.isin(bones[:, 1], here)))
+        if len(meeting) < 2:
+            continue
+        radius = width * thickness[meeting].min()
+        near = np.hypot(mesh.V[:, 0] - joint[0], mesh.V[:, 1] - joint[1]) < radius
+        free |= near & np.isin(binding.bone, meeting)
+    return free
+
+
+def _bone_half_thickness(skeleton, mask, *, floor):
+    """Median distance to the outline along the middle half of each bone, at least ``floor``."""
+    distance = distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
+    h, w = mask.shape
+    bones = skeleton.bones
+    A, B = skeleton.positions[bones[:, 0]], skeleton.positions[bones[:, 1]]
+    t = np.linspace(0.25, 0.75, 9)
+    P = A[:, None] + t[None, :, None] * (B - A)[:, None]
+    x = np.clip(np.rint(P[..., 0]), 0, w - 1).astype(np.int64)
+    y = np.clip(np.rint(P[..., 1]), 0, h - 1).astype(np.int64)
+    return np.maximum(np.median(distance[y, x], axis=1), floor)
+
+
+class JointSolver:
+    """Stage two's precomputation for one mesh and joint area; :meth:`solve` runs per frame.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The rest mesh.
+    free : (n,) bool
+        Vertices to solve for (:func:`joint_area`).
+    weights : (3,) float
+        ``w1, w2, w3`` for the RSI Laplacian, mean value and edge-length terms; normalised to
+        sum to 1 (eq. 3.8). Equal by default.
+
+    Attributes
+    ----------
+    free : (m,) int
+        Indices of the free vertices.
+    weights : (3,) float
+        The normalised weights.
+    """
+
+    def __init__(self, mesh, free, *, weights=(1.0, 1.0, 1.0), edge_term="rigid"):
+        if edge_term not in EDGE_TERMS:
+            raise SettingsError(f"the edge term must be one of {', '.join(EDGE_TERMS)}, got {edge_term!r}")
+        self.edge_term = edge_term
+        weights = np.asarray(weights, dtype=float)
+        if weights.shape != (3,) or not np.all(np.isfinite(weights)) or (weights < 0).any() \
+                or weights.sum() <= 0:
+            raise SettingsError(
+                f"stage-two weights must be three finite numbers >= 0, not all zero; got {weights.tolist()}"
+            )
+        self.weights = weights / weights.sum()
+        n = len(mesh.V)
+        self.n = n
+        free = np.asarray(free, dtype=bool)
+        self.free = np.flatnonzero(free)
+        self.fixed = np.flatnonzero(~free)
+        rest = as_complex(mesh.V)
+        A1 = _laplacian_rows(mesh, rest, free)
+        A2 = _mean_value_rows(mesh, free)
+        if edge_term == "length":
+            self.edges, A3 = _edge_rows(mesh, free)
+            self._corners = None
+        else:
+            self.edges, A3, self._corners = _triangle_edge_rows(mesh, free)
+        self.rest_edge = rest[self.edges[:, 0]] - rest[self.edges[:, 1]]
+        self.rest_length = np.abs(self.rest_edge)
+        if self._corners is not None:
+            self._rest = self.rest_edge.reshape(-1, 3)
+            self._rest_conj = np.conj(self._rest)
+        w1, w2, w3 = self.weights
+        self._linear = sp.vstack([np.sqrt(w1) * A1, np.sqrt(w2) * A2]).tocsr()
+        self._A3 = A3
+        if len(self.free) == 0:
+            return
+        Af = sp.vstack([self._linear, np.sqrt(w3) * A3]).tocsc()
+        Ff, Fx = Af[:, self.free], Af[:, self.fixed]
+        normal = (Ff.conj().T @ Ff).tocsc()
+        self._epsilon = _REGULARISE * max(float(np.abs(normal.diagonal()).mean()), 1e-300)
+        normal = normal + self._epsilon * sp.identity(len(self.free), format="csc")
+        # The normal matrix is Hermitian positive definite: no pivoting needed.
+        self._factor = splu(normal, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                            options={"SymmetricMode": True})
+        self._from_fixed = (-(Ff.conj().T @ Fx)).tocsr()
+        self._from_edges = (w3 * A3[:, self.free].conj().T).tocsr()
+
+    def energy(self, U):
+        """Eq. 3.8 at vertices ``U`` (``(n, 2)``)."""
+        return self._energy(as_complex(U))
+
+    def solve(self, U, *, initial=None, max_iterations=50, tolerance=1e-3):
+        """Solve for the free vertices, the others fixed at ``U`` (the stage-one result).
+
+        Parameters
+        ----------
+        U : (n, 2) float
+            Stage-one positions of every vertex.
+        initial : (n, 2) float, optional
+            Where the free vertices start (a warm start, e.g. the previous frame's result moved
+            by this frame's stage one). Used only when its energy is below ``U``'s.
+        max_iterations : int
+        tolerance : float
+            Stop when an iteration lowers the energy by less than this fraction of it.
+        """
+        z = as_complex(U).copy()
+        start = self._energy(z)
+        if initial is not None and len(self.free):
+            warm = z.copy()
+            warm[self.free] = as_complex(initial)[self.free]
+            warm_energy = self._energy(warm)
+            if warm_energy < start:
+                z, start = warm, warm_energy
+        if len(self.free) == 0:
+            return SolveResult(U=np.array(U, dtype=float), iterations=0, energy_start=start,
+                               energy=start, converged=True)
+        base = self._from_fixed @ z[self.fixed] + self._epsilon * z[self.free]
+        targets, energy = self._local(z)
+        iterations, converged = 0, False
+        while iterations < max_iterations and not converged:
+            iterations += 1
+            z[self.free] = self._factor.solve(base + self._from_edges @ targets)
+            targets, new_energy = self._local(z)
+            converged = energy - new_energy <= tolerance * energy
+            energy = new_energy
+        return SolveResult(U=as_points(z), iterations=iterations, energy_start=start,
+                           energy=energy, converged=bool(converged))
+
+    def _energy(self, z):
+        return self._local(z)[1]
+
+    def _local(self, z):
+        """The local step at positions ``z``: every E3 row's best target edge vector, and the
+        energy (eq. 3.8) at ``z``, which those targets attain.
+
+        ``"length"``: the rest length along the edge's current direction (eq. 3.7).
+        ``"rigid"``: the rest edges of a triangle turned by its best-fitting rotation.
+        """
+        linear = self._linear @ z
+        energy = np.vdot(linear, linear).real
+        if self._corners is None:
+            e = z[self.edges[:, 0]] - z[self.edges[:, 1]]
+            length = np.abs(e)
+            targets = np.where(length > 1e-12, self.rest_length * e / np.maximum(length, 1e-300),
+                               self.rest_edge)
+            stretch = length - self.rest_length
+            return targets, float(energy + self.weights[2] * np.dot(stretch, stretch))
+        c = z[self._corners]  # (t, 3); the edges of a triangle run to corner 0, 1, 2 from the next
+        e = np.empty_like(c)
+        e[:, 0] = c[:, 0] - c[:, 1]
+        e[:, 1] = c[:, 1] - c[:, 2]
+        e[:, 2] = c[:, 2] - c[:, 0]
+        fit = np.einsum("ij,ij->i", self._rest_conj, e)
+        size = np.abs(fit)
+        rotation = np.where(size > 1e-300, fit / np.where(size > 1e-300, size, 1.0), 1.0)
+        targets = rotation[:, None] * self._rest
+        r = e - targets
+        return targets.ravel(), float(energy + self.weights[2] * np.vdot(r, r).real)
+
+
+def _laplacian_rows(mesh, rest, free):
+    """E1 rows: one per free outline vertex, ``u - (u_prev + u_next)/2 - c (u_next - u_prev)``."""
+    rows, cols, vals = [], [], []
+    count = 0
+    for loop in mesh.boundary:
+        prev, after = np.roll(loop, 1), np.roll(loop, -1)
+        keep = free[loop]
+        c = rsi_laplacian_coefficients(mesh.V[prev[keep]], mesh.V[loop[keep]], mesh.V[after[keep]])
+        k = int(keep.sum())
+        r = np.arange(count, count + k)
+        rows += [r, r, r]
+        cols += [loop[keep], prev[keep], after[keep]]
+        vals += [np.ones(k, complex), -0.5 + c, -0.5 - c]
+        count += k
+    return _matrix(rows, cols, vals, count, len(mesh.V))
+
+
+def _mean_value_rows(mesh, free):
+    """E2 rows: one per free inner vertex, ``u_i - sum_j w_ij u_j``."""
+    inner = free.copy()
+    inner[: mesh.n_outline] = False
+    r, c, w = mean_value_weights(mesh.V, mesh.F)
+    keep = inner[r]
+    index = np.cumsum(inner) - 1
+    ids = np.flatnonzero(inner)
+    rows = [index[ids], index[r[keep]]]
+    cols = [ids, c[keep]]
+    vals = [np.ones(len(ids), complex), -w[keep].astype(complex)]
+    return _matrix(rows, cols, vals, len(ids), len(mesh.V))
+
+
+def _edge_rows(mesh, free):
+    """E3 rows: one per edge touching a free vertex, ``u_i - u_j``."""
+    edges = unique_edges(mesh.F)
+    edges = edges[free[edges[:, 0]] | free[edges[:, 1]]]
+    k = np.arange(len(edges))
+    A = _matrix([k, k], [edges[:, 0], edges[:, 1]], [np.ones(len(k), complex), -np.ones(len(k), complex)],
+                len(edges), len(mesh.V))
+    return edges, A
+
+
+def _triangle_edge_rows(mesh, free):
+    """E3 rows, rigid form: three per triangle touching a free vertex, one for each edge."""
+    triangles = np.flatnonzero(free[mesh.F].any(axis=1))
+    F = mesh.F[triangles]
+    edges = np.stack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1).reshape(-1, 2)
+    k = np.arange(len(edges))
+    A = _matrix([k, k], [edges[:, 0], edges[:, 1]], [np.ones(len(k), complex), -np.ones(len(k), complex)],
+                len(edges), len(mesh.V))
+    return edges, A, F
+
+
+def _matrix(rows, cols, vals, shape0, shape1):
+    if not rows:
+        return sp.csr_matrix((shape0, shape1), dtype=complex)
+    return sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(shape0, shape1)
+    )
+

@@ -1,0 +1,101 @@
+"""Stage one: the variable-length needle model (thesis 3.4.1-3.4.2, fig. 3.7-3.8).
+
+Every vertex hangs off its bone on a *needle*: it is written in the bone's frame as ``t``, the
+fraction of the way from the bone's start joint to its end, and ``s``, its signed distance
+across the bone. A posed bone carries its needles along: it rotates them, moves their roots with
+``t`` (so they stretch and squash with the bone), and, with area preservation, shortens each
+needle by the reciprocal of the bone's stretch (fig. 3.8), so a region stretched 1.5x along its
+bone is 1/1.5x as thick and keeps its area.
+
+For a vertex beside a bone the needle meets the bone at a right angle, exactly the thesis'
+model. Past a bone's ends (a hand past the wrist joint) the thesis' needle starts at the end
+joint at a fixed angle and shortens by the reciprocal stretch, which would shrink that cap's
+area by the square of the stretch; we extend the same affine map there instead, so every bone
+region keeps its area, and the map is continuous across the bone's end. Vertices on a bone of
+zero rest length (a correction may put them there) only follow its start joint's translation.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+
+
+@dataclass(frozen=True, eq=False)
+class NeedleModel:
+    """Each vertex's needle in its bone's rest frame; built once per character.
+
+    Attributes
+    ----------
+    bones : (b, 2) int
+        ``(parent, child)`` joints of each bone (``skeleton.bones``).
+    bone : (n,) int
+        Bone of each vertex.
+    t : (n,) float
+        Position along the bone, 0 at its start joint and 1 at its end.
+    s : (n,) float
+        Signed needle length across the bone, pixels.
+    rest_length : (b,) float
+    rigid : (b,) bool
+        Bones of zero rest length: their vertices translate only.
+    offset : (n, 2) float
+        For vertices of rigid bones, their offset from the bone's start joint.
+    """
+
+    bones: np.ndarray
+    bone: np.ndarray
+    t: np.ndarray
+    s: np.ndarray
+    rest_length: np.ndarray
+    rigid: np.ndarray
+    offset: np.ndarray
+
+
+def needle_model(V, skeleton, bone):
+    """Needles of vertices ``V`` (``(n, 2)``) attached to bones ``bone`` (``(n,)``) of ``skeleton``."""
+    bones = skeleton.bones
+    A = skeleton.positions[bones[:, 0]]
+    d = skeleton.positions[bones[:, 1]] - A
+    length = np.linalg.norm(d, axis=1)
+    rigid = length <= MIN_BONE_LENGTH
+    u = d / np.where(rigid, 1.0, length)[:, None]
+    u[rigid] = (1.0, 0.0)
+    rel = V - A[bone]
+    along = np.sum(rel * u[bone], axis=1)
+    across = rel[:, 1] * u[bone, 0] - rel[:, 0] * u[bone, 1]  # component along n = (-u_y, u_x)
+    scale = np.where(rigid, 1.0, length)[bone]
+    t = np.where(rigid[bone], 0.0, along / scale)
+    s = np.where(rigid[bone], 0.0, across)
+    return NeedleModel(
+        bones=bones,
+        bone=np.asarray(bone),
+        t=t,
+        s=s,
+        rest_length=length,
+        rigid=rigid,
+        offset=np.where(rigid[bone][:, None], rel, 0.0),
+    )
+
+
+def stage_one(model, positions, *, preserve_area=True):
+    """Deformed vertices for joint positions ``positions`` (``(k, 2)``, a pose).
+
+    Returns
+    -------
+    (n, 2) float
+        ``U``: each vertex at the end of its bone-carried needle.
+    """
+    A = positions[model.bones[:, 0]]
+    d = positions[model.bones[:, 1]] - A
+    length = np.hypot(d[:, 0], d[:, 1])
+    normal = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.maximum(length, 1e-300)[:, None]
+    if preserve_area:
+        # Needles shorten by the reciprocal of the bone's stretch: rest / posed length.
+        normal *= (model.rest_length / np.maximum(length, 1e-300))[:, None]
+    b = model.bone
+    U = A[b] + model.t[:, None] * d[b] + model.s[:, None] * normal[b]
+    if model.rigid.any():
+        r = model.rigid[b]
+        U[r] = A[b[r]] + model.offset[r]
+    return U

@@ -1,0 +1,21 @@
+"""Angles in radians, ``atan2(dy, dx)`` in the image frame (y down)."""
+
+import numpy as np
+
+
+def wrap_angle(a):
+    """Angles wrapped into ``[-pi, pi)``.
+
+    >>> float(wrap_angle(3 * np.pi / 2))
+    -1.5707963267948966
+    """
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def lerp_angle(a, b, t):
+    """Interpolate from angle ``a`` to ``b`` the short way round (slerp of 2D directions).
+
+    >>> round(float(np.degrees(lerp_angle(np.radians(170), np.radians(-170), 0.5))), 6)
+    180.0
+    """
+    return a + t * wrap_angle(b - a)

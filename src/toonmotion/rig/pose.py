@@ -1,0 +1,150 @@
+"""Poses: a new 2D position for every joint of a skeleton (a sketched skeleton, thesis 3.4).
+
+Bones may rotate, stretch and squash: a pose is free positions, not angles. A bone whose rest
+length is non-zero must keep a length of at least :data:`MIN_POSED_FRACTION` of it in a pose,
+because the needle model divides by the bone's stretch.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from toonmotion.errors import PoseError
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+
+# A posed bone may squash to 2% of its rest length, no further.
+MIN_POSED_FRACTION = 0.02
+
+
+@dataclass(frozen=True, eq=False)
+class Pose:
+    """Joint positions for one skeleton, in the skeleton's joint order.
+
+    Attributes
+    ----------
+    positions : (k, 2) float
+        (x, y) pixels, y down, one row per joint of the skeleton.
+    """
+
+    positions: np.ndarray
+
+    def __post_init__(self):
+        positions = np.array(self.positions, dtype=float)  # a copy: the caller's array stays writable
+        positions.setflags(write=False)
+        object.__setattr__(self, "positions", positions)
+
+
+def rest_pose(skeleton):
+    """The skeleton's own rest positions as a pose."""
+    return Pose(positions=np.array(skeleton.positions, dtype=float))
+
+
+def pose_from_joints(skeleton, joints, *, where="pose"):
+    """A pose from a mapping of joint name to ``(x, y)``.
+
+    Every joint of the skeleton must be given, and no other; positions must be finite.
+
+    Examples
+    --------
+    >>> from toonmotion.rig.skeleton import Skeleton
+    >>> s = Skeleton.from_joints([("arm", None, (0, 0)), ("hand", "arm", (10, 0))])
+    >>> pose_from_joints(s, {"arm": (0, 0), "hand": (0, 10)}).positions.tolist()
+    [[0.0, 0.0], [0.0, 10.0]]
+    """
+    if not isinstance(joints, dict):
+        raise PoseError(f"{where}: joints must be a mapping of joint name to [x, y]")
+    unknown = [name for name in joints if name not in skeleton.names]
+    if unknown:
+        raise PoseError(
+            f"{where}: unknown joint {unknown[0]!r}; the skeleton's joints are: "
+            f"{', '.join(skeleton.names)}"
+        )
+    missing = [name for name in skeleton.names if name not in joints]
+    if missing:
+        raise PoseError(f"{where}: joint {missing[0]!r} has no position; give every joint [x, y]"
+                        + (f" ({len(missing)} are missing)" if len(missing) > 1 else ""))
+    positions = np.array([_point(joints[name], name, where) for name in skeleton.names])
+    return check_pose(skeleton, Pose(positions=positions), where=where)
+
+
+def pose_to_joints(skeleton, pose):
+    """The pose as a name -> ``[x, y]`` dict in joint order (for JSON)."""
+    return {
+        name: [float(x), float(y)]
+        for name, (x, y) in zip(skeleton.names, pose.positions, strict=True)
+    }
+
+
+def check_pose(skeleton, pose, *, where="pose"):
+    """Raise :class:`PoseError` unless ``pose`` fits ``skeleton``; returns the pose."""
+    positions = pose.positions
+    if positions.shape != (len(skeleton), 2):
+        raise PoseError(
+            f"{where}: has {positions.shape[0] if positions.ndim else 0} joint positions but the "
+            f"skeleton has {len(skeleton)} joints"
+        )
+    if not np.all(np.isfinite(positions)):
+        row = int(np.flatnonzero(~np.isfinite(positions).all(axis=1))[0])
+        raise PoseError(f"{where}: joint {skeleton.names[row]!r} has a non-finite position")
+    bones = skeleton.bones
+    rest = skeleton.bone_lengths
+    posed = np.linalg.norm(positions[bones[:, 1]] - positions[bones[:, 0]], axis=1)
+    collapsed = (rest > MIN_BONE_LENGTH) & (posed < MIN_POSED_FRACTION * rest)
+    if collapsed.any():
+        b = int(np.flatnonzero(collapsed)[0])
+        raise PoseError(
+            f"{where}: bone {skeleton.bone_names[b]!r} is squashed to {posed[b]:.3g} px "
+            f"(rest length {rest[b]:.3g} px); keep it at least {MIN_POSED_FRACTION:.0%} of its rest length"
+        )
+    return pose
+
+
+def bone_angles(skeleton, positions):
+    """Angle (radians, ``atan2(dy, dx)``) and length of every bone, ``(..., b)`` each.
+
+    ``positions`` is ``(..., k, 2)``; leading axes are batched.
+    """
+    bones = skeleton.bones
+    d = positions[..., bones[:, 1], :] - positions[..., bones[:, 0], :]
+    return np.arctan2(d[..., 1], d[..., 0]), np.hypot(d[..., 0], d[..., 1])
+
+
+def _point(value, name, where):
+    try:
+        x, y = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise PoseError(f"{where}: joint {name!r} has position {value!r}; give two numbers [x, y]") from None
+    if not (np.isfinite(x) and np.isfinite(y)):
+        raise PoseError(f"{where}: joint {name!r} has a non-finite position ({x}, {y})")
+    return x, y
+
+
+def descendants(skeleton, joint):
+    """Indices of every joint below ``joint`` (an index), in parents-first order."""
+    below = np.zeros(len(skeleton), dtype=bool)
+    for i in range(joint + 1, len(skeleton)):
+        p = skeleton.parents[i]
+        below[i] = p == joint or (p >= 0 and below[p])
+    return np.flatnonzero(below)
+
+
+def rotate_about(skeleton, positions, joint, angle, *, scale=1.0):
+    """Turn everything below ``joint`` (a name) about it by ``angle`` radians, scaled by ``scale``.
+
+    Bends an elbow (rotate about the elbow), raises an arm (about the shoulder). Angles are
+    screen angles: positive turns from +x towards +y, clockwise as seen with y down.
+
+    Examples
+    --------
+    >>> from toonmotion.rig.skeleton import Skeleton
+    >>> s = Skeleton.from_joints([("arm", None, (0, 0)), ("hand", "arm", (10, 0))])
+    >>> np.round(rotate_about(s, s.positions, "arm", np.pi / 2), 9).tolist()
+    [[0.0, 0.0], [0.0, 10.0]]
+    """
+    j = skeleton.index(joint)
+    out = np.array(positions, dtype=float)
+    below = descendants(skeleton, j)
+    c, s = np.cos(angle) * scale, np.sin(angle) * scale
+    rel = out[below] - out[j]
+    out[below] = out[j] + np.stack([c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1]], axis=1)
+    return out

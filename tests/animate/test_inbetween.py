@@ -1,0 +1,236 @@
+"""Tests for toonmotion.animate.inbetween and the bundled sample animation."""
+
+import numpy as np
+import pytest
+
+from toonmotion.animate.inbetween import METHODS, animate_frames, solve_keys
+from toonmotion.animate.timeline import EASES, Keyframe, make_timeline
+from toonmotion.deform.deformer import Deformer
+from toonmotion.errors import SettingsError
+from toonmotion.geometry.polygon import triangle_areas
+from toonmotion.io.char_cfg import load_char_cfg
+from toonmotion.io.image import load_image, load_mask
+from toonmotion.rig.pipeline import rig_drawing
+from toonmotion.rig.pose import Pose, bone_angles, check_pose, rest_pose, rotate_about
+from toonmotion.sample_animation import sample_keyframes
+from toonmotion.samples import sample_character
+
+# Between two keys a vertex may move per frame at most this multiple of its share of the keys'
+# difference (key difference / frames between them) times the ease's steepest slope. Uniform
+# motion along a straight line gives 1; a turn moves along an arc, a little longer than its chord.
+SMOOTHNESS = 1.5
+STEEPEST = {"linear": 1.0, "in-out": 1.5, "in": 2.0, "out": 2.0}
+
+
+@pytest.fixture(scope="module")
+def sample():
+    """The sample character's deformer, rigged once for this module."""
+    rgba, skeleton = sample_character()
+    return Deformer(rig_drawing(rgba, skeleton=skeleton))
+
+
+@pytest.fixture(scope="module")
+def char1(drawings_root_module):
+    folder = drawings_root_module / "char1"
+    texture = load_image(folder / "texture.png")
+    size = (texture.shape[1], texture.shape[0])
+    skeleton, _ = load_char_cfg(folder / "char_cfg.yaml")
+    mask = load_mask(folder / "mask.png", size=size)
+    return Deformer(rig_drawing(texture, mask=mask, skeleton=skeleton))
+
+
+@pytest.fixture(scope="module")
+def drawings_root_module():
+    from tests.conftest import DRAWINGS_DIR, _require
+
+    return _require(DRAWINGS_DIR)
+
+
+def _frames(deformer, timeline, method, keys=None):
+    out = list(animate_frames(deformer, timeline, method=method, keys=keys))
+    assert [f for f, _ in out] == list(range(timeline.frame_count))
+    return np.array([U for _, U in out])
+
+
+def _wave(skeleton, frames=(2, 10, 18, 26), ease="linear"):
+    """Rest, both elbows bent, both arms half raised, rest."""
+    P = skeleton.positions
+    bent = rotate_about(skeleton, rotate_about(skeleton, P, "right_elbow", 1.0), "left_elbow", -1.0)
+    up = rotate_about(skeleton, rotate_about(skeleton, P, "right_shoulder", 0.8), "left_shoulder", -0.8)
+    poses = [P, bent, up, P]
+    keys = [Keyframe(f, Pose(np.array(p))) for f, p in zip(frames, poses, strict=True)]
+    return make_timeline(skeleton, keys, ease=ease)
+
+
+# --- key frames and frame counts -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_key_frames_are_the_solved_keys_bit_for_bit(sample, method):
+    timeline = sample_keyframes(sample.character.skeleton)
+    keys = solve_keys(sample, timeline)
+    assert len(keys) == len(timeline.keys)
+    for given in (keys, None):  # keys solved beforehand, or solved by animate_frames itself
+        frames = _frames(sample, timeline, method, keys=given)
+        assert len(frames) == timeline.frame_count == 37
+        for key, solved in zip(timeline.keys, keys, strict=True):
+            assert np.array_equal(frames[key.frame], solved.U), f"frame {key.frame} is not its key"
+    # solve_keys warm-starts each key from the one before, as deform(previous=...) does.
+    previous = None
+    for key, solved in zip(timeline.keys, keys, strict=True):
+        previous = sample.deform(key.pose, previous=previous)
+        assert np.array_equal(previous.U, solved.U)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_frames_before_the_first_key_hold_it(sample, method):
+    timeline = _wave(sample.character.skeleton)
+    keys = solve_keys(sample, timeline)
+    frames = _frames(sample, timeline, method, keys=keys)
+    assert len(frames) == 27
+    for f in range(3):
+        assert np.array_equal(frames[f], keys[0].U)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_timeline_of_rest_keys_is_the_rest_mesh_throughout(sample, method):
+    skeleton = sample.character.skeleton
+    timeline = make_timeline(skeleton, [Keyframe(0, rest_pose(skeleton)), Keyframe(5, rest_pose(skeleton))])
+    frames = _frames(sample, timeline, method)
+    rest = np.broadcast_to(sample.character.mesh.V, frames.shape)
+    np.testing.assert_allclose(frames, rest, rtol=0, atol=1e-9)
+
+
+def test_a_bogus_method_is_refused(sample):
+    timeline = _wave(sample.character.skeleton)
+    with pytest.raises(SettingsError, match=r"method must be one of interpolate, solve, got 'bogus'"):
+        next(animate_frames(sample, timeline, method="bogus"))
+
+
+def test_a_bogus_method_is_refused_when_called(sample):
+    with pytest.raises(SettingsError):
+        animate_frames(sample, _wave(sample.character.skeleton), method="bogus")
+
+
+# --- smooth in-betweens ---------------------------------------------------------------------------
+
+
+def _worst_step(frames, timeline):
+    """Per pair of keys: the largest vertex move between consecutive frames over that pair's
+    share of the keys' difference (largest key-to-key move / frames between the keys)."""
+    worst = []
+    for a, b in zip(timeline.keys, timeline.keys[1:], strict=False):
+        i, j = a.frame, b.frame
+        difference = np.linalg.norm(frames[j] - frames[i], axis=1).max()
+        steps = np.linalg.norm(np.diff(frames[i:j + 1], axis=0), axis=2).max()
+        worst.append(steps / (difference / (j - i)))
+    return np.array(worst)
+
+
+SMOOTHNESS_FAILS = {
+    ("sample", "linear", "solve"): "frame 6 (a key) pops 31.7 px from frame 5 where its neighbours move "
+                                   "~14.5 px: 2.18x the key difference per frame. The key is solved from "
+                                   "the previous key, the frames before it from the previous frame, and "
+                                   "stage two stops early (tolerance 1e-3), so the two land apart",
+}
+
+
+def _smooth_cases():
+    out = []
+    for who in ("sample", "char1"):
+        for ease in ("linear", "in-out"):
+            for method in METHODS:
+                reason = SMOOTHNESS_FAILS.get((who, ease, method))
+                marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
+                out.append(pytest.param(who, ease, method, marks=marks, id=f"{who}-{ease}-{method}"))
+    return out
+
+
+@pytest.mark.parametrize(("who", "ease", "method"), _smooth_cases())
+def test_in_betweens_move_smoothly_from_key_to_key(request, who, ease, method):
+    deformer = request.getfixturevalue(who)
+    skeleton = deformer.character.skeleton
+    if who == "sample":
+        timeline = make_timeline(skeleton, sample_keyframes(skeleton).keys, fps=12, ease=ease)
+    else:
+        timeline = _wave(skeleton, ease=ease)
+    frames = _frames(deformer, timeline, method)
+    worst = _worst_step(frames, timeline)
+    print(f"\n{who} {ease} {method}: worst step / (key difference / frames), per pair of keys: "
+          f"{np.round(worst, 2)}")
+    assert np.all(worst <= SMOOTHNESS * STEEPEST[ease])
+    assert set(STEEPEST) == set(EASES)
+
+
+HOLD_FAILS = {
+    ("sample", "solve"): "the held pose drifts 0.95 px while its two keys differ by 0.25 px",
+    ("char1", "solve"): "the held pose drifts 23.6 px while its two keys differ by 0.67 px: every frame "
+                        "warm-starts from the last and stage two, stopped early by its 1e-3 tolerance, "
+                        "keeps descending (energy 2622 -> 2256 over 8 re-solves of one pose)",
+}
+
+
+@pytest.mark.parametrize(("who", "method"), [
+    pytest.param(w, m, id=f"{w}-{m}", marks=[pytest.mark.xfail(strict=True, reason=HOLD_FAILS[w, m])]
+                 if (w, m) in HOLD_FAILS else [])
+    for w in ("sample", "char1") for m in METHODS
+])
+def test_a_held_pose_holds_still(request, who, method):
+    deformer = request.getfixturevalue(who)
+    skeleton = deformer.character.skeleton
+    P = skeleton.positions
+    bent = Pose(rotate_about(skeleton, rotate_about(skeleton, P, "right_elbow", 1.0), "left_elbow", -1.0))
+    timeline = make_timeline(skeleton, [Keyframe(0, bent), Keyframe(6, bent)])
+    keys = solve_keys(deformer, timeline)
+    frames = _frames(deformer, timeline, method, keys=keys)
+    keys_apart = np.abs(keys[1].U - keys[0].U).max()
+    drift = np.abs(frames - keys[0].U).max()
+    print(f"\n{who} {method}: keys {keys_apart:.3g} px apart, frames drift {drift:.3g} px")
+    assert drift <= keys_apart + 1e-9
+
+
+# --- the sample animation ---------------------------------------------------------------------------
+
+
+def test_sample_keyframes_are_valid_poses_that_keep_every_bone_length(sample):
+    skeleton = sample.character.skeleton
+    timeline = sample_keyframes(skeleton)
+    assert [k.frame for k in timeline.keys] == [0, 6, 12, 18, 24, 30, 36]
+    assert timeline.fps == 12 and timeline.ease == "in-out" and timeline.frame_count == 37
+    for key in timeline.keys:
+        assert check_pose(skeleton, key.pose) is key.pose
+        np.testing.assert_allclose(bone_angles(skeleton, key.pose.positions)[1], skeleton.bone_lengths,
+                                   rtol=0, atol=1e-9)
+    first, crouch, hop, landing, *_, last = timeline.keys
+    np.testing.assert_array_equal(first.pose.positions, skeleton.positions)
+    np.testing.assert_array_equal(last.pose.positions, skeleton.positions)
+    np.testing.assert_array_equal(landing.pose.positions, crouch.pose.positions)
+    feet = [skeleton.index("right_foot"), skeleton.index("left_foot")]
+    np.testing.assert_allclose(crouch.pose.positions[feet], skeleton.positions[feet], atol=1e-9)  # planted
+    hip = skeleton.index("hip")
+    assert crouch.pose.positions[hip, 1] > skeleton.positions[hip, 1]  # lower (y down)
+    assert np.all(hop.pose.positions[feet, 1] < skeleton.positions[feet, 1])  # off the ground
+
+
+def test_sample_keyframes_scale_with_the_character():
+    small = sample_character(scale=0.5)[1]
+    big = sample_character(scale=1.0)[1]
+    for a, b in zip(sample_keyframes(small).keys, sample_keyframes(big).keys, strict=True):
+        np.testing.assert_allclose(2 * a.pose.positions, b.pose.positions, rtol=1e-12, atol=1e-9)
+
+
+SAMPLE_KEY_FAILS = {}
+
+
+@pytest.mark.parametrize("frame", [
+    pytest.param(f, marks=[pytest.mark.xfail(strict=True, reason=SAMPLE_KEY_FAILS[f])]
+                 if f in SAMPLE_KEY_FAILS else [])
+    for f in (0, 6, 12, 18, 24, 30, 36)
+])
+def test_sample_animation_keys_have_no_inverted_joint_triangle(sample, frame):
+    character = sample.character
+    timeline = sample_keyframes(character.skeleton)
+    keys = dict(zip((k.frame for k in timeline.keys), solve_keys(sample, timeline), strict=True))
+    areas = triangle_areas(keys[frame].U, character.mesh.F)
+    inverted = int((areas[character.binding.joint_triangle] <= 0).sum())
+    assert inverted == 0, f"{inverted} joint triangles inverted at key frame {frame}"
