@@ -24,7 +24,7 @@ from toonmotion.io.pose_json import load_keyframes, load_pose, save_keyframes
 from toonmotion.io.project import load_project, save_project
 from toonmotion.io.skeleton_json import load_skeleton_file, save_skeleton_json
 from toonmotion.io.video import animation_format, save_animation
-from toonmotion.render.frame import OVERLAYS, fit_view, natural_size, render_frame
+from toonmotion.render.frame import check_overlays, fit_view, natural_size, render_frame
 from toonmotion.render.overview import render_overview
 from toonmotion.rig.character import RigSettings
 from toonmotion.rig.pipeline import STAGES, rig_drawing
@@ -403,11 +403,7 @@ def _colour(text):
 
 
 def _overlays(text):
-    items = tuple(o.strip() for o in text.split(",") if o.strip())
-    unknown = [o for o in items if o not in OVERLAYS]
-    if unknown:
-        raise SettingsError(f"unknown overlay {unknown[0]!r}; choose from {', '.join(OVERLAYS)}")
-    return items
+    return check_overlays(o.strip() for o in text.split(",") if o.strip())
 
 
 def _progress():

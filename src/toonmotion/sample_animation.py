@@ -7,7 +7,7 @@ they fit it at any scale. 36 frames at 12 fps: three seconds.
 import numpy as np
 
 from toonmotion.animate.timeline import Keyframe, make_timeline
-from toonmotion.rig.pose import Pose, descendants, rest_pose, rotate_about
+from toonmotion.rig.pose import Pose, descendants, rotate_about
 
 _LEGS = ("right_knee", "right_foot", "left_knee", "left_foot")
 
@@ -40,8 +40,7 @@ def sample_keyframes(skeleton, *, fps=12.0, ease="in-out"):
     wave_a = rotate_about(skeleton, wave_a, "right_elbow", 0.5)
     wave_b = rotate_about(skeleton, wave_a, "right_elbow", -0.9)
     poses = {0: rest, 6: crouch, 12: hop, 18: crouch, 24: wave_a, 30: wave_b, 36: rest}
-    keys = [Keyframe(frame, Pose(np.array(p))) if frame else Keyframe(0, rest_pose(skeleton))
-            for frame, p in poses.items()]
+    keys = [Keyframe(frame, Pose(p)) for frame, p in poses.items()]
     return make_timeline(skeleton, keys, fps=fps, ease=ease)
 
 

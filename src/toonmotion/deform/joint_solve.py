@@ -140,8 +140,6 @@ class JointSolver:
                 f"stage-two weights must be three finite numbers >= 0, not all zero; got {weights.tolist()}"
             )
         self.weights = weights / weights.sum()
-        n = len(mesh.V)
-        self.n = n
         free = np.asarray(free, dtype=bool)
         self.free = np.flatnonzero(free)
         self.fixed = np.flatnonzero(~free)

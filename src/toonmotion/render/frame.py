@@ -15,6 +15,15 @@ from toonmotion.render.raster import render_mesh
 OVERLAYS = ("mesh", "skeleton", "rest")
 
 
+def check_overlays(overlays):
+    """``overlays`` as a tuple, each one of :data:`OVERLAYS`."""
+    overlays = tuple(overlays)
+    unknown = [o for o in overlays if o not in OVERLAYS]
+    if unknown:
+        raise SettingsError(f"unknown overlay {unknown[0]!r}; choose from {', '.join(OVERLAYS)}")
+    return overlays
+
+
 def canvas_view(character):
     """The drawing's own canvas as a view."""
     w, h = character.size
@@ -81,9 +90,7 @@ def render_frame(character, U, *, pose=None, size=None, view=None, background=No
     -------
     (H, W, 4) uint8
     """
-    unknown = [o for o in overlays if o not in OVERLAYS]
-    if unknown:
-        raise SettingsError(f"unknown overlay {unknown[0]!r}; choose from {', '.join(OVERLAYS)}")
+    overlays = check_overlays(overlays)
     if pose is None and {"skeleton", "rest"} & set(overlays):
         raise SettingsError("the skeleton and rest overlays need the pose")
     view = canvas_view(character) if view is None else view

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from toonmotion.errors import SettingsError
-from toonmotion.render.raster import _check_colour, view_transform
+from toonmotion.render.raster import check_colour, view_transform
 from toonmotion.shape.mesh import unique_edges
 
 # Points are passed to OpenCV in fixed point with this many fractional bits.
@@ -129,7 +129,7 @@ def draw_reference(frame, positions, bones, *, view, colour=(220, 30, 30, 255), 
 
 def _paint(frame, colour, width, segments, discs=None, radius=0):
     """Composite ``colour`` through anti-aliased ``segments`` (s, 2, 2) and ``discs`` (k, 2)."""
-    colour = _check_colour(colour, "colour")
+    colour = check_colour(colour, "colour")
     H, W = frame.shape[:2]
     cover = np.zeros((H, W), np.uint8)
     fixed = np.rint(np.clip(segments, -_FAR, _FAR) * (1 << _SHIFT)).astype(np.int32)

@@ -122,7 +122,7 @@ def render_mesh(texture, V, U, F, *, size, view=None, order=None, background=Non
     if mask is not None:
         mask = _check_mask_shape(mask, (h, w))
     out = np.zeros((H, W, 4), np.uint8)
-    bg = None if background is None else _check_colour(background, "background")
+    bg = None if background is None else check_colour(background, "background")
     if bg is not None:
         out.view(np.uint32).fill(np.array(bg, np.uint8).view(np.uint32)[0])
     if len(F) == 0:
@@ -383,7 +383,8 @@ def _check_view(view):
     return x0, y0, x1, y1
 
 
-def _check_colour(colour, name):
+def check_colour(colour, name):
+    """``colour`` as an RGBA tuple of ints 0-255 (alpha 255 when three are given); SettingsError otherwise."""
     try:
         values = tuple(colour)
     except TypeError:
