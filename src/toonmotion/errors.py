@@ -51,3 +51,18 @@ class KeyframeError(ToonmotionError):
 
 class ExportError(ToonmotionError):
     """An animation or image cannot be written in the requested format."""
+
+
+class FilterError(ToonmotionError):
+    """A cartoon-filter setting is invalid: a negative or non-finite strength or width, a fixed
+    joint that no chain from the root reaches."""
+
+
+class EditError(ToonmotionError):
+    """An edit is malformed or cannot apply: a sketch curve of fewer than two points, a drag
+    with no vertex near its start, nothing left to undo."""
+
+
+class MotionError(ToonmotionError):
+    """A motion is malformed: no frames, a frame rate that is not a positive number, joints
+    that do not match the skeleton it is used with."""
