@@ -1,0 +1,82 @@
+"""Motion: a pose for every frame, as one array (captured, filtered or sampled from key-frames).
+
+A motion is ``(frames, joints, 2)`` joint positions plus a frame rate, for a skeleton whose
+joint names and parents say what the columns are. It is what the cartoon filter reads and
+writes, what motion capture produces, and what ``toonmotion animate`` plays frame by frame.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from toonmotion.animate.timeline import pose_at
+from toonmotion.errors import MotionError
+from toonmotion.rig.pose import Pose
+
+
+@dataclass(frozen=True, eq=False)
+class Motion:
+    """Joint positions over time.
+
+    Attributes
+    ----------
+    skeleton : Skeleton
+        Joint names and parents; its positions are the rest pose the motion was made for.
+    positions : (T, k, 2) float
+        (x, y) pixels, y down, of every joint at every frame.
+    fps : float
+        Frames per second.
+    """
+
+    skeleton: object
+    positions: np.ndarray
+    fps: float
+
+    def __post_init__(self):
+        positions = np.array(self.positions, dtype=float)
+        k = len(self.skeleton)
+        if positions.ndim != 3 or positions.shape[1:] != (k, 2) or len(positions) == 0:
+            raise MotionError(
+                f"a motion needs positions of shape (frames, {k}, 2) for its {k} joints, "
+                f"got {positions.shape}"
+            )
+        if not np.all(np.isfinite(positions)):
+            frame = int(np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))[0])
+            raise MotionError(f"frame {frame} of the motion has a non-finite joint position")
+        if isinstance(self.fps, bool) or not isinstance(self.fps, (int, float, np.number)) \
+                or not (np.isfinite(self.fps) and self.fps > 0):
+            raise MotionError(f"the motion's fps must be a finite number > 0, got {self.fps!r}")
+        positions.setflags(write=False)
+        object.__setattr__(self, "positions", positions)
+        object.__setattr__(self, "fps", float(self.fps))
+
+    @property
+    def frame_count(self):
+        return len(self.positions)
+
+    def pose(self, frame):
+        """The pose at ``frame`` (an index)."""
+        return Pose(self.positions[frame])
+
+
+def motion_from_timeline(skeleton, timeline):
+    """Sample key-frames and their in-betweens into a :class:`Motion`, one pose per frame."""
+    frames = [pose_at(skeleton, timeline, f).positions for f in range(timeline.frame_count)]
+    return Motion(skeleton=skeleton, positions=np.stack(frames), fps=timeline.fps)
+
+
+def motion_for(skeleton, motion, *, where="the motion"):
+    """``motion``'s positions in ``skeleton``'s joint order, ``(T, k, 2)``.
+
+    The motion must name every joint of ``skeleton`` (it may have more); retargeting a motion
+    made for a differently built skeleton is a separate step.
+    """
+    names = motion.skeleton.names
+    missing = [n for n in skeleton.names if n not in names]
+    if missing:
+        raise MotionError(
+            f"{where} has no joint {missing[0]!r}"
+            + (f" (and {len(missing) - 1} more are missing)" if len(missing) > 1 else "")
+            + f"; its joints are: {', '.join(names)}"
+        )
+    return motion.positions[:, [names.index(n) for n in skeleton.names]]

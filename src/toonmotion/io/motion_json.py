@@ -1,0 +1,80 @@
+"""Motion files: JSON, versioned, one frame per line.
+
+::
+
+    {"format": "toonmotion.motion", "version": 1, "fps": 12,
+     "joints": [{"name": "root", "parent": null, "position": [264, 397]}, ...],
+     "frames": [
+      [[264, 397], [264, 397], ...],
+      ...]}
+
+``joints`` is the skeleton (its positions the rest pose); each frame lists every joint's
+``[x, y]`` in that order. Numbers are written with full precision, so a save followed by a
+load gives back the same arrays.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from toonmotion.animate.motion import Motion
+from toonmotion.errors import MotionError, ToonmotionError
+from toonmotion.io.atomic import write_text
+from toonmotion.io.skeleton_json import skeleton_from_dict, skeleton_to_dict
+
+FORMAT = "toonmotion.motion"
+VERSION = 1
+
+
+def is_motion_file(path):
+    """True when ``path`` is a JSON file whose format is a motion (cheap sniff, no validation)."""
+    try:
+        head = Path(path).read_text(encoding="utf-8")[:200]
+    except (OSError, UnicodeDecodeError):
+        return False
+    return f'"format": "{FORMAT}"' in head
+
+
+def load_motion(path):
+    """Read a motion file; returns a :class:`Motion`."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise MotionError(f"cannot read {path}: no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise MotionError(f"cannot read {path} as JSON: {error}") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise MotionError(f"{path} is not a motion file (format {FORMAT!r})")
+    if data.get("version") != VERSION:
+        raise MotionError(
+            f"{path} is motion format version {data.get('version')!r}; this toonmotion reads "
+            f"version {VERSION}"
+        )
+    try:
+        skeleton = skeleton_from_dict(data.get("joints"), where=str(path))
+    except ToonmotionError as error:
+        raise MotionError(str(error)) from None
+    frames = data.get("frames")
+    try:
+        positions = np.array(frames, dtype=float)
+    except (TypeError, ValueError):
+        raise MotionError(f"{path}: 'frames' must be a list of frames of [x, y] per joint") from None
+    if positions.ndim == 3 and positions.shape[1] == len(skeleton):
+        # Columns follow the file's joint order; the skeleton lists parents first.
+        order = [skeleton.index(j["name"]) for j in data["joints"]]
+        positions = positions[:, np.argsort(order)]
+    try:
+        return Motion(skeleton=skeleton, positions=positions, fps=data.get("fps"))
+    except MotionError as error:
+        raise MotionError(f"{path}: {error}") from None
+
+
+def save_motion(path, motion):
+    """Write a :class:`Motion` atomically."""
+    head = json.dumps({"format": FORMAT, "version": VERSION, "fps": motion.fps})[:-1]
+    joints = json.dumps(skeleton_to_dict(motion.skeleton))
+    rows = ",\n".join(" " + json.dumps(frame.tolist(), separators=(",", ":"))
+                      for frame in motion.positions)
+    write_text(path, f'{head},\n "joints": {joints},\n "frames": [\n{rows}]}}\n')

@@ -1,0 +1,71 @@
+"""Tests for toonmotion.io.motion_json: motion files."""
+
+import json
+
+import numpy as np
+import pytest
+
+from toonmotion.animate.motion import Motion, motion_for
+from toonmotion.errors import MotionError
+from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion
+from toonmotion.samples import sample_character
+
+
+@pytest.fixture(scope="module")
+def motion():
+    skeleton = sample_character()[1]
+    rng = np.random.default_rng(3)
+    # Numbers that need every bit of a double.
+    positions = skeleton.positions + rng.normal(scale=np.pi, size=(9, len(skeleton), 2))
+    return Motion(skeleton, positions, fps=23.976)
+
+
+def test_save_then_load_is_exact(motion, tmp_path):
+    save_motion(tmp_path / "m.json", motion)
+    loaded = load_motion(tmp_path / "m.json")
+    assert loaded.skeleton.names == motion.skeleton.names
+    np.testing.assert_array_equal(loaded.skeleton.parents, motion.skeleton.parents)
+    np.testing.assert_array_equal(loaded.positions, motion.positions)
+    assert loaded.fps == motion.fps
+    assert is_motion_file(tmp_path / "m.json")
+    # One line per frame, so diffs of a motion stay readable.
+    assert len((tmp_path / "m.json").read_text().splitlines()) == 3 + len(motion.positions)
+
+
+def test_joints_listed_children_first_still_line_up(motion, tmp_path):
+    save_motion(tmp_path / "m.json", motion)
+    data = json.loads((tmp_path / "m.json").read_text())
+    data["joints"] = data["joints"][::-1]
+    data["frames"] = [frame[::-1] for frame in data["frames"]]
+    (tmp_path / "r.json").write_text(json.dumps(data))
+    loaded = load_motion(tmp_path / "r.json")
+    np.testing.assert_array_equal(motion_for(motion.skeleton, loaded), motion.positions)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda d: d.update(format="toonmotion.pose"), "is not a motion file"),
+        (lambda d: d.update(version=2), "motion format version 2"),
+        (lambda d: d.update(fps=-1), "fps must be a finite number > 0"),
+        (lambda d: d.update(frames=[]), r"shape \(frames, 17, 2\)"),
+        (lambda d: d["frames"][0].pop(), r"must be a list of frames|shape"),
+        (lambda d: d["joints"][1].update(parent="nobody"), "unknown parent 'nobody'"),
+    ],
+)
+def test_malformed_motion_files(motion, tmp_path, change, message):
+    save_motion(tmp_path / "m.json", motion)
+    data = json.loads((tmp_path / "m.json").read_text())
+    change(data)
+    (tmp_path / "m.json").write_text(json.dumps(data))
+    with pytest.raises(MotionError, match=message):
+        load_motion(tmp_path / "m.json")
+
+
+def test_missing_and_broken_files(tmp_path):
+    with pytest.raises(MotionError, match="no such file"):
+        load_motion(tmp_path / "none.json")
+    (tmp_path / "bad.json").write_text("{")
+    with pytest.raises(MotionError, match="as JSON"):
+        load_motion(tmp_path / "bad.json")
+    assert not is_motion_file(tmp_path / "none.json")
