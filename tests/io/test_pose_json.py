@@ -220,3 +220,44 @@ def test_bad_timelines_in_a_file_name_the_file(tmp_path, skeleton, content):
     with pytest.raises(KeyframeError) as error:
         load_keyframes(path, skeleton)
     assert str(path) in str(error.value)
+
+
+def test_fine_tuning_edits_round_trip_in_pose_and_key_files(skeleton, tmp_path):
+    from toonmotion.deform.tuning import CurveEdit, DragEdit
+    from toonmotion.io.pose_json import load_pose_edits
+
+    edits = (CurveEdit(points=[[1.5, 2.25], [3, 4], [5, np.pi]]),
+             DragEdit(start=[[10, 20], [30, 40]], end=[[11, 19], [30, 45]]))
+    save_pose(tmp_path / "p.json", skeleton, rest_pose(skeleton), edits)
+    loaded = load_pose_edits(tmp_path / "p.json")
+    assert [type(e) for e in loaded] == [CurveEdit, DragEdit]
+    np.testing.assert_array_equal(loaded[0].points, edits[0].points)
+    np.testing.assert_array_equal(loaded[1].end, edits[1].end)
+    timeline = make_timeline(skeleton, [Keyframe(0, rest_pose(skeleton)),
+                                        Keyframe(6, rest_pose(skeleton), edits)], fps=12)
+    save_keyframes(tmp_path / "k.json", skeleton, timeline)
+    keys = load_keyframes(tmp_path / "k.json", skeleton).keys
+    assert keys[0].edits == () and len(keys[1].edits) == 2
+    np.testing.assert_array_equal(keys[1].edits[1].start, edits[1].start)
+    save_skeleton_json(tmp_path / "s.json", skeleton)
+    assert load_pose_edits(tmp_path / "s.json") == ()
+
+
+@pytest.mark.parametrize(
+    ("edits", "message"),
+    [
+        ([{"kind": "curve", "points": [[1, 2]]}], "edit 1 a sketch curve needs at least 2 points"),
+        ([{"kind": "curve", "points": [[1, 2], [3, None]]}], "list of \\[x, y\\] points|non-finite"),
+        ([{"kind": "drag", "from": [[1, 2]], "to": []}], "drag's end points needs at least 1"),
+        ([{"kind": "drag", "from": [[1, 2]], "to": [[1, 2], [3, 4]]}], "1 start points but 2 end"),
+        ([{"kind": "blur"}], "kind 'blur'; use 'curve' or 'drag'"),
+        ({"kind": "curve"}, "'edits' must be a list"),
+    ],
+)
+def test_malformed_edits_in_a_key_file(skeleton, tmp_path, edits, message):
+    from toonmotion.errors import EditError
+
+    data = {"format": "toonmotion.keyframes", "version": 1,
+            "keys": [{"frame": 0, "rest": True, "edits": edits}]}
+    with pytest.raises(EditError, match=message):
+        load_keyframes(_write(tmp_path / "k.json", data), skeleton)

@@ -10,28 +10,44 @@ keys' own solved meshes, exactly.
 
 ``method="solve"`` instead runs stage two on every frame, warm-started from the previous one:
 slower, but every in-between is itself a minimum of the stage-two energy.
+
+Fine-tuning edits on a key (sketch curves, drags) are part of its mesh, so in-betweens carry
+them in and out with the rest of stage two's displacement. When the frames' poses are replaced
+(the cartoon filter's exaggerated poses), each frame takes its new pose's stage one plus the
+displacement interpolated from the keys, turned with the new pose's bones.
 """
 
 import numpy as np
 
 from toonmotion.animate.timeline import interpolate_pose, segment_at
+from toonmotion.deform.tuning import apply_tuning
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.coordinates import as_complex, as_points
-from toonmotion.rig.pose import bone_angles
+from toonmotion.rig.pose import Pose, bone_angles
 
 METHODS = ("interpolate", "solve")
 
 
 def solve_keys(deformer, timeline):
-    """Deform every key pose (stage one and two), each warm-started from the one before."""
+    """Deform every key pose (stage one and two, then its edits), each warm-started from the
+    one before."""
     results, previous = [], None
     for key in timeline.keys:
         previous = deformer.deform(key.pose, previous=previous)
-        results.append(previous)
+        results.append(apply_tuning(deformer, key.pose, previous, key.edits))
     return results
 
 
-def animate_frames(deformer, timeline, *, method="interpolate", keys=None):
+def motion_frames(deformer, positions):
+    """Yield ``(frame, U)`` for a pose per frame (``(T, k, 2)``, a motion), each frame solved
+    warm-started from the one before."""
+    previous = None
+    for frame, P in enumerate(positions):
+        previous = deformer.deform(Pose(P), previous=previous)
+        yield frame, previous.U
+
+
+def animate_frames(deformer, timeline, *, method="interpolate", keys=None, poses=None):
     """Yield ``(frame, U)`` for every frame from 0 to the last key.
 
     Parameters
@@ -42,6 +58,9 @@ def animate_frames(deformer, timeline, *, method="interpolate", keys=None):
         ``"interpolate"`` (eq. 3.11) or ``"solve"`` (stage two on every frame).
     keys : list of Deformation, optional
         The keys already solved by :func:`solve_keys`.
+    poses : (frame_count, k, 2) float, optional
+        Replacement joint positions for every frame (e.g. exaggerated by the cartoon filter);
+        by default each frame's pose is interpolated from the keys.
 
     Yields
     ------
@@ -51,11 +70,16 @@ def animate_frames(deformer, timeline, *, method="interpolate", keys=None):
     """
     if method not in METHODS:
         raise SettingsError(f"the in-between method must be one of {', '.join(METHODS)}, got {method!r}")
+    if poses is not None:
+        poses = np.asarray(poses, dtype=float)
+        expected = (timeline.frame_count, len(deformer.character.skeleton), 2)
+        if poses.shape != expected:
+            raise SettingsError(f"replacement poses must have shape {expected}, got {poses.shape}")
     keys = solve_keys(deformer, timeline) if keys is None else keys
-    return _frames(deformer, timeline, method, keys)
+    return _frames(deformer, timeline, method, keys, poses)
 
 
-def _frames(deformer, timeline, method, keys):
+def _frames(deformer, timeline, method, keys, poses):
     skeleton = deformer.character.skeleton
     bone = deformer.needles.bone
     rest_angle, _ = bone_angles(skeleton, skeleton.positions)
@@ -64,17 +88,20 @@ def _frames(deformer, timeline, method, keys):
     previous = None
     for frame in range(timeline.frame_count):
         i, t = segment_at(timeline, frame)
-        if t == 0:
+        if t == 0 and poses is None:
             previous = keys[i]
             yield frame, keys[i].U
             continue
-        pose = interpolate_pose(skeleton, timeline.keys[i].pose, timeline.keys[i + 1].pose, t)
+        if poses is not None:
+            pose = Pose(poses[frame])
+        else:
+            pose = interpolate_pose(skeleton, timeline.keys[i].pose, timeline.keys[i + 1].pose, t)
         if method == "solve":
             previous = deformer.deform(pose, previous=previous)
             yield frame, previous.U
             continue
         U1 = deformer.stage_one(pose)
-        displacement = (1 - t) * local[i] + t * local[i + 1]
+        displacement = local[i] if t == 0 else (1 - t) * local[i] + t * local[i + 1]
         turn = np.exp(1j * _bone_turn(skeleton, pose, rest_angle))
         yield frame, U1 + as_points(turn[bone] * displacement)
 

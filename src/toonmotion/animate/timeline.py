@@ -21,10 +21,15 @@ EASES = ("linear", "in-out", "in", "out")
 
 @dataclass(frozen=True, eq=False)
 class Keyframe:
-    """A key pose at a frame number."""
+    """A key pose at a frame number, and fine-tuning edits made on its deformed mesh.
+
+    ``edits`` are :mod:`toonmotion.deform.tuning` edits (sketch curves, point drags), applied in
+    order after the key is deformed; in-betweens carry them along with stage two's displacement.
+    """
 
     frame: int
     pose: Pose
+    edits: tuple = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,7 +96,8 @@ def make_timeline(skeleton, keys, *, fps=24.0, ease="linear"):
     for key in keys:
         check_pose(skeleton, key.pose, where=f"key-frame {key.frame}")
     keys.sort(key=lambda k: k.frame)
-    return Timeline(keys=tuple(Keyframe(int(k.frame), k.pose) for k in keys), fps=fps, ease=ease)
+    keys = tuple(Keyframe(int(k.frame), k.pose, tuple(k.edits)) for k in keys)
+    return Timeline(keys=keys, fps=fps, ease=ease)
 
 
 def segment_at(timeline, frame):

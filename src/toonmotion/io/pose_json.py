@@ -11,13 +11,20 @@ skeleton sketched in any editor can be used directly. Key-frames put poses on a 
      "keys": [{"frame": 0, "joints": {...}}, {"frame": 12, "rest": true}, ...]}
 
 ``"rest": true`` stands for the character's rest pose.
+
+A pose or a key may carry fine-tuning edits, applied in order after it is deformed (see
+``deform.tuning``); points are drawing pixels::
+
+    "edits": [{"kind": "curve", "points": [[x, y], ...]},
+              {"kind": "drag", "from": [[x, y], ...], "to": [[x, y], ...]}]
 """
 
 import json
 from pathlib import Path
 
 from toonmotion.animate.timeline import Keyframe, make_timeline
-from toonmotion.errors import KeyframeError, PoseError
+from toonmotion.deform.tuning import CurveEdit, DragEdit
+from toonmotion.errors import EditError, KeyframeError, PoseError
 from toonmotion.io.atomic import write_text
 from toonmotion.rig.pose import pose_from_joints, pose_to_joints, rest_pose
 
@@ -43,10 +50,51 @@ def load_pose(path, skeleton):
     return pose_from_joints(skeleton, data.get("joints"), where=str(path))
 
 
-def save_pose(path, skeleton, pose):
-    """Write ``pose`` as a pose file."""
+def load_pose_edits(path):
+    """The fine-tuning edits of a pose file, a tuple (empty for a skeleton file or none)."""
+    path = Path(path)
+    data = _read(path, PoseError)
+    if not isinstance(data, dict) or data.get("format") != POSE_FORMAT:
+        return ()
+    return edits_from_json(data.get("edits", []), where=str(path))
+
+
+def save_pose(path, skeleton, pose, edits=()):
+    """Write ``pose`` (and its fine-tuning ``edits``) as a pose file."""
     data = {"format": POSE_FORMAT, "version": VERSION, "joints": pose_to_joints(skeleton, pose)}
+    if edits:
+        data["edits"] = edits_to_json(edits)
     write_text(path, json.dumps(data, indent=1) + "\n")
+
+
+def edits_to_json(edits):
+    """Fine-tuning edits as JSON-ready dicts."""
+    out = []
+    for edit in edits:
+        if isinstance(edit, CurveEdit):
+            out.append({"kind": "curve", "points": edit.points.tolist()})
+        else:
+            out.append({"kind": "drag", "from": edit.start.tolist(), "to": edit.end.tolist()})
+    return out
+
+
+def edits_from_json(items, *, where):
+    """Fine-tuning edits from their JSON dicts; :class:`EditError` naming ``where`` if malformed."""
+    if not isinstance(items, list):
+        raise EditError(f"{where}: 'edits' must be a list")
+    out = []
+    for n, item in enumerate(items, start=1):
+        kind = item.get("kind") if isinstance(item, dict) else None
+        try:
+            if kind == "curve":
+                out.append(CurveEdit(points=item.get("points")))
+            elif kind == "drag":
+                out.append(DragEdit(start=item.get("from"), end=item.get("to")))
+            else:
+                raise EditError(f"has kind {kind!r}; use 'curve' or 'drag'")
+        except EditError as error:
+            raise EditError(f"{where}: edit {n} {error}") from None
+    return tuple(out)
 
 
 def load_keyframes(path, skeleton, *, fps=None):
@@ -73,7 +121,8 @@ def load_keyframes(path, skeleton, *, fps=None):
             pose = pose_from_joints(skeleton, key["joints"], where=where)
         else:
             raise KeyframeError(f"{where} needs 'joints' (or 'rest': true)")
-        out.append(Keyframe(frame=key["frame"], pose=pose))
+        edits = edits_from_json(key.get("edits", []), where=where)
+        out.append(Keyframe(frame=key["frame"], pose=pose, edits=edits))
     try:
         return make_timeline(skeleton, out, fps=data.get("fps", 24) if fps is None else fps,
                              ease=data.get("ease", "linear"))
@@ -88,9 +137,16 @@ def save_keyframes(path, skeleton, timeline):
         "version": VERSION,
         "fps": timeline.fps,
         "ease": timeline.ease,
-        "keys": [{"frame": k.frame, "joints": pose_to_joints(skeleton, k.pose)} for k in timeline.keys],
+        "keys": [_key_to_json(skeleton, k) for k in timeline.keys],
     }
     write_text(path, json.dumps(data, indent=1) + "\n")
+
+
+def _key_to_json(skeleton, key):
+    out = {"frame": key.frame, "joints": pose_to_joints(skeleton, key.pose)}
+    if key.edits:
+        out["edits"] = edits_to_json(key.edits)
+    return out
 
 
 def _read(path, error):
