@@ -10,8 +10,9 @@ from PIL import Image
 import toonmotion.io.project as project_module
 from toonmotion.errors import ProjectError, ProjectVersionError, ToonmotionError
 from toonmotion.io.project import PROJECT_FILE, load_project, save_project
-from toonmotion.rig.binding import attach_inside
+from toonmotion.rig.binding import Correction
 from toonmotion.rig.character import RigSettings
+from toonmotion.rig.edits import DepthEdit, apply_edit, undo
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.skeleton import Skeleton
 
@@ -48,8 +49,9 @@ def character():
     settings = RigSettings(spacing=3, tolerance=1, max_bone=20, min_part=0, prune=1)
     ch = rig_drawing(_u_drawing(), skeleton=_skeleton(), settings=settings)
     curve = np.array([[2.3, 10.7], [25.1, 10.7], [25.1, 20.3], [2.3, 20.3]])
-    binding = attach_inside(ch.binding, ch.mesh, ch.skeleton, curve, "bar")
-    ch = dataclasses.replace(ch, binding=binding)
+    ch = apply_edit(ch, Correction(curve=curve, bone="bar"))
+    ch = apply_edit(ch, DepthEdit(value=2, at=(10.0, 30.0)))
+    ch = apply_edit(ch, DepthEdit(value=-1, bone="outside"))
     assert ch.silhouette.parts[0].holes, "the test drawing should have a hole"
     assert ch.binding.fallback.any(), "the test rig should have fallback vertices"
     return ch
@@ -90,6 +92,15 @@ def _assert_same(a, b):
         assert ka.bone == kb.bone
         np.testing.assert_array_equal(ka.curve, kb.curve)
     assert a.settings == b.settings
+    np.testing.assert_array_equal(a.depth, b.depth)
+    for ea, eb in zip(a.edits + a.undone, b.edits + b.undone, strict=True):
+        assert type(ea) is type(eb)
+        if isinstance(ea, Correction):
+            assert ea.bone == eb.bone
+            np.testing.assert_array_equal(ea.curve, eb.curve)
+        else:
+            assert ea == eb
+    assert (len(a.edits), len(a.undone)) == (len(b.edits), len(b.undone))
 
 
 def _files(folder):
@@ -222,15 +233,15 @@ def test_json_that_is_not_an_object(saved):
 
 
 def test_newer_version_says_upgrade(saved):
-    _edit(saved, lambda d: d.update(version=3))
-    error = _expect(saved, ProjectVersionError, r"is project version 3, newer than this toonmotion")
+    _edit(saved, lambda d: d.update(version=4))
+    error = _expect(saved, ProjectVersionError, r"is project version 4, newer than this toonmotion")
     assert str(error).endswith("upgrade toonmotion")
 
 
 @pytest.mark.parametrize("version", [0, "1", None])
 def test_unknown_version(saved, version):
     _edit(saved, lambda d: d.update(version=version))
-    _expect(saved, ProjectVersionError, r"has unknown project version .*reads versions 1, 2")
+    _expect(saved, ProjectVersionError, r"has unknown project version .*reads versions 1, 2, 3")
 
 
 def _first_triangle_out_of_range(data):
@@ -250,7 +261,11 @@ def _negative_triangle_index(data):
         (lambda d: d["binding"]["vertex_bone"].__setitem__(0, 99), "names a bone that does not exist"),
         (lambda d: d["binding"]["fallback"].append(10**6), "fallback list names a vertex"),
         (lambda d: d["binding"]["bones"].reverse(), "bone list does not match the skeleton"),
-        (lambda d: d["binding"]["corrections"][0].update(bone="tail"), "unknown bone 'tail'"),
+        (lambda d: d["edits"][0].update(bone="tail"), "unknown bone 'tail'"),
+        (lambda d: d["edits"][2].update(bone="tail"), "unknown bone 'tail'"),
+        (lambda d: d["edits"][1].update(bone="bar"), "names a bone or gives a point"),
+        (lambda d: d["binding"].update(corrections=[{"bone": "bar", "curve": [[0, 0], [1, 0], [0, 1]]}]),
+         "keeps its corrections in 'edits'"),
         (lambda d: d["mesh"]["boundary"][0].reverse(), "outline loops must list vertices 0, 1"),
         (lambda d: d["mesh"]["triangles"].pop(), "the project's mesh is broken: "),
         (lambda d: d["curve_skeleton"]["branches"][0].update(nodes=[0, 999]), "branch names a node"),
@@ -268,6 +283,9 @@ def _negative_triangle_index(data):
         "fallback-out-of-range",
         "bone-list-mismatch",
         "correction-unknown-bone",
+        "depth-edit-unknown-bone",
+        "depth-edit-bone-and-point",
+        "v3-corrections-in-binding",
         "boundary-out-of-order",
         "missing-triangle",
         "curve-skeleton-node-out-of-range",
@@ -329,14 +347,38 @@ def test_failed_save_leaves_the_previous_project(character, saved, monkeypatch):
     assert not any(p.name.endswith(".tmp") for p in saved.iterdir())
 
 
+def _to_version_2(data):
+    """A version 3 project as version 2 wrote it: corrections in the binding, no history."""
+    data["version"] = 2
+    data["binding"]["corrections"] = [
+        {"bone": e["bone"], "curve": e["curve"]} for e in data["edits"] if e["kind"] == "correction"
+    ]
+    del data["edits"], data["undone"]
+
+
 def test_version_1_loads_with_every_region_at_depth_0(saved):
     """Projects written before depth layers existed still load."""
     def to_v1(data):
+        _to_version_2(data)
         data["version"] = 1
         del data["depth"]
 
     _edit(saved, to_v1)
-    assert not load_project(saved).depth.any()
+    loaded = load_project(saved)
+    assert not loaded.depth.any()
+    assert [type(e) for e in loaded.edits] == [Correction]
+
+
+def test_version_2_loads_as_an_edit_history(saved, character):
+    """A version 2 project's corrections and depths become edits that can be undone."""
+    _edit(saved, _to_version_2)
+    loaded = load_project(saved)
+    assert [type(e) for e in loaded.edits] == [Correction, DepthEdit, DepthEdit]
+    np.testing.assert_array_equal(loaded.depth, character.depth)
+    np.testing.assert_array_equal(loaded.binding.bone, character.binding.bone)
+    earlier, _ = undo(loaded, 2)
+    assert not earlier.depth.any()
+    np.testing.assert_array_equal(earlier.binding.bone, character.binding.bone)
 
 
 def test_depth_layers_round_trip(tmp_path, saved):

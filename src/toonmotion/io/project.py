@@ -18,7 +18,7 @@ import hashlib
 import json
 import re
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
@@ -30,14 +30,17 @@ from toonmotion.io.image import load_image, png_bytes
 from toonmotion.io.skeleton_json import skeleton_from_dict, skeleton_to_dict
 from toonmotion.rig.binding import Correction, binding_from_bones
 from toonmotion.rig.character import Character, RigSettings
+from toonmotion.rig.edits import DepthEdit
 from toonmotion.shape.curve_skeleton import NODE_KINDS, CurveSkeleton
 from toonmotion.shape.mesh import Mesh, check_mesh
 from toonmotion.shape.silhouette import Part, Silhouette
 
 FORMAT = "toonmotion.project"
-VERSION = 2
-# Version 1 had no depth layers; it loads with every region at depth 0.
-READABLE = (1, 2)
+VERSION = 3
+# Version 1 had no depth layers; it loads with every region at depth 0. Versions 1 and 2 kept
+# corrections in the binding and depth as a result only; they load as an edit history of the
+# corrections followed by a depth edit per region not at depth 0.
+READABLE = (1, 2, 3)
 PROJECT_FILE = "project.json"
 
 Point = tuple[float, float]
@@ -99,7 +102,21 @@ class _Binding(_Model):
     bones: list[str]
     vertex_bone: list[int]
     fallback: list[int] = []
-    corrections: list[_Correction] = []
+    corrections: list[_Correction] = []  # versions 1 and 2; version 3 keeps them in edits
+
+
+class _CorrectionEdit(_Correction):
+    kind: Literal["correction"]
+
+
+class _DepthEdit(_Model):
+    kind: Literal["depth"]
+    value: int
+    bone: str | None = None
+    at: Point | None = None
+
+
+_Edit = Annotated[_CorrectionEdit | _DepthEdit, Field(discriminator="kind")]
 
 
 class _Settings(_Model):
@@ -116,7 +133,7 @@ class _Settings(_Model):
 
 class _Project(_Model):
     format: Literal["toonmotion.project"]
-    version: Literal[1, 2]
+    version: Literal[1, 2, 3]
     toonmotion: str
     width: int = Field(gt=0)
     height: int = Field(gt=0)
@@ -129,6 +146,8 @@ class _Project(_Model):
     mesh: _Mesh
     binding: _Binding
     depth: dict[str, int] = {}
+    edits: list[_Edit] = []
+    undone: list[_Edit] = []
 
 
 def save_project(path, character):
@@ -296,12 +315,35 @@ def _to_dict(ch, assets):
             "bones": list(bone_names),
             "vertex_bone": ch.binding.bone.tolist(),
             "fallback": np.flatnonzero(ch.binding.fallback).tolist(),
-            "corrections": [
-                {"bone": c.bone, "curve": _points(c.curve)} for c in ch.binding.corrections
-            ],
         },
         "depth": {name: int(d) for name, d in zip(bone_names, ch.depth, strict=True)},
+        "edits": [_edit_to_dict(e) for e in ch.edits],
+        "undone": [_edit_to_dict(e) for e in ch.undone],
     }
+
+
+def _edit_to_dict(edit):
+    if isinstance(edit, Correction):
+        return {"kind": "correction", "bone": edit.bone, "curve": _points(edit.curve)}
+    out = {"kind": "depth", "value": edit.value}
+    if edit.bone is not None:
+        out["bone"] = edit.bone
+    else:
+        out["at"] = list(edit.at)
+    return out
+
+
+def _edit_from_model(m, bone_names):
+    if m.kind == "correction":
+        edit = Correction(curve=np.array(m.curve, dtype=float), bone=m.bone)
+    else:
+        try:
+            edit = DepthEdit(value=m.value, bone=m.bone, at=m.at)
+        except ToonmotionError as error:
+            raise ProjectError(f"a depth edit is malformed: {error}") from None
+    if getattr(edit, "bone", None) is not None and edit.bone not in bone_names:
+        raise ProjectError(f"an edit names an unknown bone {edit.bone!r}")
+    return edit
 
 
 def _from_model(m, folder):
@@ -324,10 +366,21 @@ def _from_model(m, folder):
     curve_skeleton = _curve_skeleton(m.curve_skeleton)
     skeleton = skeleton_from_dict([j.model_dump() for j in m.skeleton.joints])
     mesh = _mesh(m.mesh)
-    binding = _binding(m.binding, mesh, skeleton)
-    unknown = set(m.depth) - set(skeleton.bone_names)
+    names = skeleton.bone_names
+    unknown = set(m.depth) - set(names)
     if unknown:
         raise ProjectError(f"the depth layers name an unknown bone {sorted(unknown)[0]!r}")
+    edits = tuple(_edit_from_model(e, names) for e in m.edits)
+    undone = tuple(_edit_from_model(e, names) for e in m.undone)
+    if m.version < 3:
+        corrections = tuple(_edit_from_model(_CorrectionEdit(kind="correction", **c.model_dump()), names)
+                            for c in m.binding.corrections)
+        edits = corrections + tuple(DepthEdit(value=m.depth[n], bone=n) for n in names
+                                    if m.depth.get(n, 0) != 0)
+    elif m.binding.corrections:
+        raise ProjectError("a version 3 project keeps its corrections in 'edits', not in the binding")
+    binding = _binding(m.binding, mesh, skeleton,
+                       tuple(e for e in edits if isinstance(e, Correction)))
     return Character(
         texture=texture,
         mask=mask,
@@ -338,6 +391,8 @@ def _from_model(m, folder):
         binding=binding,
         settings=RigSettings(**m.settings.model_dump()),
         depth=[m.depth.get(name, 0) for name in skeleton.bone_names],
+        edits=edits,
+        undone=undone,
     )
 
 
@@ -370,7 +425,7 @@ def _mesh(m):
     return mesh
 
 
-def _binding(m, mesh, skeleton):
+def _binding(m, mesh, skeleton, corrections):
     if tuple(m.bones) != skeleton.bone_names:
         raise ProjectError("the binding's bone list does not match the skeleton's bones")
     bone = np.array(m.vertex_bone, dtype=np.int64)
@@ -384,10 +439,4 @@ def _binding(m, mesh, skeleton):
     if m.fallback and not all(0 <= i < len(bone) for i in m.fallback):
         raise ProjectError("the binding's fallback list names a vertex that does not exist")
     fallback[m.fallback] = True
-    corrections = tuple(
-        Correction(curve=np.array(c.curve, dtype=float), bone=c.bone) for c in m.corrections
-    )
-    for c in corrections:
-        if c.bone not in m.bones:
-            raise ProjectError(f"a correction names an unknown bone {c.bone!r}")
     return binding_from_bones(mesh, bone, fallback, corrections)

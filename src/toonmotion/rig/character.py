@@ -62,6 +62,11 @@ class Character:
         What was asked for; ``mesh.spacing`` and ``silhouette.tolerance`` say what was used.
     depth : (b,) int
         Depth layer of each bone's region, higher in front (thesis 3.5); all 0 by default.
+    edits : tuple
+        The corrections and depth edits made, in order (see :mod:`toonmotion.rig.edits`);
+        ``binding`` and ``depth`` are their result.
+    undone : tuple
+        Edits taken back by undo, in the order they were made, for redo.
     """
 
     texture: np.ndarray
@@ -73,8 +78,12 @@ class Character:
     binding: object
     settings: RigSettings = field(default_factory=RigSettings)
     depth: np.ndarray = None
+    edits: tuple = ()
+    undone: tuple = ()
 
     def __post_init__(self):
+        object.__setattr__(self, "edits", tuple(self.edits))
+        object.__setattr__(self, "undone", tuple(self.undone))
         bones = len(self.skeleton.bones)
         depth = np.zeros(bones) if self.depth is None else self.depth
         depth = np.array(depth, dtype=np.int64)

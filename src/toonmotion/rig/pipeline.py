@@ -9,6 +9,7 @@ from toonmotion.errors import MaskError, SettingsError, SkeletonError
 from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
 from toonmotion.rig.binding import decompose
 from toonmotion.rig.character import Character, RigSettings
+from toonmotion.rig.edits import replay
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH
 from toonmotion.shape.curve_skeleton import curve_skeleton
 from toonmotion.shape.mesh import choose_spacing, triangulate
@@ -95,6 +96,21 @@ def rig_drawing(texture, *, mask=None, skeleton=None, settings=None, progress=No
         binding=binding,
         settings=settings,
     )
+
+
+def remesh(character, settings, *, progress=None):
+    """Rig ``character``'s drawing again with new ``settings`` (a finer or coarser mesh), keeping
+    its mask and skeleton, and replay its edits on the new mesh.
+
+    Returns
+    -------
+    character : Character
+    skipped : list of (edit, str)
+        Edits that no longer apply, with the reason (see :func:`toonmotion.rig.edits.replay`).
+    """
+    fresh = rig_drawing(character.texture, mask=character.mask, skeleton=character.skeleton,
+                        settings=settings, progress=progress)
+    return replay(fresh, character.edits)
 
 
 def check_skeleton_on_figure(skeleton, mask):

@@ -1,0 +1,147 @@
+"""A character's editing history: decomposition corrections (6.3a) and depth settings (3.5, 6.3b).
+
+A project keeps the edits themselves, in the order they were made, not only their result:
+
+* a :class:`~toonmotion.rig.binding.Correction` attaches every vertex inside a closed curve to
+  a bone;
+* a :class:`DepthEdit` puts a bone's region, named or picked by a point, at a depth layer.
+
+Both are in drawing pixels and bone names, never vertex numbers, so :func:`replay` can apply
+them to a re-meshed character, skipping (and saying why) any that no longer make sense, such as
+a bone the new skeleton lacks. :func:`undo` rebuilds the character from its automatic
+decomposition and every edit but the last; the undone edits are kept for :func:`redo` until a
+new edit is made.
+"""
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from toonmotion.errors import EditError, SettingsError, ToonmotionError
+from toonmotion.rig.binding import Correction, attach_inside, decompose
+
+
+@dataclass(frozen=True)
+class DepthEdit:
+    """Set the depth layer of one bone region (higher is in front).
+
+    Give ``bone`` (a bone's name, i.e. its child joint's) or ``at`` (an ``(x, y)`` drawing
+    pixel: the region of the rest-mesh vertex nearest it, like clicking the drawing).
+    """
+
+    value: int
+    bone: str | None = None
+    at: tuple | None = None
+
+    def __post_init__(self):
+        if isinstance(self.value, bool) or not isinstance(self.value, (int, np.integer)):
+            raise EditError(f"a depth must be a whole number, got {self.value!r}")
+        if (self.bone is None) == (self.at is None):
+            raise EditError("a depth edit names a bone or gives a point (at), exactly one of them")
+        if self.at is not None:
+            at = tuple(float(v) for v in self.at)
+            if len(at) != 2 or not np.all(np.isfinite(at)):
+                raise EditError(f"a depth edit's point must be two finite numbers, got {self.at!r}")
+            object.__setattr__(self, "at", at)
+        object.__setattr__(self, "value", int(self.value))
+
+
+def apply_edit(character, edit):
+    """``character`` with ``edit`` made: its result applied and the edit appended to the history.
+
+    A new edit clears what :func:`redo` could bring back.
+    """
+    return dataclasses.replace(_applied(character, edit), undone=())
+
+
+def replay(character, edits):
+    """Apply ``edits`` in order to ``character`` (e.g. one just re-meshed).
+
+    Returns
+    -------
+    character : Character
+    skipped : list of (edit, str)
+        Edits that no longer apply, with the reason.
+    """
+    skipped = []
+    for edit in edits:
+        try:
+            character = _applied(character, edit)
+        except ToonmotionError as error:
+            skipped.append((edit, str(error)))
+    return character, skipped
+
+
+def undo(character, steps=1):
+    """Take back the last ``steps`` edits; returns ``(character, undone edits)``."""
+    edits = character.edits
+    if not (isinstance(steps, int) and steps >= 1):
+        raise SettingsError(f"undo takes a number of steps >= 1, got {steps!r}")
+    if steps > len(edits):
+        raise EditError(
+            f"there {'is' if len(edits) == 1 else 'are'} only {len(edits)} edit"
+            f"{'' if len(edits) == 1 else 's'} to undo" if edits else "there are no edits to undo"
+        )
+    keep, taken = edits[: len(edits) - steps], edits[len(edits) - steps:]
+    rebuilt, skipped = replay(without_edits(character), keep)
+    if skipped:  # cannot happen for edits that applied before; never lose them silently
+        raise EditError(f"an earlier edit no longer applies: {skipped[0][1]}")
+    return dataclasses.replace(rebuilt, undone=(*taken, *character.undone)), taken
+
+
+def redo(character, steps=1):
+    """Make again the last ``steps`` undone edits; returns ``(character, redone edits)``."""
+    undone = character.undone
+    if not (isinstance(steps, int) and steps >= 1):
+        raise SettingsError(f"redo takes a number of steps >= 1, got {steps!r}")
+    if steps > len(undone):
+        raise EditError(f"there {'is' if len(undone) == 1 else 'are'} only {len(undone)} undone "
+                        f"edit{'' if len(undone) == 1 else 's'} to redo" if undone
+                        else "there is nothing to redo")
+    again = undone[:steps]
+    for edit in again:
+        character = _applied(character, edit)
+    return dataclasses.replace(character, undone=undone[steps:]), again
+
+
+def without_edits(character):
+    """The character as rigging left it: the automatic decomposition, every region at depth 0."""
+    binding = decompose(character.mesh, character.skeleton, character.mask)
+    return dataclasses.replace(character, binding=binding, depth=None, edits=(), undone=())
+
+
+def describe(edit):
+    """One line for listings."""
+    if isinstance(edit, Correction):
+        return f"attach {len(edit.curve)}-point region to bone {edit.bone}"
+    where = edit.bone if edit.bone is not None else f"the region at ({edit.at[0]:.0f}, {edit.at[1]:.0f})"
+    return f"depth {edit.value} for {where}"
+
+
+def region_at(character, point):
+    """The bone (index) whose region holds the rest-mesh vertex nearest ``point``."""
+    V = character.mesh.V
+    vertex = int(np.argmin(np.hypot(V[:, 0] - point[0], V[:, 1] - point[1])))
+    return int(character.binding.bone[vertex])
+
+
+def _applied(character, edit):
+    names = character.skeleton.bone_names
+    if isinstance(edit, Correction):
+        binding = attach_inside(character.binding, character.mesh, character.skeleton,
+                                edit.curve, edit.bone)
+        character = dataclasses.replace(character, binding=binding)
+    elif isinstance(edit, DepthEdit):
+        if edit.bone is not None:
+            if edit.bone not in names:
+                raise EditError(f"no bone is called {edit.bone!r}; the bones are: {', '.join(names)}")
+            b = names.index(edit.bone)
+        else:
+            b = region_at(character, edit.at)
+        depth = np.array(character.depth)
+        depth[b] = edit.value
+        character = dataclasses.replace(character, depth=depth)
+    else:
+        raise EditError(f"unknown edit {type(edit).__name__}")
+    return dataclasses.replace(character, edits=(*character.edits, edit))
