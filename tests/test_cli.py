@@ -409,3 +409,168 @@ def test_posing_errors_are_one_line_and_exit_2(posable, tmp_path, capsys, args, 
     err = capsys.readouterr().err.strip()
     assert err.startswith("toonmotion: error: ") and "\n" not in err
     assert message in err
+
+
+def _copy_project(posable, tmp_path):
+    import shutil
+
+    project = tmp_path / "hero"
+    shutil.copytree(posable / "hero", project)
+    return project
+
+
+def test_animate_exaggerated_saves_a_motion_that_filter_and_animate_read(posable, tmp_path, capsys):
+    from toonmotion.io.motion_json import load_motion
+
+    plain, wild = tmp_path / "plain.json", tmp_path / "wild.json"
+    assert _run("animate", posable / "hero", posable / "keys.json", "-o", tmp_path / "a.gif",
+                "--size", "42x60", "--save-motion", plain) == 0
+    assert _run("animate", posable / "hero", posable / "keys.json", "-o", tmp_path / "b.gif",
+                "--size", "42x60", "--save-motion", wild, "--exaggerate", "1.5") == 0
+    assert "exaggerated (A=1.5)" in capsys.readouterr().out
+    a, b = load_motion(plain), load_motion(wild)
+    assert a.positions.shape == b.positions.shape == (37, 17, 2) and a.fps == b.fps == 12
+    assert np.abs(a.positions - b.positions).max() > 2.0
+
+    filtered = tmp_path / "filtered.json"
+    assert _run("filter", plain, "--strength", "1.5", "-o", filtered) == 0
+    assert "filtered 37 frames" in capsys.readouterr().out
+    # The CLI filter of the saved motion is the exaggeration animate applied.
+    np.testing.assert_allclose(load_motion(filtered).positions, b.positions, atol=1e-9)
+    out = tmp_path / "motion.gif"
+    assert _run("animate", posable / "hero", filtered, "-o", out, "--size", "42x60") == 0
+    assert Image.open(out).n_frames == 37
+
+
+def test_filter_only_chosen_joints(posable, tmp_path):
+    from toonmotion.io.motion_json import load_motion
+
+    plain, hand = tmp_path / "plain.json", tmp_path / "hand.json"
+    assert _run("animate", posable / "hero", posable / "keys.json", "-o", tmp_path / "a.gif",
+                "--size", "42x60", "--save-motion", plain) == 0
+    assert _run("filter", plain, "--strength", "2", "--joints", "right_hand", "-o", hand) == 0
+    before, after = load_motion(plain), load_motion(hand)
+    moved = np.abs(after.positions - before.positions).max(axis=(0, 2))
+    names = before.skeleton.names
+    assert moved[names.index("right_hand")] > 0.5
+    assert moved[[i for i, n in enumerate(names) if n != "right_hand"]].max() == 0
+
+
+def test_pose_with_the_single_frame_filter_keeps_the_feet(posable, tmp_path, capsys):
+    out = tmp_path / "crouch.png"
+    assert _run("pose", posable / "hero", posable / "pose.json", "-o", out,
+                "--accel", "0,-30", "--fixed", "right_foot,left_foot") == 0
+    assert Image.open(out).mode == "RGBA"
+
+
+def test_correct_undo_redo_and_list_edits(posable, tmp_path, capsys):
+    project = _copy_project(posable, tmp_path)
+    before = load_project(project).binding.bone
+    assert _run("correct", project, "right_hand", "40,200", "120,200", "120,300", "40,300") == 0
+    assert "attached" in capsys.readouterr().out
+    corrected = load_project(project).binding.bone
+    assert (corrected != before).any()
+    assert _run("depth", project, "head=3") == 0
+    capsys.readouterr()
+    assert _run("edits", project) == 0
+    listing = capsys.readouterr().out.splitlines()
+    assert len(listing) == 2 and "right_hand" in listing[0] and "depth 3 for head" in listing[1]
+    assert _run("undo", project, "--steps", "2") == 0
+    assert capsys.readouterr().out.count("undid") == 2
+    undone = load_project(project)
+    np.testing.assert_array_equal(undone.binding.bone, before)
+    assert not undone.depth.any()
+    assert _run("redo", project) == 0
+    np.testing.assert_array_equal(load_project(project).binding.bone, corrected)
+    assert _run("edits", project) == 0
+    out = capsys.readouterr().out
+    assert "redo depth 3 for head" in out
+
+
+def test_remesh_replays_the_edits(posable, tmp_path, capsys):
+    project = _copy_project(posable, tmp_path)
+    assert _run("depth", project, "right_elbow=1") == 0
+    assert _run("remesh", project, "--vertices", "700") == 0
+    assert "1 edit replayed" in capsys.readouterr().out
+    character = load_project(project)
+    assert abs(len(character.mesh.V) - 700) < 200
+    assert character.depth[character.skeleton.bone_names.index("right_elbow")] == 1
+
+
+def test_tune_adds_lists_and_undoes_edits_in_a_pose_file(posable, tmp_path, capsys):
+    import shutil
+
+    from toonmotion.io.pose_json import load_pose_edits
+
+    pose = tmp_path / "pose.json"
+    shutil.copy(posable / "pose.json", pose)
+    head = load_project(posable / "hero").skeleton.positions[4]
+    x, y = head
+    assert _run("tune", posable / "hero", pose, "--drag", f"{x},{y}:{x + 3},{y - 2}",
+                "-o", tmp_path / "tuned.png") == 0
+    assert "added edit 1: drag" in capsys.readouterr().out
+    assert len(load_pose_edits(pose)) == 1
+    assert Image.open(tmp_path / "tuned.png").mode == "RGBA"
+    assert _run("pose", posable / "hero", pose, "-o", tmp_path / "p.png") == 0
+    assert "1 edit" in capsys.readouterr().out
+    assert _run("tune", posable / "hero", pose) == 0
+    assert "drag" in capsys.readouterr().out
+    assert _run("tune", posable / "hero", pose, "--undo") == 0
+    assert load_pose_edits(pose) == ()
+
+
+def test_tune_a_key_of_a_key_frames_file(posable, tmp_path, capsys):
+    import shutil
+
+    from toonmotion.io.pose_json import load_keyframes
+
+    keys = tmp_path / "keys.json"
+    shutil.copy(posable / "keys.json", keys)
+    skeleton = load_project(posable / "hero").skeleton
+    x, y = skeleton.positions[4]
+    assert _run("tune", posable / "hero", keys, "--key", "12", "--drag", f"{x},{y}:{x},{y - 3}") == 0
+    timeline = load_keyframes(keys, skeleton)
+    assert [len(k.edits) for k in timeline.keys] == [0, 0, 1, 0, 0, 0, 0]
+    assert _run("animate", posable / "hero", keys, "-o", tmp_path / "a.gif", "--size", "42x60") == 0
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["filter", "{t}/m.json", "--strength", "-1", "-o", "{t}/o.json"], "strength must be a finite"),
+        (["filter", "{t}/m.json", "--strength", "nan", "-o", "{t}/o.json"], "strength must be a finite"),
+        (["filter", "{t}/m.json", "--strength", "1", "--sigma", "0", "-o", "{t}/o.json"], "sigma"),
+        (["filter", "{t}/m.json", "--strength", "1", "--joints", "tail", "-o", "{t}/o.json"], "tail"),
+        (["filter", "{p}/keys.json", "--strength", "1", "-o", "{t}/o.json"], "is not a motion file"),
+        (["filter", "{t}/m.json", "--strength", "1", "-o", "{t}/o.gif"], "ending in .json"),
+        (["animate", "{p}/hero", "{p}/keys.json", "-o", "{t}/x.gif", "--exaggerate", "-2"], "strength"),
+        (["pose", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.png", "--accel", "0,-9"], "go together"),
+        (["pose", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.png", "--accel", "0,-9", "--fixed", "root"],
+         "not on a chain from the root"),
+        (["pose", "{p}/hero", "{p}/pose.json", "-o", "{t}/x.png", "--accel", "0", "--fixed", "left_foot"],
+         "--accel takes 2"),
+        (["tune", "{p}/hero", "{p}/pose.json", "--curve", "10,10"], "at least 2 points"),
+        (["tune", "{p}/hero", "{p}/pose.json", "--drag", "10,10"], "X,Y:X2,Y2"),
+        (["tune", "{p}/hero", "{p}/pose.json", "--drag", "-500,-500:0,0"], "no vertex within"),
+        (["tune", "{p}/hero", "{p}/pose.json", "--undo"], "no edits to undo"),
+        (["tune", "{p}/hero", "{p}/keys.json", "--key", "5", "--undo"], "no key at frame 5"),
+        (["undo", "{p}/hero"], "no edits to undo"),
+        (["redo", "{p}/hero"], "nothing to redo"),
+        (["correct", "{p}/hero", "tail", "0,0", "9,0", "0,9"], "no bone is called 'tail'"),
+        (["correct", "{p}/hero", "head", "0,0", "9,0"], "at least 3"),
+        (["remesh", "{p}/hero"], "give --spacing, --vertices"),
+    ],
+)
+def test_filter_and_edit_errors_are_one_line_and_exit_2(posable, tmp_path, capsys, args, message):
+    from toonmotion.animate.motion import Motion
+    from toonmotion.io.motion_json import save_motion
+
+    skeleton = load_project(posable / "hero").skeleton
+    save_motion(tmp_path / "m.json", Motion(skeleton, np.stack([skeleton.positions] * 5), fps=12))
+    pose_before = (posable / "pose.json").read_bytes()
+    args = [a.format(p=posable, t=tmp_path) for a in args]
+    assert _run(*args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("toonmotion: error: ") and "\n" not in err
+    assert message in err
+    assert (posable / "pose.json").read_bytes() == pose_before, "a failed edit must not touch the file"

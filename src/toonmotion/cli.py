@@ -14,20 +14,35 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from toonmotion import __version__
-from toonmotion.animate.inbetween import animate_frames, solve_keys
-from toonmotion.animate.timeline import make_timeline, pose_at
+from toonmotion.animate.cartoon_filter import FilterSettings, filter_bones, filter_trajectories
+from toonmotion.animate.inbetween import animate_frames, motion_frames, solve_keys
+from toonmotion.animate.motion import Motion, motion_for, motion_from_timeline
+from toonmotion.animate.pose_filter import exaggerate_pose
+from toonmotion.animate.timeline import Keyframe, make_timeline
 from toonmotion.deform.deformer import Deformer, DeformSettings
-from toonmotion.deform.depth import find_overlaps, set_region_depth
-from toonmotion.errors import SettingsError, ToonmotionError
+from toonmotion.deform.depth import find_overlaps
+from toonmotion.deform.tuning import CurveEdit, DragEdit, apply_tuning
+from toonmotion.deform.tuning import describe as describe_tuning
+from toonmotion.errors import EditError, SettingsError, ToonmotionError
 from toonmotion.io.image import DEFAULT_MAX_PIXELS, load_image, load_mask, save_png
-from toonmotion.io.pose_json import load_keyframes, load_pose, save_keyframes
+from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion
+from toonmotion.io.pose_json import (
+    load_keyframes,
+    load_pose,
+    load_pose_edits,
+    save_keyframes,
+    save_pose,
+)
 from toonmotion.io.project import load_project, save_project
 from toonmotion.io.skeleton_json import load_skeleton_file, save_skeleton_json
 from toonmotion.io.video import animation_format, save_animation
 from toonmotion.render.frame import check_overlays, fit_view, natural_size, render_frame
 from toonmotion.render.overview import render_overview
+from toonmotion.rig.binding import Correction
 from toonmotion.rig.character import RigSettings
-from toonmotion.rig.pipeline import STAGES, rig_drawing
+from toonmotion.rig.edits import DepthEdit, apply_edit, redo, undo
+from toonmotion.rig.edits import describe as describe_edit
+from toonmotion.rig.pipeline import STAGES, remesh, rig_drawing
 from toonmotion.sample_animation import sample_keyframes
 from toonmotion.samples import sample_character
 
@@ -190,6 +205,13 @@ _JointWidth = Annotated[
 ]
 
 
+_Strength = Annotated[
+    float, typer.Option("--strength", help="Filter strength A (0 leaves the motion as it is).")
+]
+_Sigma = Annotated[float, typer.Option("--sigma", help="Filter width in frames.")]
+_Shift = Annotated[float, typer.Option("--shift", help="Filter time shift in frames (> 0 delays it).")]
+
+
 @app.command()
 def pose(
     project: _Project,
@@ -203,17 +225,39 @@ def pose(
         str, typer.Option("--background", help="transparent, white, black or #rrggbb.")
     ] = "transparent",
     overlay: _Overlay = "",
+    accel: Annotated[
+        str | None,
+        typer.Option("--accel", help="Cartoon filter: acceleration DX,DY at the root, pixels."),
+    ] = None,
+    fixed: Annotated[
+        str | None, typer.Option("--fixed", help="Joints that stay put under --accel: J[,J...].")
+    ] = None,
+    root: Annotated[
+        str | None, typer.Option("--root", help="Joint --accel acts on \\[default: the skeleton's root].")
+    ] = None,
     no_area: _NoArea = False,
     stage_one_only: _StageOne = False,
     weights: _Weights = "1,1,1",
     joint_width: _JointWidth = 1.5,
 ):
-    """Pose a rigged drawing: deform it to a sketched skeleton and render one frame."""
+    """Pose a rigged drawing: deform it to a sketched skeleton and render one frame.
+
+    Fine-tuning edits in the pose file (see 'toonmotion tune') are applied. --accel and
+    --fixed exaggerate the pose with the single-frame cartoon filter first.
+    """
     _png_output(output)
+    if (accel is None) != (fixed is None):
+        raise SettingsError(
+            "--accel and --fixed go together: give the acceleration and the joints that stay put"
+        )
     character = load_project(project)
     posed = load_pose(pose_file, character.skeleton)
+    edits = load_pose_edits(pose_file)
+    if accel is not None:
+        posed = exaggerate_pose(character.skeleton, posed, _numbers(accel, 2, "--accel"),
+                                _names(fixed), root=root)
     deformer = Deformer(character, _deform_settings(no_area, stage_one_only, weights, joint_width))
-    result = deformer.deform(posed)
+    result = apply_tuning(deformer, posed, deformer.deform(posed), edits)
     view = fit_view(character, [result.U])
     frame = render_frame(
         character,
@@ -227,8 +271,11 @@ def pose(
     save_png(output, frame)
     typer.echo(
         f"posed {project.name}: stage two {result.iterations} "
-        f"iterations, energy {result.energy_start:.4g} -> {result.energy:.4g} -> {output}"
+        f"iterations, energy {result.energy_start:.4g} -> {result.energy:.4g}"
+        + (f", {len(edits)} edit{'s' if len(edits) > 1 else ''}" if edits else "")
+        + f" -> {output}"
     )
+    _report_view(view, character)
     _report_overlaps(character, result.U)
 
 
@@ -236,7 +283,10 @@ def pose(
 def animate(
     project: _Project,
     keys_file: Annotated[
-        Path, typer.Argument(metavar="KEYS.json", help="Key-frames: poses at frame numbers.")
+        Path,
+        typer.Argument(
+            metavar="KEYS.json", help="Key-frames (poses at frame numbers) or a motion (a pose per frame)."
+        ),
     ],
     output: Annotated[
         Path,
@@ -246,7 +296,7 @@ def animate(
     ],
     fps: Annotated[
         float | None,
-        typer.Option("--fps", help="Frames per second \\[default: the key file's, else 24].", min=0.001),
+        typer.Option("--fps", help="Frames per second \\[default: the file's, else 24]."),
     ] = None,
     size: _Size = None,
     background: Annotated[
@@ -260,6 +310,16 @@ def animate(
     ease: Annotated[
         str | None, typer.Option("--ease", help="linear, in-out, in or out \\[default: the key file's].")
     ] = None,
+    exaggerate: Annotated[
+        float | None,
+        typer.Option("--exaggerate", help="Cartoon filter strength A: anticipation and follow-through."),
+    ] = None,
+    sigma: _Sigma = 3.0,
+    shift: _Shift = 0.0,
+    save_motion_to: Annotated[
+        Path | None,
+        typer.Option("--save-motion", help="Also write the joint positions of every frame (.json)."),
+    ] = None,
     solve_inbetweens: Annotated[
         bool,
         typer.Option("--solve-inbetweens", help="Run stage two on every frame, not only the keys."),
@@ -269,41 +329,104 @@ def animate(
     weights: _Weights = "1,1,1",
     joint_width: _JointWidth = 1.5,
 ):
-    """Animate a rigged drawing through key-frames, with in-betweens, to GIF, MP4 or PNGs."""
+    """Animate a rigged drawing through key-frames or a motion, to GIF, MP4 or PNGs.
+
+    --exaggerate runs the cartoon filter over every bone's angle and length and the root's path.
+    """
     kind = animation_format(output)
+    if save_motion_to is not None and save_motion_to.suffix.lower() != ".json":
+        raise SettingsError(f"give a motion file ending in .json, not {save_motion_to.name}")
     character = load_project(project)
-    timeline = load_keyframes(keys_file, character.skeleton, fps=fps)
-    if ease is not None:
-        timeline = make_timeline(character.skeleton, timeline.keys, fps=timeline.fps, ease=ease)
+    skeleton = character.skeleton
     colour = _colour(background or ("transparent" if kind == "png" else "white"))
+    settings = FilterSettings(strength=exaggerate, sigma=sigma, shift=shift) if exaggerate else None
     deformer = Deformer(character, _deform_settings(no_area, stage_one_only, weights, joint_width))
-    keys = solve_keys(deformer, timeline)
-    method = "solve" if solve_inbetweens else "interpolate"
-    meshes = list(animate_frames(deformer, timeline, method=method, keys=keys))
+    keys, solved = (), []
+    if is_motion_file(keys_file):
+        if ease is not None:
+            raise SettingsError("--ease applies to key-frames; a motion has a pose for every frame")
+        motion = load_motion(keys_file)
+        rate = motion.fps if fps is None else fps
+        positions = motion_for(skeleton, motion, where=str(keys_file))
+        if settings:
+            positions = filter_bones(skeleton, positions, settings)
+        motion = Motion(skeleton=skeleton, positions=positions, fps=rate)
+        meshes = list(motion_frames(deformer, positions))
+        what = f"a motion of {len(positions)} frames"
+    else:
+        timeline = load_keyframes(keys_file, skeleton, fps=fps)
+        if ease is not None:
+            timeline = make_timeline(skeleton, timeline.keys, fps=timeline.fps, ease=ease)
+        motion = motion_from_timeline(skeleton, timeline)
+        poses = None
+        if settings:
+            poses = filter_bones(skeleton, motion.positions, settings)
+            motion = Motion(skeleton=skeleton, positions=poses, fps=timeline.fps)
+        keys, solved = timeline.keys, solve_keys(deformer, timeline)
+        method = "solve" if solve_inbetweens else "interpolate"
+        meshes = list(animate_frames(deformer, timeline, method=method, keys=solved, poses=poses))
+        what = f"{len(timeline.keys)} key-frames"
     view = fit_view(character, [U for _, U in meshes])
     out_size = natural_size(view, size=_size(size))
     overlays = _overlays(overlay)
-    skeleton = character.skeleton
     with _progress() as bar:
         task = bar.add_task("rendering", total=len(meshes))
 
         def frames():
             for frame, U in meshes:
-                posed = pose_at(skeleton, timeline, frame) if overlays else None
+                posed = motion.pose(frame) if overlays else None
                 yield render_frame(
                     character, U, pose=posed, size=out_size, view=view, background=colour, overlays=overlays
                 )
                 bar.update(task, advance=1)
 
         count = save_animation(
-            output, frames(), fps=timeline.fps, background=colour if colour is not None else (255, 255, 255)
+            output, frames(), fps=motion.fps, background=colour if colour is not None else (255, 255, 255)
         )
+    if save_motion_to is not None:
+        save_motion(save_motion_to, motion)
     typer.echo(
-        f"animated {len(timeline.keys)} key-frames: {count} frames at {timeline.fps:g} fps, "
-        f"{out_size[0]}x{out_size[1]} -> {output}"
+        f"animated {what}"
+        + (f", exaggerated (A={exaggerate:g})" if settings else "")
+        + f": {count} frames at {motion.fps:g} fps, {out_size[0]}x{out_size[1]} -> {output}"
+        + (f" (motion -> {save_motion_to})" if save_motion_to is not None else "")
     )
-    for key, solved in zip(timeline.keys, keys, strict=True):
-        _report_overlaps(character, solved.U, where=f"key-frame {key.frame}: ")
+    for key, result in zip(keys, solved, strict=True):
+        _report_overlaps(character, result.U, where=f"key-frame {key.frame}: ")
+
+
+@app.command("filter")
+def filter_motion(
+    motion_file: Annotated[Path, typer.Argument(metavar="MOTION.json", help="A motion: a pose per frame.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Motion file to write (.json).")],
+    strength: _Strength,
+    sigma: _Sigma = 3.0,
+    shift: _Shift = 0.0,
+    joints: Annotated[
+        str | None,
+        typer.Option(
+            "--joints",
+            help="Filter only these joints' paths (J[,J...]), carrying what hangs below them "
+            "\\[default: the root's path and every bone's angle and length].",
+        ),
+    ] = None,
+):
+    """Exaggerate a motion with the cartoon animation filter: anticipation, follow-through."""
+    if output.suffix.lower() != ".json":
+        raise SettingsError(f"give a motion file ending in .json, not {output.name}")
+    settings = FilterSettings(strength=strength, sigma=sigma, shift=shift)
+    motion = load_motion(motion_file)
+    skeleton = motion.skeleton
+    if joints is None:
+        positions = filter_bones(skeleton, motion.positions, settings)
+    else:
+        positions = filter_trajectories(skeleton, motion.positions, settings, joints=_names(joints))
+    save_motion(output, Motion(skeleton=skeleton, positions=positions, fps=motion.fps))
+    moved = np.hypot(*(positions - motion.positions).reshape(-1, 2).T).max()
+    typer.echo(
+        f"filtered {motion.frame_count} frames (A={strength:g}, sigma={sigma:g}, shift={shift:g}): "
+        f"joints moved up to {moved:.1f} px -> {output}"
+    )
 
 
 @app.command()
@@ -318,10 +441,9 @@ def depth(
         ),
     ] = None,
 ):
-    """Show or set the depth layers of a project's bone regions (saved in the project)."""
+    """Show or set the depth layers of a project's bone regions (saved as edits; see 'undo')."""
     character = load_project(project)
     names = character.skeleton.bone_names
-    layers = np.array(character.depth)
     for item in settings or []:
         target, _, value = item.rpartition("=")
         try:
@@ -329,17 +451,179 @@ def depth(
         except ValueError:
             raise SettingsError(f"give a whole-number depth after '=' in {item!r}") from None
         if target.startswith("@"):
-            x, y = _numbers(target[1:], 2, "@X,Y")
-            vertex = int(np.argmin(np.hypot(*(character.mesh.V - (x, y)).T)))
-            layers = set_region_depth(layers, character.binding, vertex, value)
+            edit = DepthEdit(value=value, at=_numbers(target[1:], 2, "@X,Y"))
         elif target in names:
-            layers[names.index(target)] = value
+            edit = DepthEdit(value=value, bone=target)
         else:
             raise SettingsError(f"no bone is called {target!r}; the bones are: {', '.join(names)}")
+        character = apply_edit(character, edit)
     if settings:
-        save_project(project, dataclasses.replace(character, depth=layers))
-    for name, d in zip(names, layers, strict=True):
+        save_project(project, character)
+    for name, d in zip(names, character.depth, strict=True):
         typer.echo(f"{name:>20} {d}")
+
+
+@app.command()
+def correct(
+    project: _Project,
+    bone: Annotated[str, typer.Argument(help="The bone (named after its child joint) to attach to.")],
+    curve: Annotated[
+        list[str],
+        typer.Argument(metavar="X,Y X,Y X,Y...", help="A closed curve round the vertices, drawing pixels."),
+    ],
+):
+    """Correct the decomposition: attach every vertex inside a closed curve to one bone."""
+    character = load_project(project)
+    points = np.array([_numbers(p, 2, "a curve point X,Y") for p in curve])
+    before = character.binding.bone
+    character = apply_edit(character, Correction(curve=points, bone=bone))
+    save_project(project, character)
+    moved = int(np.count_nonzero(character.binding.bone != before))
+    typer.echo(
+        f"attached {moved} vertices to {bone} (edit {len(character.edits)}; 'toonmotion undo' takes it back)"
+    )
+
+
+_Steps = Annotated[int, typer.Option("--steps", help="How many edits.")]
+
+
+@app.command("undo")
+def undo_edits(project: _Project, steps: _Steps = 1):
+    """Take back a project's last corrections or depth settings."""
+    character, taken = undo(load_project(project), steps)
+    save_project(project, character)
+    for edit in taken[::-1]:
+        typer.echo(f"undid: {describe_edit(edit)}")
+
+
+@app.command("redo")
+def redo_edits(project: _Project, steps: _Steps = 1):
+    """Make again edits taken back by 'undo' (until a new edit is made)."""
+    character, again = redo(load_project(project), steps)
+    save_project(project, character)
+    for edit in again:
+        typer.echo(f"redid: {describe_edit(edit)}")
+
+
+@app.command()
+def edits(project: _Project):
+    """List a project's edits, oldest first, and any that can be redone."""
+    character = load_project(project)
+    if not character.edits and not character.undone:
+        typer.echo("no edits")
+    for n, edit in enumerate(character.edits, start=1):
+        typer.echo(f"{n:>3}  {describe_edit(edit)}")
+    for edit in character.undone:
+        typer.echo(f"redo {describe_edit(edit)}")
+
+
+@app.command("remesh")
+def remesh_project(
+    project: _Project,
+    spacing: Annotated[float | None, typer.Option("--spacing", help="Mesh spacing in pixels.")] = None,
+    vertices: Annotated[int | None, typer.Option("--vertices", help="Target mesh vertex count.")] = None,
+    refine_joints: Annotated[
+        bool | None, typer.Option("--refine-joints/--no-refine-joints", help="Denser mesh around joints.")
+    ] = None,
+):
+    """Mesh a project again (finer or coarser), keeping its skeleton and replaying its edits."""
+    if spacing is None and vertices is None and refine_joints is None:
+        raise SettingsError("give --spacing, --vertices or --refine-joints to say how to mesh again")
+    if spacing is not None and vertices is not None:
+        raise SettingsError("give either --spacing or --vertices, not both")
+    character = load_project(project)
+    old = character.settings
+    settings = dataclasses.replace(
+        old,
+        spacing=spacing if spacing is not None or vertices is not None else old.spacing,
+        vertices=vertices if spacing is not None or vertices is not None else old.vertices,
+        refine_joints=old.refine_joints if refine_joints is None else refine_joints,
+    )
+    character, skipped = remesh(character, settings)
+    save_project(project, character)
+    typer.echo(
+        f"remeshed {project.name}: {len(character.mesh.V)} vertices, {len(character.mesh.F)} triangles; "
+        f"{len(character.edits)} edit{'' if len(character.edits) == 1 else 's'} replayed"
+    )
+    for edit, reason in skipped:
+        typer.echo(f"dropped an edit that no longer applies ({describe_edit(edit)}): {reason}", err=True)
+
+
+@app.command()
+def tune(
+    project: _Project,
+    pose_file: Annotated[
+        Path, typer.Argument(metavar="POSE.json|KEYS.json", help="A pose file, or key-frames with --key.")
+    ],
+    key: Annotated[int | None, typer.Option("--key", help="Frame number of the key to tune.")] = None,
+    curve: Annotated[
+        str | None,
+        typer.Option(
+            "--curve", help="Pull the outline onto a sketched curve: 'X,Y X,Y ...', drawing pixels."
+        ),
+    ] = None,
+    drag: Annotated[
+        list[str] | None,
+        typer.Option("--drag", help="Drag the vertex at X,Y to X2,Y2: 'X,Y:X2,Y2' (repeat for several)."),
+    ] = None,
+    undo_last: Annotated[bool, typer.Option("--undo", help="Take back the last edit.")] = False,
+    preview: Annotated[
+        Path | None, typer.Option("-o", "--output", help="Also render the tuned pose to this PNG.")
+    ] = None,
+    joint_width: _JointWidth = 1.5,
+):
+    """Fine-tune a deformed pose: sketch curves and point drags, saved in the pose or key file.
+
+    With no edit given, lists the edits. Each new edit is tried on the project before it is
+    saved, so a file never holds an edit that does not apply.
+    """
+    if preview is not None:
+        _png_output(preview)
+    actions = (curve is not None) + bool(drag) + undo_last
+    if actions > 1:
+        raise SettingsError("give one of --curve, --drag or --undo at a time")
+    character = load_project(project)
+    skeleton = character.skeleton
+    timeline, index = None, None
+    if key is None:
+        posed, edits = load_pose(pose_file, skeleton), load_pose_edits(pose_file)
+    else:
+        timeline = load_keyframes(pose_file, skeleton)
+        frames = [k.frame for k in timeline.keys]
+        if key not in frames:
+            raise SettingsError(f"{pose_file} has no key at frame {key}; its keys are at {frames}")
+        index = frames.index(key)
+        posed, edits = timeline.keys[index].pose, timeline.keys[index].edits
+    if curve is not None:
+        edits = (*edits, CurveEdit(points=[_numbers(p, 2, "--curve point X,Y") for p in curve.split()]))
+    elif drag:
+        start, end = zip(*(_drag(d) for d in drag), strict=True)
+        edits = (*edits, DragEdit(start=start, end=end))
+    elif undo_last:
+        if not edits:
+            raise EditError(f"{pose_file} has no edits to undo")
+        taken, edits = edits[-1], edits[:-1]
+    deformer = Deformer(character, _deform_settings(False, False, "1,1,1", joint_width))
+    result = apply_tuning(deformer, posed, deformer.deform(posed), edits)
+    if actions:
+        if timeline is None:
+            save_pose(pose_file, skeleton, posed, edits)
+        else:
+            keys = list(timeline.keys)
+            keys[index] = Keyframe(keys[index].frame, posed, edits)
+            save_keyframes(pose_file, skeleton, dataclasses.replace(timeline, keys=tuple(keys)))
+        typer.echo(f"undid: {describe_tuning(taken)}" if undo_last
+                   else f"added edit {len(edits)}: {describe_tuning(edits[-1])} -> {pose_file}")
+    elif not edits:
+        typer.echo("no edits")
+    else:
+        for n, edit in enumerate(edits, start=1):
+            typer.echo(f"{n:>3}  {describe_tuning(edit)}")
+    if preview is not None:
+        view = fit_view(character, [result.U])
+        save_png(preview, render_frame(character, result.U, view=view, background=None))
+        typer.echo(f"wrote {preview}")
+        _report_view(view, character)
 
 
 def _deform_settings(no_area, stage_one_only, weights, joint_width):
@@ -349,6 +633,28 @@ def _deform_settings(no_area, stage_one_only, weights, joint_width):
         weights=_numbers(weights, 3, "--weights"),
         joint_width=joint_width,
     )
+
+
+def _report_view(view, character):
+    """Say how picture pixels map to drawing pixels when the picture grew past the drawing."""
+    x0, y0 = view[0] + 0.5, view[1] + 0.5
+    if (x0, y0) != (0.0, 0.0) and view[2] - view[0] > 0:
+        typer.echo(f"the picture's pixel (0, 0) is drawing pixel ({x0:.1f}, {y0:.1f}); edits and poses "
+                   "use drawing pixels", err=True)
+
+
+def _names(text):
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    if not names:
+        raise SettingsError(f"give one or more joint names separated by commas, got {text!r}")
+    return names
+
+
+def _drag(text):
+    a, sep, b = text.partition(":")
+    if not sep:
+        raise SettingsError(f"--drag takes X,Y:X2,Y2 (from, to), got {text!r}")
+    return _numbers(a, 2, "--drag X,Y"), _numbers(b, 2, "--drag X2,Y2")
 
 
 def _report_overlaps(character, U, *, where=""):
