@@ -22,6 +22,7 @@ demo: $(STAMP)
 	$(BIN)/toonmotion depth demo/hero right_elbow=1 right_hand=1
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo.gif
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo.mp4
+	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo_exaggerated.gif --exaggerate 1.5
 
 test: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks

@@ -234,3 +234,41 @@ def test_sample_animation_keys_have_no_inverted_joint_triangle(sample, frame):
     areas = triangle_areas(keys[frame].U, character.mesh.F)
     inverted = int((areas[character.binding.joint_triangle] <= 0).sum())
     assert inverted == 0, f"{inverted} joint triangles inverted at key frame {frame}"
+
+
+def test_a_key_edit_is_in_the_key_and_fades_through_the_inbetweens(sample):
+    """A drag on a key's mesh is exactly in that key and carried in and out by the in-betweens."""
+    from toonmotion.deform.tuning import DragEdit
+
+    skeleton = sample.character.skeleton
+    head = skeleton.positions[skeleton.index("head")]
+    rest = rest_pose(skeleton)
+    plain = make_timeline(skeleton, [Keyframe(0, rest), Keyframe(8, rest), Keyframe(16, rest)], fps=12)
+    drag = DragEdit(start=[head], end=[head + (6.0, -4.0)])
+    tuned = make_timeline(skeleton, [Keyframe(0, rest), Keyframe(8, rest, (drag,)), Keyframe(16, rest)],
+                          fps=12)
+    before = _frames(sample, plain, "interpolate")
+    after = _frames(sample, tuned, "interpolate")
+    vertex = int(np.argmin(np.hypot(*(before[8] - head).T)))
+    np.testing.assert_allclose(after[8][vertex], head + (6.0, -4.0), atol=1e-9)
+    moved = [np.hypot(*(after[f][vertex] - before[f][vertex])) for f in range(17)]
+    assert moved[0] == moved[16] == 0
+    # Linear in-betweens: the edit grows and fades in equal steps.
+    np.testing.assert_allclose(moved[:9], np.linspace(0, moved[8], 9), atol=1e-6)
+    np.testing.assert_allclose(moved[8:], np.linspace(moved[8], 0, 9), atol=1e-6)
+
+
+def test_replacing_the_poses_with_their_own_changes_nothing(sample):
+    """``poses=`` (how exaggerated poses come in) with the timeline's own poses gives its frames."""
+    from toonmotion.animate.motion import motion_from_timeline
+
+    skeleton = sample.character.skeleton
+    timeline = sample_keyframes(skeleton)
+    keys = solve_keys(sample, timeline)
+    own = motion_from_timeline(skeleton, timeline).positions
+    default = _frames(sample, timeline, "interpolate", keys)
+    replaced = list(animate_frames(sample, timeline, keys=keys, poses=own))
+    assert [f for f, _ in replaced] == list(range(timeline.frame_count))
+    np.testing.assert_allclose(np.array([U for _, U in replaced]), default, atol=1e-9)
+    with pytest.raises(SettingsError, match="replacement poses must have shape"):
+        animate_frames(sample, timeline, keys=keys, poses=own[:-1])
