@@ -134,7 +134,20 @@ def _options(command):
     return {opt for param in command.params for opt in (*param.opts, *param.secondary_opts)}
 
 
-@pytest.mark.parametrize("command", [None, "rig", "show", "sample"])
+COMMANDS = ("rig", "show", "sample", "pose", "animate", "filter", "depth", "correct", "undo", "redo",
+            "edits", "remesh", "tune")
+
+
+def test_every_command_is_in_the_readme_command_reference():
+    from pathlib import Path
+
+    assert set(typer.main.get_command(app).commands) == set(COMMANDS)
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    for command in COMMANDS:
+        assert f"`toonmotion {command} " in readme, command
+
+
+@pytest.mark.parametrize("command", [None, *COMMANDS])
 def test_help_exits_zero_and_names_only_real_options(capsys, command):
     argv = ["--help"] if command is None else [command, "--help"]
     code, out, err = run(argv, capsys)
