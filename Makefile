@@ -37,6 +37,7 @@ $(BENCH_STAMP): $(STAMP)
 bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/rig.py
 	$(BIN)/python benchmarks/deform.py
+	$(BIN)/python benchmarks/edit.py
 
 clean:
 	rm -rf $(VENV) demo
