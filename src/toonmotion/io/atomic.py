@@ -18,9 +18,20 @@ def atomic_path(path):
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, _mode_for(path))  # mkstemp makes files only their owner can read
         os.replace(tmp, path)
     finally:
         Path(tmp).unlink(missing_ok=True)  # gone already after a successful rename
+
+
+def _mode_for(path):
+    """The replaced file's permissions, or those a new file gets under the umask."""
+    try:
+        return os.stat(path).st_mode & 0o777
+    except FileNotFoundError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def write_bytes(path, data):
