@@ -66,3 +66,12 @@ class EditError(ToonmotionError):
 class MotionError(ToonmotionError):
     """A motion is malformed: no frames, a frame rate that is not a positive number, joints
     that do not match the skeleton it is used with."""
+
+
+class TrackingError(ToonmotionError):
+    """Tracking cannot start: a joint rectangle outside the frame or of zero size, frames of
+    differing sizes, an empty sequence."""
+
+
+class VideoReadError(ToonmotionError):
+    """An image sequence cannot be read: a video that cannot be decoded, an empty folder."""
