@@ -1,0 +1,143 @@
+"""Retargeting a captured motion onto another character's skeleton (thesis 4.5, eq. 4.7-4.8).
+
+Each bone of the target copies the captured bone's changes from frame to frame: its length is
+multiplied by the captured length ratio ``l_t / l_{t-1}`` and its angle turned by the captured
+increment ``a_t - a_{t-1}`` (eq. 4.7-4.8). Summed over the frames these telescope to
+
+    l'_t = l'_0 * l_t / l_0,        a'_t = a'_0 + (a_t - a_0),
+
+which is how it is computed here (no error builds up frame by frame), with the captured angles
+unwrapped along time first so a bone turning through +-pi keeps turning the same way. Frame 0 of
+the result is the target's rest pose: the thesis asks that the target be drawn in about the
+pose of the first captured frame.
+
+Choices where the thesis leaves them open:
+
+- **Which bones match.** A target joint takes the captured joint of the same name, or the one
+  ``joint_map`` names. A target bone follows the captured bone between the captured joints of
+  its two ends; those must be parent and child in the capture, or the motion and the target do
+  not match (:class:`MotionError`). A target bone whose ends are not both captured keeps its
+  rest angle relative to its parent bone and its rest length: it turns with what it hangs from.
+- **Roots.** A root of the target (a forest is allowed: a hat tracked apart from a man) moves
+  by its captured joint's displacement from frame 0, scaled by the ratio of the two figures'
+  sizes (the summed lengths of the matched bones, target over capture), so a smaller character
+  jumps proportionally lower. A root with no captured joint stays put.
+"""
+
+import numpy as np
+
+from toonmotion.animate.motion import Motion
+from toonmotion.errors import MotionError
+from toonmotion.rig.pose import bone_angles
+
+# Captured bones shorter than this (px) at frame 0 keep the target's length.
+_MIN_LENGTH = 1e-6
+
+
+def retarget(motion, skeleton, *, joint_map=None):
+    """Replay ``motion`` on ``skeleton`` (the target's rest pose at frame 0).
+
+    Parameters
+    ----------
+    motion : Motion
+        The captured motion; its skeleton names its joints and parents.
+    skeleton : Skeleton
+        The target character's skeleton, in its rest pose.
+    joint_map : dict, optional
+        Target joint name -> captured joint name, for joints named differently; joints not in
+        it match by name.
+
+    Returns
+    -------
+    Motion
+        For ``skeleton``, at the captured frame rate.
+    """
+    source = motion.skeleton
+    match = _match_joints(source, skeleton, joint_map or {})
+    followed = _followed_bones(source, skeleton, match)
+    if not any(f is not None for f in followed):
+        raise MotionError(
+            "no bone of the target matches a bone of the motion; name the target's joints as the "
+            f"motion does ({', '.join(source.names)}) or give a joint map"
+        )
+    S = motion.positions
+    angle, length = bone_angles(source, S)
+    angle = np.unwrap(angle, axis=0)
+    rest_angle, rest_length = bone_angles(skeleton, skeleton.positions)
+    T = len(S)
+    turn = np.zeros((T, len(rest_angle)))  # each target bone's turn from rest
+    stretch = np.ones((T, len(rest_angle)))
+    for b, f in enumerate(followed):
+        if f is not None:
+            turn[:, b] = angle[:, f] - angle[0, f]
+            if length[0, f] > _MIN_LENGTH:  # a captured bone of no length has no ratio to copy
+                stretch[:, b] = length[:, f] / length[0, f]
+    scale = _size_ratio(skeleton, rest_length, length[0], followed)
+    return Motion(skeleton=skeleton, positions=_pose_frames(skeleton, S, match, turn, stretch, scale,
+                                                            rest_angle, rest_length, followed),
+                  fps=motion.fps)
+
+
+def _match_joints(source, target, joint_map):
+    unknown = [t for t in joint_map if t not in target.names]
+    if unknown:
+        raise MotionError(f"the joint map names {unknown[0]!r}, which the target does not have; its joints "
+                          f"are: {', '.join(target.names)}")
+    missing = [s for s in joint_map.values() if s not in source.names]
+    if missing:
+        raise MotionError(f"the joint map names {missing[0]!r}, which the motion does not have; its joints "
+                          f"are: {', '.join(source.names)}")
+    match = {}
+    for j, name in enumerate(target.names):
+        other = joint_map.get(name, name)
+        if other in source.names:
+            match[j] = source.names.index(other)
+    return match
+
+
+def _followed_bones(source, target, match):
+    """For each target bone, the index of the captured bone it follows, or None."""
+    source_bone = {int(c): r for r, (p, c) in enumerate(source.bones)}
+    followed = []
+    for parent, child in target.bones:
+        if parent in match and child in match:
+            r = source_bone.get(match[child])
+            if r is None or source.bones[r][0] != match[parent]:
+                raise MotionError(
+                    f"the target's bone {target.names[parent]} -> {target.names[child]} has no matching "
+                    f"bone in the motion ({source.names[match[parent]]} is not the parent of "
+                    f"{source.names[match[child]]} there); map the joints so bones match"
+                )
+            followed.append(r)
+        else:
+            followed.append(None)
+    return followed
+
+
+def _size_ratio(target, rest_length, source_length, followed):
+    pairs = [(rest_length[b], source_length[f]) for b, f in enumerate(followed) if f is not None]
+    target_size, source_size = (sum(v) for v in zip(*pairs, strict=True))
+    return target_size / source_size if source_size > 1e-9 else 1.0
+
+
+def _pose_frames(target, S, match, turn, stretch, scale, rest_angle, rest_length, followed):
+    T, k = len(S), len(target)
+    out = np.empty((T, k, 2))
+    bone_of_child = {int(c): r for r, (p, c) in enumerate(target.bones)}
+    total_turn = np.zeros((T, k))  # how far each joint's bone frame has turned, for unmatched children
+    for j in range(k):  # parents come first
+        parent = target.parents[j]
+        if parent < 0:
+            moved = (S[:, match[j]] - S[0, match[j]]) * scale if j in match else 0.0
+            out[:, j] = target.positions[j] + moved
+            continue
+        b = bone_of_child[j]
+        if followed[b] is not None:
+            a = rest_angle[b] + turn[:, b]
+            length = rest_length[b] * stretch[:, b]
+        else:
+            a = rest_angle[b] + total_turn[:, parent]
+            length = np.full(T, rest_length[b])
+        total_turn[:, j] = a - rest_angle[b]
+        out[:, j] = out[:, parent] + length[:, None] * np.stack([np.cos(a), np.sin(a)], axis=1)
+    return out
