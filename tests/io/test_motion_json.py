@@ -69,3 +69,26 @@ def test_missing_and_broken_files(tmp_path):
     with pytest.raises(MotionError, match="as JSON"):
         load_motion(tmp_path / "bad.json")
     assert not is_motion_file(tmp_path / "none.json")
+
+
+def test_confidence_round_trips_and_csv_has_every_number(motion, tmp_path):
+    import csv
+
+    from toonmotion.io.motion_json import save_motion_csv
+
+    rng = np.random.default_rng(5)
+    captured = Motion(motion.skeleton, motion.positions, fps=motion.fps,
+                      confidence=rng.uniform(size=motion.positions.shape[:2]))
+    save_motion(tmp_path / "m.json", captured)
+    loaded = load_motion(tmp_path / "m.json")
+    np.testing.assert_array_equal(loaded.confidence, captured.confidence)
+    save_motion_csv(tmp_path / "m.csv", captured)
+    rows = list(csv.reader((tmp_path / "m.csv").open()))
+    names = motion.skeleton.names
+    assert rows[0][:5] == ["frame", "time", f"{names[0]}_x", f"{names[0]}_y", f"{names[0]}_confidence"]
+    assert len(rows) == 1 + len(motion.positions) and len(rows[1]) == 2 + 3 * len(names)
+    table = np.array(rows[1:], dtype=float)
+    np.testing.assert_array_equal(table[:, 0], np.arange(len(motion.positions)))
+    np.testing.assert_array_equal(table[:, 2::3], captured.positions[..., 0])
+    np.testing.assert_array_equal(table[:, 3::3], captured.positions[..., 1])
+    np.testing.assert_array_equal(table[:, 4::3], captured.confidence)

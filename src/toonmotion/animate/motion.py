@@ -26,11 +26,14 @@ class Motion:
         (x, y) pixels, y down, of every joint at every frame.
     fps : float
         Frames per second.
+    confidence : (T, k) float in [0, 1], optional
+        How sure motion capture was of each joint at each frame (None when not captured).
     """
 
     skeleton: object
     positions: np.ndarray
     fps: float
+    confidence: np.ndarray | None = None
 
     def __post_init__(self):
         positions = np.array(self.positions, dtype=float)
@@ -46,6 +49,15 @@ class Motion:
         if isinstance(self.fps, bool) or not isinstance(self.fps, (int, float, np.number)) \
                 or not (np.isfinite(self.fps) and self.fps > 0):
             raise MotionError(f"the motion's fps must be a finite number > 0, got {self.fps!r}")
+        if self.confidence is not None:
+            confidence = np.array(self.confidence, dtype=float)
+            if confidence.shape != positions.shape[:2]:
+                raise MotionError(f"the motion's confidence must have shape {positions.shape[:2]}, "
+                                  f"got {confidence.shape}")
+            if not np.all((confidence >= 0) & (confidence <= 1)):
+                raise MotionError("the motion's confidence values must lie between 0 and 1")
+            confidence.setflags(write=False)
+            object.__setattr__(self, "confidence", confidence)
         positions.setflags(write=False)
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "fps", float(self.fps))

@@ -9,8 +9,10 @@
       ...]}
 
 ``joints`` is the skeleton (its positions the rest pose); each frame lists every joint's
-``[x, y]`` in that order. Numbers are written with full precision, so a save followed by a
-load gives back the same arrays.
+``[x, y]`` in that order. A captured motion also has ``"confidence"``: a row per frame of each
+joint's tracking confidence in [0, 1]. Numbers are written with full precision, so a save
+followed by a load gives back the same arrays. :func:`save_motion_csv` writes a table for
+spreadsheets and other tools: ``frame, time, <joint>_x, <joint>_y[, <joint>_confidence]...``.
 """
 
 import json
@@ -61,12 +63,20 @@ def load_motion(path):
         positions = np.array(frames, dtype=float)
     except (TypeError, ValueError):
         raise MotionError(f"{path}: 'frames' must be a list of frames of [x, y] per joint") from None
+    confidence = data.get("confidence")
+    if confidence is not None:
+        try:
+            confidence = np.array(confidence, dtype=float)
+        except (TypeError, ValueError):
+            raise MotionError(f"{path}: 'confidence' must be a list of rows of numbers") from None
     if positions.ndim == 3 and positions.shape[1] == len(skeleton):
         # Columns follow the file's joint order; the skeleton lists parents first.
-        order = [skeleton.index(j["name"]) for j in data["joints"]]
-        positions = positions[:, np.argsort(order)]
+        order = np.argsort([skeleton.index(j["name"]) for j in data["joints"]])
+        positions = positions[:, order]
+        if confidence is not None and confidence.ndim == 2 and confidence.shape[1] == len(order):
+            confidence = confidence[:, order]
     try:
-        return Motion(skeleton=skeleton, positions=positions, fps=data.get("fps"))
+        return Motion(skeleton=skeleton, positions=positions, fps=data.get("fps"), confidence=confidence)
     except MotionError as error:
         raise MotionError(f"{path}: {error}") from None
 
@@ -77,4 +87,26 @@ def save_motion(path, motion):
     joints = json.dumps(skeleton_to_dict(motion.skeleton))
     rows = ",\n".join(" " + json.dumps(frame.tolist(), separators=(",", ":"))
                       for frame in motion.positions)
-    write_text(path, f'{head},\n "joints": {joints},\n "frames": [\n{rows}]}}\n')
+    text = f'{head},\n "joints": {joints},\n "frames": [\n{rows}]'
+    if motion.confidence is not None:
+        rows = ",\n".join(" " + json.dumps(row.tolist(), separators=(",", ":")) for row in motion.confidence)
+        text += f',\n "confidence": [\n{rows}]'
+    write_text(path, text + "}\n")
+
+
+def save_motion_csv(path, motion):
+    """Write a :class:`Motion` as CSV: a row per frame, two columns per joint (and confidence)."""
+    names = motion.skeleton.names
+    header = ["frame", "time"]
+    sure = motion.confidence is not None
+    for name in names:
+        header += [f"{name}_x", f"{name}_y"] + ([f"{name}_confidence"] if sure else [])
+    lines = [",".join(header)]
+    for f, frame in enumerate(motion.positions):
+        row = [str(f), repr(f / motion.fps)]
+        for j, (x, y) in enumerate(frame):
+            row += [repr(float(x)), repr(float(y))]
+            if sure:
+                row.append(repr(float(motion.confidence[f, j])))
+        lines.append(",".join(row))
+    write_text(path, "\n".join(lines) + "\n")
