@@ -1,0 +1,1 @@
+"""Motion capture from image sequences and mocap (thesis ch. 4)."""
