@@ -1,0 +1,201 @@
+"""Background subtraction and the guide skeleton for placing joints (thesis 4.3).
+
+The thesis cuts the character out of every frame with an interactive video cutout tool, then
+shows the curve skeleton of frame 1's cut-out as a guide for marking joints. Here the cut-out
+is automatic, for the two backgrounds that capture clips come on:
+
+* a **static background** (a fixed camera): the background is the per-pixel median of up to
+  25 evenly spaced frames, right wherever the figure covers a pixel in fewer than half of
+  them; or give it as an image (a clean plate);
+* a **flat colour** (a cartoon on one colour, a green screen): give the colour.
+
+A pixel is foreground when the RGB (Euclidean) distance between its colour and the
+background's exceeds a threshold. By default the threshold is Otsu's on frame 0's distances,
+the split between "background plus noise" and "figure", clamped to [20, 100] (of 441, black
+to white): 20 stays above video compression noise, 100 keeps a figure close in colour to its
+background from being thrown away wholesale when the distances are spread wide.
+
+Each mask is then cleaned: specks (8-connected parts smaller than 1% of the largest part) are
+dropped, and holes (background parts not touching the frame's border) smaller than 1% of the
+foreground's area are filled; bigger holes, such as the gap between an arm on the hip and the
+body, stay.
+"""
+
+from numbers import Real
+
+import numpy as np
+from scipy import ndimage as ndi
+
+from toonmotion.errors import TrackingError
+from toonmotion.shape.curve_skeleton import curve_skeleton
+from toonmotion.shape.segment import clean_mask
+
+THRESHOLD_RANGE = (20.0, 100.0)
+# Specks smaller than this share of the largest part, and holes smaller than this share of the
+# foreground, are cleaned away.
+CLEAN_FRACTION = 0.01
+
+_CROSS = ndi.generate_binary_structure(2, 1)
+
+
+def estimate_background(frames, *, samples=25):
+    """The static background: each pixel's median over evenly spaced frames.
+
+    Parameters
+    ----------
+    frames : (T, h, w, 3) uint8
+    samples : int
+        How many frames, evenly spaced from the first to the last, the median is taken over
+        (all of them when there are fewer). A pixel comes out right when the figure covers it
+        in fewer than half of these.
+
+    Returns
+    -------
+    (h, w, 3) uint8
+
+    Examples
+    --------
+    >>> frames = np.zeros((5, 2, 2, 3), np.uint8); frames[1, 0, 0] = 200
+    >>> estimate_background(frames)[0, 0].tolist()
+    [0, 0, 0]
+    """
+    frames = _checked_frames(frames)
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+        raise ValueError(f"samples must be a positive whole number, got {samples!r}")
+    T = len(frames)
+    picked = np.unique(np.rint(np.linspace(0, T - 1, min(samples, T))).astype(int))
+    out = np.empty(frames.shape[1:], np.uint8)
+    for r in range(0, out.shape[0], 64):  # row bands keep the float copy median makes small
+        band = np.median(frames[picked, r : r + 64], axis=0)
+        out[r : r + 64] = np.rint(band).astype(np.uint8)
+    return out
+
+
+def foreground_masks(frames, *, background=None, colour=None, threshold=None):
+    """Where the figure is in each frame: pixels whose colour differs from the background's.
+
+    Parameters
+    ----------
+    frames : (T, h, w, 3) uint8
+    background : (h, w, 3) uint8, optional
+        The background image (a clean plate). Default: :func:`estimate_background`, unless
+        ``colour`` is given.
+    colour : (r, g, b), optional
+        A flat background colour, 0-255, instead of a background image.
+    threshold : float, optional
+        RGB distance (0 to 441) above which a pixel is foreground. Default: Otsu's threshold on
+        frame 0's distances, clamped to :data:`THRESHOLD_RANGE`.
+
+    Returns
+    -------
+    (T, h, w) bool
+        Cleaned masks: specks dropped, small holes filled (see the module docstring).
+    """
+    frames = _checked_frames(frames)
+    h, w = frames.shape[1:3]
+    if background is not None and colour is not None:
+        raise TrackingError("give a background image or a background colour, not both")
+    if colour is not None:
+        reference = _checked_colour(colour)[None, None, :]
+    elif background is not None:
+        reference = np.asarray(background)
+        if reference.shape != (h, w, 3):
+            raise TrackingError(
+                f"the background image is {_size(reference.shape)} but the frames are {w}x{h} RGB; "
+                "give a background of the frames' size"
+            )
+        reference = reference.astype(np.float32)
+    else:
+        reference = estimate_background(frames).astype(np.float32)
+    if threshold is None:
+        threshold = _auto_threshold(_distance(frames[0], reference))
+    elif not _is_number(threshold) or not threshold >= 0:
+        raise TrackingError(f"the foreground threshold must be a number >= 0, got {threshold!r}")
+    masks = np.empty(frames.shape[:3], dtype=bool)
+    for t, frame in enumerate(frames):
+        masks[t] = _cleaned(_distance(frame, reference) > threshold)
+    return masks
+
+
+def guide_skeleton(mask, *, prune=0.5):
+    """The curve skeleton of frame 1's foreground, the guide for placing joints (thesis 4.3).
+
+    Parameters
+    ----------
+    mask : (h, w) bool
+        Frame 1's foreground, e.g. ``foreground_masks(frames)[0]``.
+    prune : float
+        Spur pruning, as in :func:`~toonmotion.shape.curve_skeleton.curve_skeleton`.
+
+    Returns
+    -------
+    CurveSkeleton
+    """
+    mask = np.asarray(mask, dtype=bool)
+    if mask.ndim != 2:
+        raise TrackingError(f"the guide mask must be one (h, w) frame, got shape {mask.shape}")
+    if not mask.any():
+        raise TrackingError(
+            "the first frame's foreground is empty: no figure was found; check the background "
+            "(or colour) and lower the threshold, or start from a frame where the figure shows"
+        )
+    return curve_skeleton(mask, prune=prune)
+
+
+def _checked_frames(frames):
+    frames = np.asarray(frames)
+    if frames.ndim != 4 or frames.shape[3] != 3 or frames.dtype != np.uint8:
+        raise TrackingError(
+            f"frames must be a (T, h, w, 3) uint8 RGB array, got shape {frames.shape} dtype {frames.dtype}"
+        )
+    if frames.shape[0] == 0 or frames.shape[1] == 0 or frames.shape[2] == 0:
+        raise TrackingError("the sequence is empty: there are no frames (or no pixels) to track")
+    return frames
+
+
+def _checked_colour(colour):
+    try:
+        values = np.array([float(v) for v in colour])
+    except (TypeError, ValueError):
+        values = np.zeros(0)
+    if values.shape != (3,) or not np.all((values >= 0) & (values <= 255)):
+        raise TrackingError(f"the background colour must be three numbers (r, g, b) 0-255, got {colour!r}")
+    return values.astype(np.float32)
+
+
+def _is_number(value):
+    return isinstance(value, Real) and not isinstance(value, bool) and bool(np.isfinite(value))
+
+
+def _size(shape):
+    return f"{shape[1]}x{shape[0]}" if len(shape) >= 2 else f"shape {shape}"
+
+
+def _distance(frame, reference):
+    """RGB distance of each pixel to the background, (h, w) float32."""
+    return np.sqrt(np.sum(np.square(frame.astype(np.float32) - reference), axis=2))
+
+
+def _auto_threshold(distance):
+    from skimage.filters import threshold_otsu
+
+    low, high = THRESHOLD_RANGE
+    if float(distance.max()) - float(distance.min()) < 1e-3:
+        return low
+    return float(np.clip(threshold_otsu(distance), low, high))
+
+
+def _cleaned(mask):
+    if not mask.any():
+        return mask
+    mask = clean_mask(mask, min_fraction=CLEAN_FRACTION)
+    # Holes: background parts (4-connected, the dual of 8-connected foreground) off the border.
+    labels, count = ndi.label(~mask, structure=_CROSS)
+    if count == 0:
+        return mask
+    sizes = np.bincount(labels.ravel())
+    small = sizes < CLEAN_FRACTION * np.count_nonzero(mask)
+    small[0] = False
+    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    small[border] = False
+    return mask | small[labels]

@@ -1,0 +1,119 @@
+"""The joints to track and the rectangle around each (thesis 4.3).
+
+In the thesis the animator marks each joint of frame 1 with a small rectangle, guided by the
+curve skeleton; the rectangle is the texture the joint is tracked by. :func:`suggest_setup`
+proposes such a setup to start from (or to use as it is): joints where
+:func:`~toonmotion.rig.auto_skeleton.skeleton_from_curve_skeleton` puts them (the ends of the
+curve skeleton's branches, its junctions and evenly along long branches), each with a square
+as wide as the figure is thick there: twice the largest distance to the outline within 3 px
+of the joint (within a few pixels, since a branch's end point sits near the tip, where the
+figure is thinnest), clamped to [8, 48] px, so small joints still have some texture and big
+ones do not drag in much of the background.
+
+Rectangles: ``sizes[j] = (width, height)`` in pixels, centred on joint ``j``. Integer
+coordinates are pixel centres, so a ``w`` x ``h`` frame spans ``[-0.5, w - 0.5]`` x
+``[-0.5, h - 0.5]``, and a rectangle must lie within that span: ``x - width / 2 >= -0.5`` and
+``x + width / 2 <= w - 0.5``, likewise in y. Suggested rectangles are shrunk, about their
+joint, until they do.
+"""
+
+import numpy as np
+from scipy import ndimage as ndi
+
+from toonmotion.capture.foreground import guide_skeleton
+from toonmotion.errors import TrackingError
+from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
+
+SIZE_RANGE = (8.0, 48.0)
+# How far from a joint (pixels) the figure's thickness is looked for.
+THICKNESS_REACH = 3
+
+_EPS = 1e-9
+
+
+def suggest_setup(mask, *, max_bone=None, prune=0.5):
+    """Joints to track on frame 1, from its curve skeleton, and a rectangle for each.
+
+    Parameters
+    ----------
+    mask : (h, w) bool
+        Frame 1's foreground.
+    max_bone : float, optional
+        Longest bone in pixels (longer branches get joints along them); default a fifth of the
+        curve skeleton's bounding-box diagonal.
+    prune : float
+        Spur pruning of the curve skeleton.
+
+    Returns
+    -------
+    skeleton : Skeleton
+        Joints at frame 1's positions, (x, y) pixels, y down.
+    sizes : (k, 2) float
+        Width and height of each joint's rectangle, in skeleton joint order; every rectangle
+        lies inside the frame.
+
+    Examples
+    --------
+    A bar 12 px thick, touching the frame's left edge: the rectangle of the joint at its left
+    end is narrowed to fit.
+
+    >>> mask = np.zeros((40, 120), bool); mask[14:26, 0:110] = True
+    >>> skeleton, sizes = suggest_setup(mask, max_bone=40)
+    >>> skeleton.positions[:, 0].round().tolist(), sizes.tolist()
+    ([54.0, 82.0, 107.0, 26.0, 1.0], [[12.0, 12.0], [12.0, 12.0], [10.0, 10.0], [12.0, 12.0], [3.0, 8.0]])
+    """
+    mask = np.asarray(mask, dtype=bool)
+    skeleton = skeleton_from_curve_skeleton(guide_skeleton(mask, prune=prune), max_bone=max_bone)
+    h, w = mask.shape
+    # Largest distance to the outline within THICKNESS_REACH px of each pixel.
+    reach = 2 * THICKNESS_REACH + 1
+    radius = ndi.maximum_filter(ndi.distance_transform_edt(mask), size=reach, mode="constant")
+    cols = np.clip(np.rint(skeleton.positions[:, 0]).astype(int), 0, w - 1)
+    rows = np.clip(np.rint(skeleton.positions[:, 1]).astype(int), 0, h - 1)
+    side = np.clip(2.0 * radius[rows, cols], *SIZE_RANGE)
+    sizes = np.stack([side, side], axis=1)
+    # Shrink about the joint until the rectangle is inside the frame.
+    room = 2.0 * np.minimum(skeleton.positions + 0.5, np.array([w, h]) - 0.5 - skeleton.positions)
+    return skeleton, np.minimum(sizes, np.maximum(room, 0.0))
+
+
+def check_setup(skeleton, sizes, frame_size):
+    """Raise :class:`TrackingError` unless every joint's rectangle is usable in the frame.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        The joints, at their positions in the frame tracking starts from.
+    sizes : (k, 2) float
+        Width and height of each joint's rectangle, in skeleton joint order.
+    frame_size : (width, height)
+        The frames' size in pixels.
+
+    Raises
+    ------
+    TrackingError
+        When ``sizes`` is not ``(k, 2)``, a size is not finite or not positive, or a rectangle
+        is not wholly inside the frame.
+    """
+    sizes = np.asarray(sizes, dtype=float)
+    k = len(skeleton)
+    if sizes.shape != (k, 2):
+        raise TrackingError(
+            f"give a (width, height) for each of the {k} joints; got sizes of shape {sizes.shape}"
+        )
+    try:
+        w, h = (float(v) for v in frame_size)
+    except (TypeError, ValueError):
+        raise TrackingError(f"the frame size must be (width, height), got {frame_size!r}") from None
+    for name, (x, y), (sw, sh) in zip(skeleton.names, skeleton.positions, sizes, strict=True):
+        if not (np.isfinite(sw) and np.isfinite(sh) and sw > 0 and sh > 0):
+            raise TrackingError(
+                f"joint {name!r} has rectangle size {sw:g}x{sh:g}; give a width and height above 0"
+            )
+        x0, y0, x1, y1 = x - sw / 2, y - sh / 2, x + sw / 2, y + sh / 2
+        if x0 < -0.5 - _EPS or y0 < -0.5 - _EPS or x1 > w - 0.5 + _EPS or y1 > h - 0.5 + _EPS:
+            raise TrackingError(
+                f"joint {name!r}'s rectangle ({x0:g}, {y0:g}) to ({x1:g}, {y1:g}) is not inside the "
+                f"{w:g}x{h:g} frame (which spans -0.5 to {w - 0.5:g}, -0.5 to {h - 0.5:g}); "
+                "move the joint inwards or make its rectangle smaller"
+            )
