@@ -1,0 +1,412 @@
+"""Tests for toonmotion.capture.tracker: joint tracking (thesis 4.4, eq. 4.1, 4.2, 4.4, 4.6).
+
+Every sequence is drawn here from seeded noise textures, so the true joint positions are known.
+"""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from toonmotion.capture.tracker import (
+    Tracking,
+    TrackSettings,
+    TrackSetup,
+    retrack,
+    track,
+)
+from toonmotion.errors import TrackingError
+from toonmotion.rig.skeleton import Skeleton
+
+RECT = 20  # rectangle side, px
+SPRITE = 28  # side of a textured square; a rectangle at its centre sees only its texture
+
+
+def _texture(rng, h, w, *, blur=1.0):
+    """``(h, w, 3)`` float32 noise, blurred a little and stretched to a standard deviation of 60."""
+    noise = cv2.GaussianBlur(rng.uniform(0, 255, (h, w, 3)).astype(np.float32), (0, 0), blur)
+    return np.clip((noise - noise.mean()) / noise.std() * 60 + 128, 0, 255).astype(np.float32)
+
+
+def _paint(canvas, sprite, centre, angle=0.0):
+    """Draw ``sprite`` onto float ``canvas`` with its centre at ``centre``, turned by ``angle``."""
+    h, w = sprite.shape[:2]
+    c, s = math.cos(angle), math.sin(angle)
+    hx, hy = (w - 1) / 2, (h - 1) / 2
+    M = np.array([[c, -s, centre[0] - c * hx + s * hy], [s, c, centre[1] - s * hx - c * hy]])
+    size = canvas.shape[1], canvas.shape[0]
+    colour = cv2.warpAffine(sprite, M, size, flags=cv2.INTER_LINEAR)
+    alpha = cv2.warpAffine(np.ones((h, w), np.float32), M, size, flags=cv2.INTER_LINEAR)[..., None]
+    canvas *= 1 - alpha
+    canvas += colour  # bilinear with a zero border: already premultiplied by alpha
+
+
+def _film(rng, canvases, noise=3.0):
+    """``(T, h, w, 3)`` uint8 from float canvases, with camera noise."""
+    frames = np.stack(canvases) + rng.normal(0, noise, (len(canvases), *canvases[0].shape))
+    return np.clip(np.rint(frames), 0, 255).astype(np.uint8)
+
+
+def _setup(names_parents, positions, size=RECT):
+    skeleton = Skeleton.from_joints([(n, p, xy) for (n, p), xy in zip(names_parents, positions, strict=True)])
+    return TrackSetup(skeleton, np.full((len(skeleton), 2), float(size)))
+
+
+def _errors(tracking, truth):
+    """``(T, k)`` distance of each tracked centre from the truth."""
+    return np.linalg.norm(tracking.positions - truth, axis=-1)
+
+
+# --- scenes -------------------------------------------------------------------------------------------
+
+
+def _translation(seed=1):
+    """A square at constant velocity for 20 frames, then accelerating for 20: frames, truth (T, 1, 2)."""
+    rng = np.random.default_rng(seed)
+    background, sprite = _texture(rng, 120, 220, blur=1.5), _texture(rng, SPRITE, SPRITE)
+    t = np.arange(40, dtype=float)[:, None]
+    truth = [40.0, 60.0] + t * [2.3, 0.6] + 0.5 * np.clip(t - 20, 0, None) ** 2 * [0.25, -0.08]
+    canvases = []
+    for xy in truth:
+        canvas = background.copy()
+        _paint(canvas, sprite, xy)
+        canvases.append(canvas)
+    return _film(rng, canvases), truth[:, None]
+
+
+def _wander(seed=7, T=150):
+    """A square wandering on two sines for T frames, never still: frames, truth (T, 1, 2)."""
+    rng = np.random.default_rng(seed)
+    background, sprite = _texture(rng, 160, 200, blur=1.5), _texture(rng, SPRITE, SPRITE)
+    t = np.arange(T)[:, None]
+    truth = [100.0, 80.0] + np.hstack([45 * np.sin(2 * np.pi * t / 97), 35 * np.sin(2 * np.pi * t / 61 + 1)])
+    canvases = []
+    for xy in truth:
+        canvas = background.copy()
+        _paint(canvas, sprite, xy)
+        canvases.append(canvas)
+    return _film(rng, canvases), truth[:, None]
+
+
+def _limb(seed=2):
+    """A limb swinging about a still shoulder, up to 8 degrees a frame: frames, truth (T, 2, 2)."""
+    rng = np.random.default_rng(seed)
+    background = _texture(rng, 170, 180, blur=1.5)
+    bar, shoulder = _texture(rng, SPRITE, 70), _texture(rng, SPRITE, SPRITE)
+    pivot, reach, period = np.array([90.0, 85.0]), 40.0, 36
+    amplitude = math.radians(8) * period / (2 * math.pi)  # peak speed 8 degrees a frame
+    canvases, truth = [], []
+    for t in range(period + 1):
+        theta = amplitude * math.sin(2 * math.pi * t / period)
+        along = np.array([math.cos(theta), math.sin(theta)])
+        _paint(canvas := background.copy(), bar, pivot + along * (70 / 2 - 10), theta)
+        _paint(canvas, shoulder, pivot)
+        canvases.append(canvas)
+        truth.append([pivot, pivot + reach * along])
+    return _film(rng, canvases), np.array(truth)
+
+
+def _sudden_turn(seed=2):
+    """A limb still for 5 frames, then turning 12 degrees a frame: frames, truth (T, 2, 2)."""
+    rng = np.random.default_rng(seed)
+    background = _texture(rng, 170, 180, blur=1.5)
+    bar, shoulder = _texture(rng, SPRITE, 70), _texture(rng, SPRITE, SPRITE)
+    pivot, reach = np.array([90.0, 85.0]), 40.0
+    canvases, truth = [], []
+    for t in range(30):
+        theta = math.radians(12) * max(0, t - 5)
+        along = np.array([math.cos(theta), math.sin(theta)])
+        _paint(canvas := background.copy(), bar, pivot + along * (70 / 2 - 10), theta)
+        _paint(canvas, shoulder, pivot)
+        canvases.append(canvas)
+        truth.append([pivot, pivot + reach * along])
+    return _film(rng, canvases), np.array(truth)
+
+
+def _occlusion(speed, seed=3):
+    """A square at ``speed`` px/frame passing behind a still occluder: frames, truth (T, 1, 2), its x span."""
+    rng = np.random.default_rng(seed)
+    background, sprite = _texture(rng, 90, 240, blur=1.5), _texture(rng, SPRITE, SPRITE)
+    occluder, left = _texture(rng, 60, 34), 100.0
+    truth = np.array([[30.0 + speed * t, 45.0] for t in range(int(160 / speed))])
+    canvases = []
+    for xy in truth:
+        canvas = background.copy()
+        _paint(canvas, sprite, xy)
+        _paint(canvas, occluder, (left + 16.5, 45.0))
+        canvases.append(canvas)
+    return _film(rng, canvases), truth[:, None], (left - 0.5, left + 33.5)
+
+
+def _hat_and_man(seed=4):
+    """A man walking right and his hat flying off up and right: frames, truth (T, 4, 2), setup."""
+    rng = np.random.default_rng(seed)
+    background = _texture(rng, 150, 200, blur=1.5)
+    body, hat = _texture(rng, 90, SPRITE), _texture(rng, 24, SPRITE)
+    joints = (("hip", None), ("chest", "hip"), ("head", "chest"), ("hat", None))
+    canvases, truth = [], []
+    for t in range(30):
+        centre = np.array([50.0 + 1.5 * t, 100.0])
+        hat_at = centre + [0.0, -57.0] + [0.8 * t + 0.03 * t * t, -0.3 * t - 0.02 * t * t]
+        _paint(canvas := background.copy(), body, centre)
+        _paint(canvas, hat, hat_at)
+        canvases.append(canvas)
+        truth.append([centre + [0, 30], centre, centre + [0, -30], hat_at])
+    truth = np.array(truth)
+    return _film(rng, canvases), truth, _setup(joints, truth[0])
+
+
+@pytest.fixture(scope="module")
+def hat_and_man():
+    return _hat_and_man()
+
+
+# --- following joints ---------------------------------------------------------------------------------
+
+
+def test_a_patch_at_constant_velocity_then_accelerating_is_tracked_within_half_a_pixel():
+    frames, truth = _translation()
+    tracking = track(frames, _setup([("dot", None)], truth[0]))
+    errors = _errors(tracking, truth)
+    assert errors.max() <= 0.5, f"worst error {errors.max():.3f} px at frame {errors.argmax()}"
+    assert tracking.tracked.all()
+    assert tracking.confidence[1:].min() > 0.8
+
+
+def test_a_long_track_does_not_drift():
+    # Matching each frame against the previous frame's patch (the thesis' c_{m,t-1}) ends this
+    # sequence 1.06 px off; the anchor template keeps it within a few hundredths.
+    frames, truth = _wander()
+    errors = _errors(track(frames, _setup([("dot", None)], truth[0])), truth)
+    assert errors.max() <= 0.2, f"worst error {errors.max():.3f} px at frame {errors.argmax()}"
+
+
+def test_a_limb_turning_8_degrees_a_frame_is_tracked_within_a_pixel_only_with_rotation():
+    frames, truth = _limb()
+    setup = _setup([("shoulder", None), ("hand", "shoulder")], truth[0])
+    turned = track(frames, setup)
+    still = track(frames, setup, settings=TrackSettings(rotate=False))
+    hand_turned, hand_still = _errors(turned, truth)[:, 1], _errors(still, truth)[:, 1]
+    assert hand_turned.max() <= 1.0, f"worst error {hand_turned.max():.3f} px at frame {hand_turned.argmax()}"
+    assert hand_still.mean() > hand_turned.mean()  # the reason for eq. 4.2
+    # The rectangle turns with the bone: its angle is the bone's direction relative to frame 0.
+    bone = truth[:, 1] - truth[:, 0]
+    assert np.allclose(turned.angles[:, 1], np.arctan2(bone[:, 1], bone[:, 0]), atol=0.03)
+    assert np.all(turned.angles[:, 0] == 0) and np.all(still.angles == 0)
+
+
+def test_a_limb_that_sets_off_turning_is_found_by_trying_turns():
+    # The first turning frame is predicted not to turn at all; 12 degrees off, the match fails.
+    frames, truth = _sudden_turn()
+    setup = _setup([("shoulder", None), ("hand", "shoulder")], truth[0])
+    errors = _errors(track(frames, setup), truth)
+    assert errors.max() <= 1.0, f"worst error {errors.max():.3f} px at frame {errors.argmax() // 2}"
+
+
+@pytest.mark.parametrize("speed, hidden_frames", [(3.0, 5), (1.0, 14)])
+def test_a_joint_hidden_behind_an_occluder_is_recovered_when_it_re_emerges(speed, hidden_frames):
+    # At 1 px/frame the rectangle is partly covered for 20 frames each side: its template must not
+    # learn the occluder, or it sticks to it.
+    frames, truth, (left, right) = _occlusion(speed)
+    tracking = track(frames, _setup([("dot", None)], truth[0]))
+    x = truth[:, 0, 0]
+    hidden = (x - RECT / 2 >= left) & (x + RECT / 2 <= right)
+    before, after = x + RECT / 2 <= left, x - RECT / 2 >= right
+    assert hidden.sum() == hidden_frames and after.sum() >= 5
+    confidence, errors = tracking.confidence[:, 0], _errors(tracking, truth)[:, 0]
+    assert confidence[before].min() > 0.8
+    assert confidence[hidden].max() < 0.5
+    assert errors[after].max() <= 2.0, f"errors after re-emerging: {np.round(errors[after], 2)}"
+
+
+def test_a_hat_and_a_man_are_tracked_apart_in_one_call(hat_and_man):
+    frames, truth, setup = hat_and_man
+    assert (setup.skeleton.parents == -1).sum() == 2  # a forest: the hat is a second root
+    tracking = track(frames, setup)
+    errors = _errors(tracking, truth)
+    assert errors.max() <= 0.5, f"worst error per joint {np.round(errors.max(axis=0), 3)}"
+
+
+def test_still_frames_do_not_drift():
+    rng = np.random.default_rng(5)
+    frame = _film(rng, [_texture(rng, 80, 100)])[0]
+    frames = np.stack([frame] * 12)
+    initial = np.array([[30.37, 40.81], [62.5, 33.25], [71.9, 55.0]])
+    skeleton = Skeleton.from_joints([("a", None, initial[0]), ("b", "a", initial[1]), ("c", "b", initial[2])])
+    tracking = track(frames, TrackSetup(skeleton, [[19, 21], [20, 20], [15.4, 18.0]]))
+    assert np.abs(tracking.positions - initial).max() <= 1e-6
+    assert np.all(tracking.angles == 0)
+    assert np.all(tracking.confidence == 1)
+
+
+def test_tracking_can_start_and_stop_inside_the_sequence():
+    frames, truth = _translation()
+    calls = []
+    tracking = track(frames, _setup([("dot", None)], truth[0]), start=5, stop=30, initial=truth[5, :],
+                     progress=lambda frame, count: calls.append((frame, count)))
+    assert tracking.tracked.tolist() == [5 <= t < 30 for t in range(40)]
+    assert np.isnan(tracking.positions[:5]).all() and np.isnan(tracking.positions[30:]).all()
+    assert np.all(tracking.confidence[:5] == 0)
+    assert _errors(tracking, truth)[5:30].max() <= 0.5
+    assert calls == [(t, 30) for t in range(5, 30)]
+
+
+def test_the_tracking_is_read_only_and_checks_its_shapes():
+    frames, truth = _translation()
+    tracking = track(frames[:3], _setup([("dot", None)], truth[0]))
+    assert isinstance(tracking, Tracking)
+    with pytest.raises(ValueError):
+        tracking.positions[0, 0, 0] = 1.0
+    with pytest.raises(TrackingError, match=r"a Tracking needs positions \(T, k, 2\).*and \(2,\)"):
+        Tracking(tracking.positions, tracking.angles, tracking.confidence, tracking.tracked[:2])
+
+
+# --- corrections ------------------------------------------------------------------------------------
+
+
+def test_retrack_from_a_corrected_frame_mends_the_rest_and_keeps_the_frames_before(hat_and_man):
+    frames, truth, setup = hat_and_man
+    chest = setup.skeleton.index("chest")
+    good = track(frames, setup)
+    bad = retrack(good, frames, setup, 10, {"chest": truth[10, chest] + [7.0, -6.0]})
+    assert _errors(bad, truth)[11:, chest].min() > 5  # it follows the wrong texture
+    assert np.array_equal(bad.positions[:10], good.positions[:10])
+
+    fixed = retrack(bad, frames, setup, 10, {"chest": truth[10, chest]})
+    errors = _errors(fixed, truth)
+    assert errors[10:].max() <= 0.5, f"worst error per joint {np.round(errors[10:].max(axis=0), 3)}"
+    for name in ("positions", "angles", "confidence", "tracked"):
+        assert np.array_equal(getattr(fixed, name)[:10], getattr(bad, name)[:10])
+    assert fixed.tracked.all()
+    assert np.array_equal(fixed.positions[10, chest], truth[10, chest])
+
+
+def test_retrack_tracks_as_far_as_the_tracking_went():
+    frames, truth = _translation()
+    setup = _setup([("dot", None)], truth[0])
+    tracking = track(frames, setup, stop=25)
+    again = retrack(tracking, frames, setup, 12, {})
+    assert again.tracked.tolist() == tracking.tracked.tolist()
+    assert _errors(again, truth)[:25].max() <= 0.5
+
+
+# --- bad input --------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def small():
+    """Three 64x48 frames and a setup of two joints."""
+    rng = np.random.default_rng(6)
+    frames = _film(rng, [_texture(rng, 48, 64)] * 3)
+    return frames, _setup([("a", None), ("b", "a")], [(20, 20), (40, 25)], size=10)
+
+
+def test_no_frames_is_an_error(small):
+    _, setup = small
+    with pytest.raises(TrackingError, match="no frames"):
+        track([], setup)
+    with pytest.raises(TrackingError, match="no frames"):
+        track(np.zeros((0, 48, 64, 3), np.uint8), setup)
+
+
+def test_frames_of_differing_sizes_name_the_odd_frame(small):
+    frames, setup = small
+    odd = list(frames) + [np.zeros((40, 64, 3), np.uint8)]
+    with pytest.raises(TrackingError, match=r"frame 3 is 64x40 but the first frame read is 64x48"):
+        track(odd, setup)
+
+
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        (lambda f: f.astype(float), r"frame 0 is a float64 array of shape \(48, 64, 3\); give \(h, w, 3\)"),
+        (lambda f: list(f[..., 0]), r"frame 0 is a uint8 array of shape \(48, 64\)"),
+        (lambda f: f[..., 0], r"frames have shape \(3, 48, 64\); give a \(T, h, w, 3\) array"),
+        (lambda f: list(f[..., :2]), r"shape \(48, 64, 2\)"),
+    ],
+)
+def test_frames_that_are_not_rgb_uint8_are_an_error(small, bad, message):
+    frames, setup = small
+    with pytest.raises(TrackingError, match=message):
+        track(bad(frames), setup)
+
+
+def test_a_rectangle_outside_the_start_frame_names_the_joint_the_rectangle_and_the_frame(small):
+    frames, setup = small
+    initial = np.array([(20.0, 20.0), (60.0, 25.0)])
+    with pytest.raises(TrackingError, match=r"joint 'b' has its 10x10 rectangle at \(60, 25\), spanning "
+                                            r"x 55\.\.65, y 20\.\.30, not inside frame 1 \(64x48"):
+        track(frames, setup, start=1, initial=initial)
+    # Touching the edge is inside: pixel centres 0..63 cover x -0.5..63.5.
+    track(frames, setup, initial=[(4.5, 4.5), (58.5, 42.5)])
+
+
+@pytest.mark.parametrize("size", [[0, 5], [5, -1], [np.nan, 5], [5, np.inf]])
+def test_a_rectangle_of_no_size_names_the_joint(small, size):
+    _, setup = small
+    with pytest.raises(TrackingError, match=r"joint 'b' has a rectangle of size .*; give a finite width"):
+        TrackSetup(setup.skeleton, [[10, 10], size])
+
+
+def test_a_setup_needs_a_skeleton_and_a_size_per_joint(small):
+    frames, setup = small
+    with pytest.raises(TrackingError, match=r"setup must be a TrackSetup \(skeleton and .*\), got Skeleton"):
+        track(frames, setup.skeleton)
+    with pytest.raises(TrackingError, match=r"sizes have shape \(1, 2\); give a width and height per joint"):
+        TrackSetup(setup.skeleton, [[10, 10]])
+    with pytest.raises(TrackingError, match=r"a TrackSetup needs a Skeleton, got list"):
+        TrackSetup(["a", "b"], [[10, 10], [10, 10]])
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"start": 3}, r"start is 3; with 3 frames give a whole number 0\.\.2"),
+        ({"start": -1}, r"start is -1"),
+        ({"start": 1.0}, r"start is 1\.0"),
+        ({"stop": 0}, r"stop is 0; with 3 frames give a whole number 1\.\.3"),
+        ({"start": 1, "stop": 1}, r"stop is 1; with 3 frames give a whole number 2\.\.3"),
+        ({"stop": 4}, r"stop is 4"),
+        ({"initial": [(1, 2)]}, r"initial positions have shape \(1, 2\); give one \(x, y\) per joint"),
+        ({"initial": [(20, 20), (np.nan, 25)]}, r"non-finite"),
+        ({"settings": "fast"}, r"settings must be a TrackSettings"),
+    ],
+)
+def test_bad_tracking_options_are_an_error(small, kwargs, message):
+    frames, setup = small
+    with pytest.raises(TrackingError, match=message):
+        track(frames, setup, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"search": 0.5}, r"the search radius \(px\) must be a finite number >= 1, got 0\.5"),
+        ({"search": np.inf}, r"search radius"),
+        ({"w_alpha": 0.0}, r"w_alpha must be a finite number > 0"),
+        ({"w_beta": -1.0}, r"w_beta must be a finite number >= 0"),
+        ({"w_beta": "1"}, r"w_beta must be a number >= 0, got '1'"),
+        ({"rotate": "yes"}, r"rotate must be True or False"),
+    ],
+)
+def test_bad_settings_are_an_error(kwargs, message):
+    with pytest.raises(TrackingError, match=message):
+        TrackSettings(**kwargs)
+
+
+def test_bad_corrections_are_an_error(small):
+    frames, setup = small
+    tracking = track(frames, setup, stop=2)
+    unknown = r"a correction names joint 'nose', which is not tracked; the joints are: a, b"
+    with pytest.raises(TrackingError, match=unknown):
+        retrack(tracking, frames, setup, 1, {"nose": (3, 4)})
+    with pytest.raises(TrackingError, match=r"the correction of joint 'a' is \(3,\); give finite \(x, y\)"):
+        retrack(tracking, frames, setup, 1, {"a": (3,)})
+    outside = r"joint 'a' has its 10x10 rectangle at \(1, 20\).*not inside frame 1"
+    with pytest.raises(TrackingError, match=outside):
+        retrack(tracking, frames, setup, 1, {"a": (1, 20)})
+    with pytest.raises(TrackingError, match=r"frame 2 was not tracked"):
+        retrack(tracking, frames, setup, 2, {"a": (20, 20)})
+    with pytest.raises(TrackingError, match=r"the tracking covers 3 frames of 2 joints, but there are 2"):
+        retrack(tracking, frames[:2], setup, 1, {})
