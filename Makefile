@@ -38,6 +38,7 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/rig.py
 	$(BIN)/python benchmarks/deform.py
 	$(BIN)/python benchmarks/edit.py
+	$(BIN)/python benchmarks/track.py
 
 clean:
 	rm -rf $(VENV) demo

@@ -134,8 +134,8 @@ def _options(command):
     return {opt for param in command.params for opt in (*param.opts, *param.secondary_opts)}
 
 
-COMMANDS = ("rig", "show", "sample", "pose", "animate", "filter", "depth", "correct", "undo", "redo",
-            "edits", "remesh", "tune")
+COMMANDS = ("rig", "show", "sample", "pose", "animate", "filter", "depth", "correct", "undo", "redo", "track",
+            "retarget", "edits", "remesh", "tune")
 
 
 def test_every_command_is_in_the_readme_command_reference():
@@ -587,3 +587,114 @@ def test_filter_and_edit_errors_are_one_line_and_exit_2(posable, tmp_path, capsy
     assert err.startswith("toonmotion: error: ") and "\n" not in err
     assert message in err
     assert (posable / "pose.json").read_bytes() == pose_before, "a failed edit must not touch the file"
+
+
+@pytest.fixture(scope="module")
+def footage(tmp_path_factory):
+    """A waving arm named like the sample's, rendered as PNG frames, with its true joints."""
+    from toonmotion.capture.synthetic import limb_figure_frames
+    from toonmotion.io.track_json import save_joints
+    from toonmotion.io.video import save_animation
+    from toonmotion.rig.skeleton import Skeleton
+
+    folder = tmp_path_factory.mktemp("footage")
+    t = np.arange(12)[:, None]
+    shoulder = np.repeat([[150.0, 100.0]], 12, axis=0)
+    elbow = shoulder + 50 * np.hstack([np.cos(0.04 * t), np.sin(0.04 * t)])
+    hand = elbow + 45 * np.hstack([np.cos(0.1 * t), np.sin(0.1 * t)])
+    truth = np.stack([shoulder, elbow, hand], axis=1)
+    frames, radius = limb_figure_frames(truth, np.array([-1, 0, 1]), size=(320, 240), width=14, seed=4)
+    opaque = np.concatenate([frames, np.full(frames.shape[:3] + (1,), 255, np.uint8)], axis=3)
+    save_animation(folder / "frames", iter(opaque), fps=12)
+    skeleton = Skeleton.from_joints([("right_shoulder", None, tuple(truth[0, 0])),
+                                     ("right_elbow", "right_shoulder", tuple(truth[0, 1])),
+                                     ("right_hand", "right_elbow", tuple(truth[0, 2]))])
+    save_joints(folder / "joints.json", skeleton, np.full((3, 2), 2 * radius))
+    return folder, truth
+
+
+def test_track_writes_a_motion_csv_and_overlay(footage, tmp_path, capsys):
+    from toonmotion.io.motion_json import load_motion
+
+    folder, truth = footage
+    out = tmp_path / "m.json"
+    assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", out, "--fps", "12",
+                "--csv", tmp_path / "m.csv", "--overlay", tmp_path / "o.gif") == 0
+    assert "tracked 3 joints through 12 frames" in capsys.readouterr().out
+    motion = load_motion(out)
+    assert motion.fps == 12 and motion.confidence.shape == (12, 3)
+    assert np.hypot(*(motion.positions - truth).reshape(-1, 2).T).max() < 2.0
+    assert len((tmp_path / "m.csv").read_text().splitlines()) == 13
+    assert Image.open(tmp_path / "o.gif").n_frames == 12
+
+
+def test_track_corrections_resume_from_a_frame(footage, tmp_path):
+    from toonmotion.io.motion_json import load_motion
+
+    folder, truth = footage
+    first = tmp_path / "m.json"
+    assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", first) == 0
+    x, y = truth[6, 2] + (0.5, -0.5)
+    out = tmp_path / "fixed.json"
+    assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", out, "--resume", first,
+                "--at", "6", "--set", f"right_hand={x},{y}") == 0
+    before, after = load_motion(first), load_motion(out)
+    hand = after.skeleton.index("right_hand")
+    np.testing.assert_allclose(after.positions[6, hand], (x, y), atol=1e-9)
+    np.testing.assert_array_equal(after.positions[:6], before.positions[:6])
+
+
+def test_track_suggests_joints_when_none_are_given(footage, tmp_path, capsys):
+    folder, _ = footage
+    assert _run("track", folder / "frames", "-o", tmp_path / "m.json") == 0
+    assert "suggested" in capsys.readouterr().err
+    assert (tmp_path / "m.joints.json").is_file()
+
+
+def test_retarget_replays_a_tracked_motion_and_keeps_it_in_the_project(footage, posable, tmp_path):
+    folder, _ = footage
+    project = _copy_project(posable, tmp_path)
+    motion = tmp_path / "wave.json"
+    assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", motion) == 0
+    assert _run("retarget", motion, project, "-o", tmp_path / "r.gif", "--size", "42x60") == 0
+    assert Image.open(tmp_path / "r.gif").n_frames == 12
+    assert (project / "motions" / "wave.json").is_file()
+    load_project(project)  # the project still loads
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["track", "{t}/bad.mp4", "--joints", "{f}/joints.json", "-o", "{t}/m.json"], "bad.mp4"),
+        (["track", "{t}/mixed", "--joints", "{f}/joints.json", "-o", "{t}/m.json"], "size"),
+        (["track", "{f}/frames", "--joints", "{t}/far.json", "-o", "{t}/m.json"], "inside"),
+        (["track", "{f}/frames", "--joints", "{f}/joints.json", "-o", "{t}/m.txt"], "ending in .json"),
+        (["track", "{f}/frames", "--joints", "{f}/joints.json", "-o", "{t}/m.json", "--at", "3"],
+         "go together"),
+        (["retarget", "{t}/alien.json", "{p}/hero", "-o", "{t}/r.gif"], "no bone of the target matches"),
+        (["retarget", "{t}/alien.json", "{p}/hero", "-o", "{t}/r.gif", "--map", "head"], "--map takes"),
+    ],
+)
+def test_capture_errors_are_one_line_and_keep_the_old_motion(footage, posable, tmp_path, capsys, args,
+                                                             message):
+    from toonmotion.animate.motion import Motion
+    from toonmotion.io.motion_json import save_motion
+    from toonmotion.io.track_json import load_joints, save_joints
+    from toonmotion.rig.skeleton import Skeleton
+
+    folder, _ = footage
+    (tmp_path / "bad.mp4").write_bytes(np.random.default_rng(0).bytes(5000))
+    (tmp_path / "mixed").mkdir()
+    Image.new("RGB", (40, 30)).save(tmp_path / "mixed" / "f_1.png")
+    Image.new("RGB", (41, 30)).save(tmp_path / "mixed" / "f_2.png")
+    skeleton, sizes, _ = load_joints(folder / "joints.json")
+    save_joints(tmp_path / "far.json", skeleton, sizes * 0 + (400, 20))
+    alien = Skeleton.from_joints([("a", None, (0, 0)), ("b", "a", (5, 0))])
+    save_motion(tmp_path / "alien.json", Motion(alien, np.zeros((3, 2, 2)) + [[0, 0], [5, 0]], fps=12))
+    (tmp_path / "m.json").write_text("previous motion")
+    args = [a.format(p=posable, t=tmp_path, f=folder) for a in args]
+    assert _run(*args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("toonmotion: error: ") and "\n" not in err
+    assert message in err
+    assert (tmp_path / "m.json").read_text() == "previous motion"

@@ -19,13 +19,19 @@ from toonmotion.animate.inbetween import animate_frames, motion_frames, solve_ke
 from toonmotion.animate.motion import Motion, motion_for, motion_from_timeline
 from toonmotion.animate.pose_filter import exaggerate_pose
 from toonmotion.animate.timeline import Keyframe, make_timeline
+from toonmotion.capture.foreground import estimate_background, foreground_masks
+from toonmotion.capture.retarget import retarget
+from toonmotion.capture.setup import check_setup, suggest_setup
+from toonmotion.capture.tracker import Tracking, TrackSettings, TrackSetup, retrack
+from toonmotion.capture.tracker import track as track_joints
 from toonmotion.deform.deformer import Deformer, DeformSettings
 from toonmotion.deform.depth import find_overlaps
 from toonmotion.deform.tuning import CurveEdit, DragEdit, apply_tuning
 from toonmotion.deform.tuning import describe as describe_tuning
 from toonmotion.errors import EditError, SettingsError, ToonmotionError
+from toonmotion.io.frames import load_frames
 from toonmotion.io.image import DEFAULT_MAX_PIXELS, load_image, load_mask, save_png
-from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion
+from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion, save_motion_csv
 from toonmotion.io.pose_json import (
     load_keyframes,
     load_pose,
@@ -35,9 +41,11 @@ from toonmotion.io.pose_json import (
 )
 from toonmotion.io.project import load_project, save_project
 from toonmotion.io.skeleton_json import load_skeleton_file, save_skeleton_json
+from toonmotion.io.track_json import load_joints, save_joints
 from toonmotion.io.video import animation_format, save_animation
 from toonmotion.render.frame import check_overlays, fit_view, natural_size, render_frame
 from toonmotion.render.overview import render_overview
+from toonmotion.render.track_overlay import draw_tracking
 from toonmotion.rig.binding import Correction
 from toonmotion.rig.character import RigSettings
 from toonmotion.rig.edits import DepthEdit, apply_edit, redo, undo
@@ -624,6 +632,203 @@ def tune(
         save_png(preview, render_frame(character, result.U, view=view, background=None))
         typer.echo(f"wrote {preview}")
         _report_view(view, character)
+
+
+@app.command()
+def track(
+    source: Annotated[
+        Path,
+        typer.Argument(metavar="INPUT", help="A video, an animated GIF, or a folder (or pattern) of frames."),
+    ],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Motion file to write (.json).")],
+    joints: Annotated[
+        Path | None,
+        typer.Option(
+            "--joints", help="Joint rectangles to track (.json) \\[default: suggested from frame 1]."
+        ),
+    ] = None,
+    overlay: Annotated[
+        Path | None,
+        typer.Option(
+            "--overlay", help="Also draw the tracked joints on the footage: OUT.mp4, OUT.gif or a folder."
+        ),
+    ] = None,
+    csv: Annotated[Path | None, typer.Option("--csv", help="Also write the motion as CSV.")] = None,
+    search: Annotated[
+        float | None,
+        typer.Option("--search", help="Search radius in pixels \\[default: from each rectangle]."),
+    ] = None,
+    background: Annotated[
+        str | None,
+        typer.Option("--background", help="Flat background colour #rrggbb for suggesting joints \\[default: "
+                     "estimated from the sequence]."),
+    ] = None,
+    fps: Annotated[
+        float | None, typer.Option("--fps", help="Frame rate \\[default: the video's, else 24].")
+    ] = None,
+    resume: Annotated[
+        Path | None, typer.Option("--resume", help="Correct this earlier tracking (with --at and --set).")
+    ] = None,
+    at: Annotated[int | None, typer.Option("--at", help="Frame where --set places joints.")] = None,
+    corrections: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--set", help="NAME=X,Y: a joint's true position at --at (repeat); tracking resumes there."
+        ),
+    ] = None,
+):
+    """Track a character's joints through footage (thesis ch. 4) into a motion file."""
+    if output.suffix.lower() != ".json":
+        raise SettingsError(f"give a motion file ending in .json, not {output.name}")
+    if csv is not None and csv.suffix.lower() != ".csv":
+        raise SettingsError(f"give a CSV file ending in .csv, not {csv.name}")
+    if (resume is None) != (at is None) or (resume is None) != (not corrections):
+        raise SettingsError(
+            "--resume, --at and --set go together: the earlier motion, the frame and the joints"
+        )
+    if overlay is not None:
+        animation_format(overlay)
+    frames, video_fps = load_frames(source)
+    rate = fps or video_fps or 24.0
+    h, w = frames.shape[1:3]
+    if joints is not None:
+        skeleton, sizes, start = load_joints(joints)
+    elif resume is not None:
+        raise SettingsError("--resume needs the --joints file the tracking used (for the rectangle sizes)")
+    else:
+        colour = None if background is None else _colour(background)
+        back = None if colour is not None else estimate_background(frames)
+        mask = foreground_masks(frames[:1], background=back, colour=colour)[0]
+        skeleton, sizes = suggest_setup(mask)
+        start = 0
+        suggested = output.with_name(output.stem + ".joints.json")
+        save_joints(suggested, skeleton, sizes)
+        typer.echo(f"suggested {len(skeleton)} joints from frame 0 -> {suggested} (edit it, pass --joints)",
+                   err=True)
+    if not 0 <= start < len(frames):
+        raise SettingsError(f"the joints are given at frame {start} but the footage has {len(frames)} frames")
+    check_setup(skeleton, sizes, (w, h))
+    setup = TrackSetup(skeleton=skeleton, sizes=sizes)
+    settings = TrackSettings(search=search)
+    with _progress() as bar:
+        task = bar.add_task("tracking", total=len(frames))
+
+        def report(frame, count):
+            bar.update(task, completed=frame, total=count)
+
+        if resume is None:
+            result = track_joints(frames, setup, settings=settings, start=start, progress=report)
+        else:
+            earlier = _tracking_from(load_motion(resume), skeleton, len(frames), start)
+            fixes = dict(_named_point(c) for c in corrections)
+            result = retrack(earlier, frames, setup, at, fixes, settings=settings, progress=report)
+    tracked = np.flatnonzero(result.tracked)
+    first, last = int(tracked[0]), int(tracked[-1]) + 1
+    motion = Motion(skeleton=skeleton, positions=result.positions[first:last], fps=rate,
+                    confidence=result.confidence[first:last])
+    save_motion(output, motion)
+    if csv is not None:
+        save_motion_csv(csv, motion)
+    if overlay is not None:
+        pictures = (_opaque(draw_tracking(frames[first + t], motion.positions[t], sizes, skeleton.parents,
+                                          angles=result.angles[first + t], confidence=motion.confidence[t]))
+                    for t in range(motion.frame_count))
+        save_animation(overlay, pictures, fps=rate, background=(255, 255, 255))
+    unsure = float((motion.confidence < 0.5).mean())
+    typer.echo(
+        f"tracked {len(skeleton)} joints through {motion.frame_count} frames (from frame {first}); "
+        f"{unsure:.0%} of joint-frames matched poorly (hidden or changed) -> {output}"
+    )
+
+
+@app.command("retarget")
+def retarget_command(
+    motion_file: Annotated[Path, typer.Argument(metavar="MOTION.json", help="A captured motion.")],
+    project: _Project,
+    output: Annotated[
+        Path, typer.Option("-o", "--output", help="OUT.gif, OUT.mp4, or a folder (or pattern) for PNGs.")
+    ],
+    joint_map: Annotated[
+        str | None,
+        typer.Option("--map", help="Target joints named differently: TARGET=SOURCE[,TARGET=SOURCE...]."),
+    ] = None,
+    size: _Size = None,
+    background: Annotated[
+        str | None,
+        typer.Option("--background", help="transparent, white, black or #rrggbb \\[default: white; "
+                     "transparent for PNGs]."),
+    ] = None,
+    overlay: _Overlay = "",
+    exaggerate: Annotated[
+        float | None, typer.Option("--exaggerate", help="Cartoon filter strength A on the retargeted motion.")
+    ] = None,
+    sigma: _Sigma = 3.0,
+    shift: _Shift = 0.0,
+    no_area: _NoArea = False,
+    stage_one_only: _StageOne = False,
+    weights: _Weights = "1,1,1",
+    joint_width: _JointWidth = 1.5,
+):
+    """Replay a captured motion on a rigged drawing (thesis 4.5); the result is kept in the project."""
+    kind = animation_format(output)
+    character = load_project(project)
+    skeleton = character.skeleton
+    mapping = {}
+    for item in (joint_map or "").split(","):
+        if item.strip():
+            target, sep, source = item.partition("=")
+            if not sep or not target.strip() or not source.strip():
+                raise SettingsError(f"--map takes TARGET=SOURCE pairs separated by commas, got {item!r}")
+            mapping[target.strip()] = source.strip()
+    captured = load_motion(motion_file)
+    motion = retarget(captured, skeleton, joint_map=mapping)
+    if exaggerate:
+        settings = FilterSettings(strength=exaggerate, sigma=sigma, shift=shift)
+        motion = Motion(skeleton=skeleton, positions=filter_bones(skeleton, motion.positions, settings),
+                        fps=motion.fps)
+    deformer = Deformer(character, _deform_settings(no_area, stage_one_only, weights, joint_width))
+    meshes = list(motion_frames(deformer, motion.positions))
+    view = fit_view(character, [U for _, U in meshes])
+    out_size = natural_size(view, size=_size(size))
+    colour = _colour(background or ("transparent" if kind == "png" else "white"))
+    overlays = _overlays(overlay)
+    frames = (render_frame(character, U, pose=motion.pose(f) if overlays else None, size=out_size, view=view,
+                           background=colour, overlays=overlays) for f, U in meshes)
+    count = save_animation(output, frames, fps=motion.fps,
+                           background=colour if colour is not None else (255, 255, 255))
+    kept = Path(project) / "motions" / f"{motion_file.stem}.json"
+    save_motion(kept, motion)
+    typer.echo(f"retargeted {captured.frame_count} frames onto {project.name}: {count} frames at "
+               f"{motion.fps:g} fps -> {output} (motion kept in {kept})")
+
+
+def _tracking_from(motion, skeleton, count, start):
+    """An earlier tracking, read back from its motion file, laid out on ``count`` frames."""
+    positions = motion_for(skeleton, motion, where="the --resume motion")
+    k = len(skeleton)
+    if start + len(positions) > count:
+        raise SettingsError(f"the --resume motion has {len(positions)} frames from frame {start}, more than "
+                            f"the footage's {count}")
+    full = np.zeros((count, k, 2))
+    confidence = np.zeros((count, k))
+    tracked = np.zeros(count, dtype=bool)
+    full[start:start + len(positions)] = positions
+    tracked[start:start + len(positions)] = True
+    if motion.confidence is not None:
+        confidence[start:start + len(positions)] = motion.confidence[:, [motion.skeleton.names.index(n)
+                                                                          for n in skeleton.names]]
+    return Tracking(positions=full, angles=np.zeros((count, k)), confidence=confidence, tracked=tracked)
+
+
+def _opaque(rgb):
+    return np.concatenate([rgb, np.full(rgb.shape[:2] + (1,), 255, dtype=np.uint8)], axis=2)
+
+
+def _named_point(text):
+    name, sep, point = text.partition("=")
+    if not sep or not name.strip():
+        raise SettingsError(f"--set takes NAME=X,Y, got {text!r}")
+    return name.strip(), _numbers(point, 2, f"--set {name.strip()}=X,Y")
 
 
 def _deform_settings(no_area, stage_one_only, weights, joint_width):

@@ -4,7 +4,10 @@ Motion capture is measured on these (``benchmarks/track.py`` and the tests): rea
 clips, projected to 2D, drive a figure whose every bone is a textured band and every joint a
 textured disc, drawn far to near so limbs cross and hide each other. The true 2D joint positions
 are the input, so a tracker's error can be measured exactly. Textures are seeded noise, turned
-with their bone, so a joint's patch rotates as a drawn limb's would.
+with their bone, so a joint's patch rotates as a drawn limb's would. The noise is smooth, with
+features a few pixels across like crayon or cloth: pixel-sized noise would decorrelate under
+any sub-pixel resampling, which no drawing or footage does (a tracker lost the turning hand of
+a test arm on its first frame with it, and kept it to 0.1 px without).
 """
 
 import cv2
@@ -52,7 +55,7 @@ def limb_figure_frames(points, parents, *, depth=None, size=(640, 480), width=No
     longest = max(1.0, float(np.max([np.hypot(*(points[:, j] - points[:, p]).T).max() for p, j in bones])))
     limb_textures = [_noise((int(np.ceil(width)) + 2, int(np.ceil(longest)) + 2), rng) for _ in bones]
     side = (int(np.ceil(2 * radius)) + 3) | 1  # odd: the centre is a pixel
-    disc_textures = [_noise((side, side), rng, grain=0.5, blur=1, contrast=70) for _ in range(J)]
+    disc_textures = [_noise((side, side), rng, grain=0.15, blur=2, contrast=70) for _ in range(J)]
     frames = np.empty((T, h, w, 3), dtype=np.uint8)
     for t in range(T):
         frame = background.copy()
