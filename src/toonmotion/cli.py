@@ -19,7 +19,7 @@ from toonmotion.animate.inbetween import animate_frames, motion_frames, solve_ke
 from toonmotion.animate.motion import Motion, motion_for, motion_from_timeline
 from toonmotion.animate.pose_filter import exaggerate_pose
 from toonmotion.animate.timeline import Keyframe, make_timeline
-from toonmotion.capture.foreground import estimate_background, foreground_masks
+from toonmotion.capture.foreground import border_colour, estimate_background, foreground_masks
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.setup import check_setup, suggest_setup
 from toonmotion.capture.tracker import Tracking, TrackSettings, TrackSetup, retrack
@@ -661,7 +661,7 @@ def track(
     background: Annotated[
         str | None,
         typer.Option("--background", help="Flat background colour #rrggbb for suggesting joints \\[default: "
-                     "estimated from the sequence]."),
+                     "the border's colour if flat, else estimated from the sequence]."),
     ] = None,
     fps: Annotated[
         float | None, typer.Option("--fps", help="Frame rate \\[default: the video's, else 24].")
@@ -696,7 +696,7 @@ def track(
     elif resume is not None:
         raise SettingsError("--resume needs the --joints file the tracking used (for the rectangle sizes)")
     else:
-        colour = None if background is None else _colour(background)
+        colour = border_colour(frames[0]) if background is None else _colour(background)
         back = None if colour is not None else estimate_background(frames)
         mask = foreground_masks(frames[:1], background=back, colour=colour)[0]
         skeleton, sizes = suggest_setup(mask)

@@ -133,3 +133,13 @@ def test_bad_inputs_raise_tracking_errors():
         foreground_masks(frames, colour=(0, 0))
     with pytest.raises(TrackingError, match="threshold"):
         foreground_masks(frames, threshold=-1)
+
+
+def test_border_colour_reads_a_flat_background_and_refuses_a_textured_one():
+    from toonmotion.capture.foreground import border_colour
+
+    frame = np.full((40, 50, 3), (250, 248, 240), dtype=np.uint8)
+    frame[10:30, 15:35] = (20, 90, 200)  # the figure, off the border
+    assert border_colour(frame) == (250, 248, 240)
+    noisy = np.random.default_rng(0).integers(0, 256, size=(40, 50, 3), dtype=np.uint8)
+    assert border_colour(noisy) is None

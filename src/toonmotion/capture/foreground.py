@@ -199,3 +199,17 @@ def _cleaned(mask):
     border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     small[border] = False
     return mask | small[labels]
+
+
+def border_colour(frame, *, spread=12.0):
+    """The colour of a flat background, read off the frame's border, or None if it is not flat.
+
+    A cartoon on a plain background has the same colour all round its edge; when the per-channel
+    spread (standard deviation) of the border pixels is under ``spread``, their median is taken as
+    the background colour. Footage with a textured or varied border returns None.
+    """
+    frame = np.asarray(frame)
+    border = np.concatenate([frame[0], frame[-1], frame[:, 0], frame[:, -1]]).astype(float)
+    if border.std(axis=0).max() >= spread:
+        return None
+    return tuple(int(v) for v in np.median(border, axis=0))
