@@ -410,3 +410,34 @@ def test_bad_corrections_are_an_error(small):
         retrack(tracking, frames, setup, 2, {"a": (20, 20)})
     with pytest.raises(TrackingError, match=r"the tracking covers 3 frames of 2 joints, but there are 2"):
         retrack(tracking, frames[:2], setup, 1, {})
+
+
+def test_a_hidden_child_is_carried_by_its_parent_not_coasted_away():
+    """A hand hidden for 30 frames while its elbow changes direction stays with the elbow.
+
+    Coasting on the hand's own velocity would carry it off in a straight line; carried by its
+    parent it keeps its offset, and is found again where it re-emerges.
+    """
+    rng = np.random.default_rng(11)
+    background = _texture(rng, 120, 320, blur=1.5)
+    elbow_sprite, hand_sprite = _texture(rng, SPRITE, SPRITE), _texture(rng, SPRITE, SPRITE)
+    cover = _texture(rng, 40, 320)
+    T = 60
+    # The elbow runs right, then back left; the hand hangs 30 px below it.
+    x = np.where(np.arange(T) < 30, 40 + 4.0 * np.arange(T), 40 + 4.0 * (60 - np.arange(T)))
+    elbow = np.stack([x, np.full(T, 40.0)], axis=1)
+    hand = elbow + (0.0, 30.0)
+    canvases = []
+    for t in range(T):
+        canvas = background.copy()
+        _paint(canvas, elbow_sprite, elbow[t])
+        _paint(canvas, hand_sprite, hand[t])
+        if 15 <= t < 45:  # a strip hides the hand's row
+            _paint(canvas, cover, (160.0, 70.0))
+        canvases.append(canvas)
+    frames = _film(rng, canvases)
+    tracking = track(frames, _setup([("elbow", None), ("hand", "elbow")], [elbow[0], hand[0]]))
+    errors = _errors(tracking, np.stack([elbow, hand], axis=1))
+    assert errors[:, 0].max() < 1.0
+    assert errors[15:45, 1].max() < 6.0  # hidden: carried along with the elbow
+    assert errors[50:, 1].max() < 1.0  # found again

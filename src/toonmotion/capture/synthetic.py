@@ -60,7 +60,13 @@ def limb_figure_frames(points, parents, *, depth=None, size=(640, 480), width=No
     for t in range(T):
         frame = background.copy()
         items = [(0.5 * (depth[t, p] + depth[t, j]), 0, k) for k, (p, j) in enumerate(bones)]
-        items += [(depth[t, j] - 1e-6, 1, j) for j in range(J)]  # a joint's disc sits just before its bones
+        # A joint's disc lies on its own bones: just nearer than the nearest of them. Only other
+        # parts of the figure, nearer the viewer, hide it.
+        near = depth[t].copy()
+        for d, _, k in items:
+            p, j = bones[k]
+            near[p], near[j] = min(near[p], d), min(near[j], d)
+        items += [(near[j] - 1e-6, 1, j) for j in range(J)]
         for _, kind, k in sorted(items, key=lambda item: -item[0]):
             if kind == 0:
                 p, j = bones[k]
