@@ -4,7 +4,8 @@
 
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
 usual naming conventions (CMU, FAIR, Mixamo, Rokoko), projected orthographically from the front,
-fitted into 640x480, resampled to about 30 fps, and rendered as a textured limb figure over a
+fitted into 640x480, resampled to about 30 fps (a leading T-pose frame the motion jumps away
+from is dropped), and rendered as a textured limb figure over a
 textured background, drawn far to near so limbs cross and hide each other
 (``toonmotion.capture.synthetic``). Every tracker starts from the true frame-1 rectangles (a
 square of the joint disc's diameter, ~30 px) and runs on one core.
@@ -57,6 +58,10 @@ def rendered_clip(path, *, frames=None, fps=FPS, seed=0):
     """A clip as ``(images (T, h, w, 3), truth (T, 16, 2), skeleton, box side, fps)``."""
     clip = load_bvh(path)
     X = forward_kinematics(clip)
+    # The MotionBuilder-style CMU files start with a T-pose frame that the motion jumps away from.
+    jumps = np.linalg.norm(np.diff(X, axis=0), axis=2).max(axis=1)
+    if len(jumps) > 2 and jumps[0] > 5 * np.median(jumps):
+        X = X[1:]
     step = max(1, round(clip.fps / fps))
     X = X[::step][:frames]
     picks = pick_joints(clip.names, clip.parents)
