@@ -39,3 +39,22 @@ def drawing_dir(request):
 @pytest.fixture
 def drawings_root():
     return _require(DRAWINGS_DIR)
+
+
+def rig_character(folder=None):
+    """The bundled sample (``folder`` None) or the shared drawing in ``folder``, rigged with its own
+    mask and char_cfg skeleton."""
+    from toonmotion.io.char_cfg import load_char_cfg
+    from toonmotion.io.image import load_image, load_mask
+    from toonmotion.rig.pipeline import rig_drawing
+    from toonmotion.samples import sample_character
+
+    if folder is None:
+        rgba, skeleton = sample_character()
+        return rig_drawing(rgba, skeleton=skeleton)
+    texture = load_image(folder / "texture.png")
+    size = (texture.shape[1], texture.shape[0])
+    skeleton, cfg_size = load_char_cfg(folder / "char_cfg.yaml")
+    assert cfg_size in (None, size)
+    mask = load_mask(folder / "mask.png", size=size)
+    return rig_drawing(texture, mask=mask, skeleton=skeleton)

@@ -353,44 +353,24 @@ def animate(
     if is_motion_file(keys_file):
         if ease is not None:
             raise SettingsError("--ease applies to key-frames; a motion has a pose for every frame")
-        motion = load_motion(keys_file)
-        rate = motion.fps if fps is None else fps
-        positions = motion_for(skeleton, motion, where=str(keys_file))
-        if settings:
-            positions = filter_bones(skeleton, positions, settings)
-        motion = Motion(skeleton=skeleton, positions=positions, fps=rate)
-        meshes = list(motion_frames(deformer, positions))
+        loaded = load_motion(keys_file)
+        positions = motion_for(skeleton, loaded, where=str(keys_file))
+        motion = _exaggerated(Motion(skeleton=skeleton, positions=positions,
+                                     fps=loaded.fps if fps is None else fps), settings)
+        meshes = list(motion_frames(deformer, motion.positions))
         what = f"a motion of {len(positions)} frames"
     else:
         timeline = load_keyframes(keys_file, skeleton, fps=fps)
         if ease is not None:
             timeline = make_timeline(skeleton, timeline.keys, fps=timeline.fps, ease=ease)
-        motion = motion_from_timeline(skeleton, timeline)
-        poses = None
-        if settings:
-            poses = filter_bones(skeleton, motion.positions, settings)
-            motion = Motion(skeleton=skeleton, positions=poses, fps=timeline.fps)
+        motion = _exaggerated(motion_from_timeline(skeleton, timeline), settings)
+        poses = motion.positions if settings else None
         keys, solved = timeline.keys, solve_keys(deformer, timeline)
         method = "solve" if solve_inbetweens else "interpolate"
         meshes = list(animate_frames(deformer, timeline, method=method, keys=solved, poses=poses))
         what = f"{len(timeline.keys)} key-frames"
-    view = fit_view(character, [U for _, U in meshes])
-    out_size = natural_size(view, size=_size(size))
-    overlays = _overlays(overlay)
-    with _progress() as bar:
-        task = bar.add_task("rendering", total=len(meshes))
-
-        def frames():
-            for frame, U in meshes:
-                posed = motion.pose(frame) if overlays else None
-                yield render_frame(
-                    character, U, pose=posed, size=out_size, view=view, background=colour, overlays=overlays
-                )
-                bar.update(task, advance=1)
-
-        count = save_animation(
-            output, frames(), fps=motion.fps, background=colour if colour is not None else (255, 255, 255)
-        )
+    count, out_size = _write_frames(character, meshes, motion, output, size=_size(size), colour=colour,
+                                    overlays=_overlays(overlay))
     if save_motion_to is not None:
         save_motion(save_motion_to, motion)
     typer.echo(
@@ -783,23 +763,45 @@ def retarget_command(
     captured = load_motion(motion_file)
     motion = retarget(captured, skeleton, joint_map=mapping)
     if exaggerate:
-        settings = FilterSettings(strength=exaggerate, sigma=sigma, shift=shift)
-        motion = Motion(skeleton=skeleton, positions=filter_bones(skeleton, motion.positions, settings),
-                        fps=motion.fps)
+        motion = _exaggerated(motion, FilterSettings(strength=exaggerate, sigma=sigma, shift=shift))
     deformer = Deformer(character, _deform_settings(no_area, stage_one_only, weights, joint_width))
     meshes = list(motion_frames(deformer, motion.positions))
-    view = fit_view(character, [U for _, U in meshes])
-    out_size = natural_size(view, size=_size(size))
     colour = _colour(background or ("transparent" if kind == "png" else "white"))
-    overlays = _overlays(overlay)
-    frames = (render_frame(character, U, pose=motion.pose(f) if overlays else None, size=out_size, view=view,
-                           background=colour, overlays=overlays) for f, U in meshes)
-    count = save_animation(output, frames, fps=motion.fps,
-                           background=colour if colour is not None else (255, 255, 255))
+    count, _ = _write_frames(character, meshes, motion, output, size=_size(size), colour=colour,
+                             overlays=_overlays(overlay))
     kept = Path(project) / "motions" / f"{motion_file.stem}.json"
     save_motion(kept, motion)
     typer.echo(f"retargeted {captured.frame_count} frames onto {project.name}: {count} frames at "
                f"{motion.fps:g} fps -> {output} (motion kept in {kept})")
+
+
+def _exaggerated(motion, settings):
+    """``motion`` through the cartoon filter (every bone and the root's path), or as it is."""
+    if settings is None:
+        return motion
+    positions = filter_bones(motion.skeleton, motion.positions, settings)
+    return Motion(skeleton=motion.skeleton, positions=positions, fps=motion.fps)
+
+
+def _write_frames(character, meshes, motion, output, *, size, colour, overlays):
+    """Render ``(frame, U)`` meshes in one view fitting them all and save them; ``(count, size)``."""
+    view = fit_view(character, [U for _, U in meshes])
+    out_size = natural_size(view, size=size)
+    with _progress() as bar:
+        task = bar.add_task("rendering", total=len(meshes))
+
+        def frames():
+            for frame, U in meshes:
+                posed = motion.pose(frame) if overlays else None
+                yield render_frame(
+                    character, U, pose=posed, size=out_size, view=view, background=colour, overlays=overlays
+                )
+                bar.update(task, advance=1)
+
+        count = save_animation(
+            output, frames(), fps=motion.fps, background=colour if colour is not None else (255, 255, 255)
+        )
+    return count, out_size
 
 
 def _tracking_from(motion, skeleton, count, start):

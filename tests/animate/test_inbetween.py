@@ -3,13 +3,12 @@
 import numpy as np
 import pytest
 
+from tests.conftest import rig_character
 from toonmotion.animate.inbetween import METHODS, animate_frames, solve_keys
 from toonmotion.animate.timeline import EASES, Keyframe, make_timeline
 from toonmotion.deform.deformer import Deformer
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.polygon import triangle_areas
-from toonmotion.io.char_cfg import load_char_cfg
-from toonmotion.io.image import load_image, load_mask
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose, bone_angles, check_pose, rest_pose, rotate_about
 from toonmotion.sample_animation import sample_keyframes
@@ -31,12 +30,7 @@ def sample():
 
 @pytest.fixture(scope="module")
 def char1(drawings_root_module):
-    folder = drawings_root_module / "char1"
-    texture = load_image(folder / "texture.png")
-    size = (texture.shape[1], texture.shape[0])
-    skeleton, _ = load_char_cfg(folder / "char_cfg.yaml")
-    mask = load_mask(folder / "mask.png", size=size)
-    return Deformer(rig_drawing(texture, mask=mask, skeleton=skeleton))
+    return Deformer(rig_character(drawings_root_module / "char1"))
 
 
 @pytest.fixture(scope="module")

@@ -9,16 +9,13 @@ sideways before a run with one foot down (fig. 5.3). Cases that fail today are m
 import numpy as np
 import pytest
 
+from tests.conftest import rig_character
 from toonmotion.animate.pose_filter import MIN_CHAIN_FRACTION, exaggerate_pose
 from toonmotion.deform.deformer import Deformer
 from toonmotion.errors import FilterError
 from toonmotion.geometry.polygon import triangle_areas
-from toonmotion.io.char_cfg import load_char_cfg
-from toonmotion.io.image import load_image, load_mask
-from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose, rest_pose, rotate_about
 from toonmotion.rig.skeleton import Skeleton
-from toonmotion.samples import sample_character
 
 # The push, as a fraction of the figure's height, and which feet stay down.
 PUSH = 0.15
@@ -56,21 +53,10 @@ class _Rigs:
 
     def deformer(self, name, folder=None):
         if name not in self._deformers:
-            self._deformers[name] = Deformer(_rig(folder))
+            self._deformers[name] = Deformer(rig_character(folder))
         return self._deformers[name]
 
 
-def _rig(folder):
-    """The sample (``folder`` None) or the drawing in ``folder``, rigged with its own skeleton."""
-    if folder is None:
-        rgba, skeleton = sample_character()
-        return rig_drawing(rgba, skeleton=skeleton)
-    texture = load_image(folder / "texture.png")
-    size = (texture.shape[1], texture.shape[0])
-    skeleton, cfg_size = load_char_cfg(folder / "char_cfg.yaml")
-    assert cfg_size in (None, size)
-    mask = load_mask(folder / "mask.png", size=size)
-    return rig_drawing(texture, mask=mask, skeleton=skeleton)
 
 
 def _height(character):

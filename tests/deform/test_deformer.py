@@ -8,6 +8,7 @@ what was measured, so they neither hide nor break the build, and flag when they 
 import numpy as np
 import pytest
 
+from tests.conftest import rig_character
 from toonmotion.deform.deformer import Deformation, Deformer, DeformSettings
 from toonmotion.deform.depth import (
     default_depth,
@@ -19,11 +20,7 @@ from toonmotion.deform.depth import (
 from toonmotion.deform.joint_solve import joint_area
 from toonmotion.errors import PoseError, SettingsError
 from toonmotion.geometry.polygon import triangle_areas
-from toonmotion.io.char_cfg import load_char_cfg
-from toonmotion.io.image import load_image, load_mask
-from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose, descendants, rest_pose, rotate_about
-from toonmotion.samples import sample_character
 
 CHARACTERS = ("sample", "char1", "char2", "char3", "char4")
 
@@ -57,16 +54,7 @@ class _Rigs:
 
 
 def _rig(name, root):
-    if name == "sample":
-        rgba, skeleton = sample_character()
-        return rig_drawing(rgba, skeleton=skeleton)
-    folder = root / name
-    texture = load_image(folder / "texture.png")
-    size = (texture.shape[1], texture.shape[0])
-    skeleton, cfg_size = load_char_cfg(folder / "char_cfg.yaml")
-    assert cfg_size in (None, size)
-    mask = load_mask(folder / "mask.png", size=size)
-    return rig_drawing(texture, mask=mask, skeleton=skeleton)
+    return rig_character(None if name == "sample" else root / name)
 
 
 @pytest.fixture

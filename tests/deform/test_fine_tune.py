@@ -11,19 +11,15 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, cKDTree
 
-from tests.conftest import drawing_names
+from tests.conftest import drawing_names, rig_character
 from toonmotion.deform.deformer import Deformer
 from toonmotion.deform.fine_tune import drag_points, follow, sketch_targets, tune_with_curve
 from toonmotion.deform.needles import needle_model
 from toonmotion.errors import EditError
 from toonmotion.geometry.polygon import points_in_polygon, triangle_areas
 from toonmotion.geometry.segments import closest_points_on_segments
-from toonmotion.io.char_cfg import load_char_cfg
-from toonmotion.io.image import load_image, load_mask
-from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose, rotate_about
 from toonmotion.rig.skeleton import Skeleton
-from toonmotion.samples import sample_character
 from toonmotion.shape.mesh import Mesh, unique_edges
 
 NAMES = ("sample", *drawing_names())
@@ -67,16 +63,7 @@ class _Rigs:
 
 
 def _rig(name, root):
-    if name == "sample":
-        rgba, skeleton = sample_character()
-        return rig_drawing(rgba, skeleton=skeleton)
-    folder = root / name
-    texture = load_image(folder / "texture.png")
-    size = (texture.shape[1], texture.shape[0])
-    skeleton, cfg_size = load_char_cfg(folder / "char_cfg.yaml")
-    assert cfg_size in (None, size)
-    mask = load_mask(folder / "mask.png", size=size)
-    return rig_drawing(texture, mask=mask, skeleton=skeleton)
+    return rig_character(None if name == "sample" else root / name)
 
 
 @pytest.fixture

@@ -72,7 +72,7 @@ def retarget(motion, skeleton, *, joint_map=None):
             turn[:, b] = angle[:, f] - angle[0, f]
             if length[0, f] > _MIN_LENGTH:  # a captured bone of no length has no ratio to copy
                 stretch[:, b] = length[:, f] / length[0, f]
-    scale = _size_ratio(skeleton, rest_length, length[0], followed)
+    scale = _size_ratio(rest_length, length[0], followed)
     return Motion(skeleton=skeleton, positions=_pose_frames(skeleton, S, match, turn, stretch, scale,
                                                             rest_angle, rest_length, followed),
                   fps=motion.fps)
@@ -114,7 +114,7 @@ def _followed_bones(source, target, match):
     return followed
 
 
-def _size_ratio(target, rest_length, source_length, followed):
+def _size_ratio(rest_length, source_length, followed):
     pairs = [(rest_length[b], source_length[f]) for b, f in enumerate(followed) if f is not None]
     target_size, source_size = (sum(v) for v in zip(*pairs, strict=True))
     return target_size / source_size if source_size > 1e-9 else 1.0

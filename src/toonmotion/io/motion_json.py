@@ -23,6 +23,7 @@ import numpy as np
 from toonmotion.animate.motion import Motion
 from toonmotion.errors import MotionError, ToonmotionError
 from toonmotion.io.atomic import write_text
+from toonmotion.io.json_file import read_json
 from toonmotion.io.skeleton_json import skeleton_from_dict, skeleton_to_dict
 
 FORMAT = "toonmotion.motion"
@@ -30,23 +31,18 @@ VERSION = 1
 
 
 def is_motion_file(path):
-    """True when ``path`` is a JSON file whose format is a motion (cheap sniff, no validation)."""
+    """True when ``path`` is a readable JSON file whose format is a motion (not validated)."""
     try:
-        head = Path(path).read_text(encoding="utf-8")[:200]
-    except (OSError, UnicodeDecodeError):
+        data = read_json(path, MotionError)
+    except MotionError:
         return False
-    return f'"format": "{FORMAT}"' in head
+    return isinstance(data, dict) and data.get("format") == FORMAT
 
 
 def load_motion(path):
     """Read a motion file; returns a :class:`Motion`."""
     path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise MotionError(f"cannot read {path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise MotionError(f"cannot read {path} as JSON: {error}") from None
+    data = read_json(path, MotionError)
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise MotionError(f"{path} is not a motion file (format {FORMAT!r})")
     if data.get("version") != VERSION:

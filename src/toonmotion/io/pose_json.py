@@ -26,6 +26,7 @@ from toonmotion.animate.timeline import Keyframe, make_timeline
 from toonmotion.deform.tuning import CurveEdit, DragEdit
 from toonmotion.errors import EditError, KeyframeError, PoseError
 from toonmotion.io.atomic import write_text
+from toonmotion.io.json_file import read_json
 from toonmotion.rig.pose import pose_from_joints, pose_to_joints, rest_pose
 
 POSE_FORMAT = "toonmotion.pose"
@@ -36,7 +37,7 @@ VERSION = 1
 def load_pose(path, skeleton):
     """Read a pose (or skeleton) file for ``skeleton``; returns a :class:`Pose`."""
     path = Path(path)
-    data = _read(path, PoseError)
+    data = read_json(path, PoseError)
     kind = data.get("format") if isinstance(data, dict) else None
     if kind == "toonmotion.skeleton":
         _check_version(data, path, PoseError)
@@ -53,7 +54,7 @@ def load_pose(path, skeleton):
 def load_pose_edits(path):
     """The fine-tuning edits of a pose file, a tuple (empty for a skeleton file or none)."""
     path = Path(path)
-    data = _read(path, PoseError)
+    data = read_json(path, PoseError)
     if not isinstance(data, dict) or data.get("format") != POSE_FORMAT:
         return ()
     return edits_from_json(data.get("edits", []), where=str(path))
@@ -103,7 +104,7 @@ def load_keyframes(path, skeleton, *, fps=None):
     ``fps`` overrides the file's frame rate (default 24 when the file gives none).
     """
     path = Path(path)
-    data = _read(path, KeyframeError)
+    data = read_json(path, KeyframeError)
     if not isinstance(data, dict) or data.get("format") != KEYS_FORMAT:
         raise KeyframeError(f"{path} is not a key-frames file (format {KEYS_FORMAT!r})")
     _check_version(data, path, KeyframeError)
@@ -147,15 +148,6 @@ def _key_to_json(skeleton, key):
     if key.edits:
         out["edits"] = edits_to_json(key.edits)
     return out
-
-
-def _read(path, error):
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise error(f"cannot read {path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as problem:
-        raise error(f"cannot read {path} as JSON: {problem}") from None
 
 
 def _check_version(data, path, error):

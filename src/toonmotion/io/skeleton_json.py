@@ -10,6 +10,7 @@ from pathlib import Path
 
 from toonmotion.errors import SkeletonError
 from toonmotion.io.atomic import write_text
+from toonmotion.io.json_file import read_json
 from toonmotion.rig.skeleton import Skeleton
 
 FORMAT = "toonmotion.skeleton"
@@ -39,12 +40,7 @@ def skeleton_from_dict(joints, *, where="skeleton"):
 def load_skeleton_json(path):
     """Read a skeleton JSON file; returns ``(skeleton, (width, height) or None)``."""
     path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SkeletonError(f"cannot read {path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise SkeletonError(f"cannot read {path} as JSON: {error}") from None
+    data = read_json(path, SkeletonError)
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise SkeletonError(f"{path} is not a toonmotion skeleton file (format {FORMAT!r})")
     if data.get("version") != VERSION:

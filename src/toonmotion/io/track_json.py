@@ -21,6 +21,7 @@ import numpy as np
 
 from toonmotion.errors import SkeletonError, TrackingError
 from toonmotion.io.atomic import write_text
+from toonmotion.io.json_file import read_json
 from toonmotion.io.skeleton_json import skeleton_from_dict, skeleton_to_dict
 
 FORMAT = "toonmotion.joints"
@@ -45,12 +46,7 @@ def load_joints(path):
         The frame the positions are given for.
     """
     path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise TrackingError(f"cannot read joints file {path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise TrackingError(f"cannot read joints file {path} as JSON: {error}") from None
+    data = read_json(path, TrackingError, what="joints file ")
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise TrackingError(
             f"{path} is not a toonmotion joints file (it needs \"format\": {FORMAT!r}); "
