@@ -1,11 +1,33 @@
 """toonmotion: 2D character animation from one drawing.
 
 The library is layered (see ``docs/architecture.md``): ``geometry`` < ``shape`` < ``rig`` <
-``io`` and ``render`` < ``cli``. The names most users need are re-exported here.
+``deform`` < ``animate`` < ``capture`` < ``io`` and ``render`` < :mod:`toonmotion.api` < ``cli``.
+The public API (:mod:`toonmotion.api`) is re-exported here, loaded on first use so that
+``import toonmotion`` stays light::
+
+    import toonmotion
+    hero = toonmotion.rig_image("hero.png", skeleton="hero.json")
+    toonmotion.save_project("hero", hero)
 """
+
+from importlib import import_module
+from typing import Any
 
 from toonmotion.errors import ToonmotionError
 
 __version__ = "0.1.0"
 
-__all__ = ["ToonmotionError", "__version__"]
+_API = (
+    "Animation", "Capture", "Character", "DeformSettings", "FilterSettings", "Motion", "PosedFrame",
+    "RigSettings", "SameDepthOverlap", "TrackSettings", "animate_character", "exaggerate", "filter_motion",
+    "load_project", "pose_character", "pose_view", "render_pose", "retarget", "rig_image", "rotate_joint",
+    "same_depth_overlaps", "save_project", "suggest_joints", "track_footage", "write_animation",
+)
+
+__all__ = ["ToonmotionError", "__version__", *_API]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _API:
+        return getattr(import_module("toonmotion.api"), name)
+    raise AttributeError(f"module 'toonmotion' has no attribute {name!r}")

@@ -1,0 +1,156 @@
+"""Capturing a motion from footage, end to end: suggest joints, track, correct, read the result.
+
+These are the steps the ``track`` command and the editor's capture panel take, on frames already
+read (``(T, H, W, 3)`` uint8 RGB, see :func:`toonmotion.io.frames.load_frames`):
+
+1. :func:`suggest_joints` places joint rectangles on the first frame's curve skeleton when the
+   user has none (thesis 4.3);
+2. :func:`capture_motion` tracks them through the footage (thesis 4.4) and returns a
+   :class:`~toonmotion.animate.motion.Motion` with a confidence per joint-frame, trimmed to the
+   frames tracked;
+3. :func:`correct_motion` puts some joints right at one frame and tracks again from there, keeping
+   the frames before it (an earlier motion read back from its file).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion.animate.motion import Motion, motion_for
+from toonmotion.capture.foreground import border_colour, estimate_background, foreground_masks
+from toonmotion.capture.setup import check_setup, suggest_setup
+from toonmotion.capture.tracker import Tracking, TrackSettings, TrackSetup, retrack, track
+from toonmotion.errors import SettingsError
+from toonmotion.rig.skeleton import Skeleton
+
+Progress = Callable[[str, int, int], None]
+
+
+@dataclass(frozen=True)
+class Capture:
+    """A tracked motion and what drew it.
+
+    Attributes
+    ----------
+    motion : Motion
+        Joint positions of the frames tracked, with ``confidence``; fps as given.
+    first : int
+        The footage frame the motion's frame 0 is.
+    angles : (T, k) float
+        Each joint rectangle's rotation in every motion frame, radians (for drawing the rectangles).
+    """
+
+    motion: Motion
+    first: int
+    angles: NDArray[np.float64]
+
+
+def suggest_joints(
+    frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None
+) -> tuple[Skeleton, NDArray[np.float64]]:
+    """Joints and rectangle sizes suggested from the first frame's figure.
+
+    The figure is what differs from the background: ``colour`` if given (a flat background), else
+    the first frame's border colour when that is flat, else a background estimated from the whole
+    sequence. Returns ``(skeleton, sizes (k, 2))`` for :class:`TrackSetup`.
+    """
+    if colour is None:
+        colour = border_colour(frames[0])
+    background = None if colour is not None else estimate_background(frames)
+    mask = foreground_masks(frames[:1], background=background, colour=colour)[0]
+    return suggest_setup(mask)
+
+
+def capture_motion(
+    frames: NDArray[np.uint8],
+    skeleton: Skeleton,
+    sizes: NDArray[np.float64],
+    *,
+    fps: float,
+    start: int = 0,
+    settings: TrackSettings | None = None,
+    progress: Progress | None = None,
+) -> Capture:
+    """Track ``skeleton``'s joints, placed at frame ``start``, through ``frames``.
+
+    ``sizes`` are each joint's rectangle (width, height) in pixels. Returns the motion of the frames
+    tracked (from ``start`` to the end).
+    """
+    setup = _setup(frames, skeleton, sizes, start)
+    result = track(frames, setup, settings=settings, start=start, progress=progress)
+    return _capture(result, skeleton, fps)
+
+
+def correct_motion(
+    earlier: Motion,
+    frames: NDArray[np.uint8],
+    skeleton: Skeleton,
+    sizes: NDArray[np.float64],
+    frame: int,
+    corrections: Mapping[str, tuple[float, float]],
+    *,
+    fps: float,
+    start: int = 0,
+    settings: TrackSettings | None = None,
+    progress: Progress | None = None,
+) -> Capture:
+    """Put joints right at ``frame`` and track again from there, keeping the frames before it.
+
+    ``earlier`` is a motion tracked with the same joints from frame ``start`` (as read back from
+    its file); ``corrections`` maps joint names to their true ``(x, y)`` at ``frame``.
+    """
+    setup = _setup(frames, skeleton, sizes, start)
+    tracking = tracking_from_motion(earlier, skeleton, len(frames), start)
+    result = retrack(tracking, frames, setup, frame, dict(corrections), settings=settings, progress=progress)
+    return _capture(result, skeleton, fps)
+
+
+def tracking_from_motion(motion: Motion, skeleton: Skeleton, count: int, start: int) -> Tracking:
+    """An earlier tracking, read back from its motion, laid out on ``count`` footage frames.
+
+    The motion's frame 0 is footage frame ``start``; its joints are taken in ``skeleton``'s order.
+    Rectangle angles are not kept in motion files, so they restart at 0.
+    """
+    positions = motion_for(skeleton, motion, where="the earlier motion")
+    k = len(skeleton)
+    if start + len(positions) > count:
+        raise SettingsError(
+            f"the earlier motion has {len(positions)} frames from frame {start}, more than "
+            f"the footage's {count}"
+        )
+    span = slice(start, start + len(positions))
+    full = np.zeros((count, k, 2))
+    confidence = np.zeros((count, k))
+    tracked = np.zeros(count, dtype=bool)
+    full[span] = positions
+    tracked[span] = True
+    if motion.confidence is not None:
+        columns = [motion.skeleton.names.index(n) for n in skeleton.names]
+        confidence[span] = motion.confidence[:, columns]
+    return Tracking(positions=full, angles=np.zeros((count, k)), confidence=confidence, tracked=tracked)
+
+
+def _setup(
+    frames: NDArray[np.uint8], skeleton: Skeleton, sizes: NDArray[np.float64], start: int
+) -> TrackSetup:
+    if not 0 <= start < len(frames):
+        raise SettingsError(f"the joints are given at frame {start} but the footage has {len(frames)} frames")
+    h, w = frames.shape[1:3]
+    check_setup(skeleton, sizes, (w, h))
+    return TrackSetup(skeleton=skeleton, sizes=sizes)
+
+
+def _capture(result: Tracking, skeleton: Skeleton, fps: float) -> Capture:
+    tracked = np.flatnonzero(result.tracked)
+    first, last = int(tracked[0]), int(tracked[-1]) + 1
+    motion = Motion(
+        skeleton=skeleton,
+        positions=result.positions[first:last],
+        fps=fps,
+        confidence=result.confidence[first:last],
+    )
+    return Capture(motion=motion, first=first, angles=np.array(result.angles[first:last]))

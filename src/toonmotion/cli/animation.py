@@ -1,0 +1,240 @@
+"""Posing and animation commands: ``pose``, ``animate``, ``filter``."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from toonmotion import api
+from toonmotion.animate.motion import Motion
+from toonmotion.animate.timeline import Timeline, make_timeline
+from toonmotion.cli import options
+from toonmotion.cli.app import app
+from toonmotion.errors import SettingsError
+from toonmotion.io.image import save_png
+from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion
+from toonmotion.io.pose_json import load_keyframes, load_pose, load_pose_edits
+from toonmotion.io.video import animation_format
+from toonmotion.rig.character import Character
+
+
+@app.command()
+def pose(
+    project: options.Project,
+    pose_file: Annotated[
+        Path, typer.Argument(metavar="POSE.json", help="Joint positions by name (a pose or skeleton file).")
+    ],
+    output: Annotated[Path, typer.Option("-o", "--output", help="PNG file to write.")],
+    size: options.Size = None,
+    background: Annotated[
+        str, typer.Option("--background", help="transparent, white, black or #rrggbb.")
+    ] = "transparent",
+    overlay: options.Overlay = "",
+    accel: Annotated[
+        str | None, typer.Option("--accel", help="Cartoon filter: acceleration DX,DY at the root, pixels.")
+    ] = None,
+    fixed: Annotated[
+        str | None, typer.Option("--fixed", help="Joints that stay put under --accel: J[,J...].")
+    ] = None,
+    root: Annotated[
+        str | None, typer.Option("--root", help="Joint --accel acts on \\[default: the skeleton's root].")
+    ] = None,
+    no_area: options.NoArea = False,
+    stage_one_only: options.StageOne = False,
+    weights: options.Weights = "1,1,1",
+    joint_width: options.JointWidth = 1.5,
+) -> None:
+    """Pose a rigged drawing: deform it to a sketched skeleton and render one frame.
+
+    Fine-tuning edits in the pose file (see 'toonmotion tune') are applied.
+
+    --accel and --fixed exaggerate the pose with the single-frame cartoon filter first.
+    """
+    options.suffix(output, ".png", "an output", why="the frame is a PNG; ")
+    if (accel is None) != (fixed is None):
+        raise SettingsError(
+            "--accel and --fixed go together: give the acceleration and the joints that stay put"
+        )
+    character = api.load_project(project)
+    edits = load_pose_edits(pose_file)
+    frame = api.pose_character(
+        character,
+        load_pose(pose_file, character.skeleton),
+        edits=edits,
+        accel=None if accel is None else options.point(accel, "--accel"),
+        fixed=options.names(fixed) if fixed is not None else (),
+        root=root,
+        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width),
+    )
+    picture = api.render_pose(
+        character,
+        frame,
+        size=options.size(size),
+        background=options.colour(background),
+        overlays=options.overlays(overlay),
+    )
+    save_png(output, picture)
+    result = frame.deformation
+    typer.echo(
+        f"posed {project.name}: stage two {result.iterations} "
+        f"iterations, energy {result.energy_start:.4g} -> {result.energy:.4g}"
+        + (f", {len(edits)} edit{'s' if len(edits) > 1 else ''}" if edits else "")
+        + f" -> {output}"
+    )
+    report_overlaps(character, [(0, result.U)])
+
+
+@app.command()
+def animate(
+    project: options.Project,
+    keys_file: Annotated[
+        Path,
+        typer.Argument(
+            metavar="KEYS.json", help="Key-frames (poses at frame numbers) or a motion (a pose per frame)."
+        ),
+    ],
+    output: options.AnimationOutput,
+    fps: Annotated[
+        float | None, typer.Option("--fps", help="Frames per second \\[default: the file's, else 24].")
+    ] = None,
+    size: options.Size = None,
+    background: options.AnimationBackground = None,
+    overlay: options.Overlay = "",
+    ease: Annotated[
+        str | None, typer.Option("--ease", help="linear, in-out, in or out \\[default: the key file's].")
+    ] = None,
+    exaggerate: Annotated[
+        float | None,
+        typer.Option("--exaggerate", help="Cartoon filter strength A: anticipation and follow-through."),
+    ] = None,
+    sigma: options.Sigma = 3.0,
+    shift: options.Shift = 0.0,
+    save_motion_to: Annotated[
+        Path | None,
+        typer.Option("--save-motion", help="Also write the joint positions of every frame (.json)."),
+    ] = None,
+    solve_inbetweens: Annotated[
+        bool, typer.Option("--solve-inbetweens", help="Run stage two on every frame, not only the keys.")
+    ] = False,
+    no_area: options.NoArea = False,
+    stage_one_only: options.StageOne = False,
+    weights: options.Weights = "1,1,1",
+    joint_width: options.JointWidth = 1.5,
+) -> None:
+    """Animate a rigged drawing through key-frames or a motion, to GIF, MP4 or PNGs.
+
+    --exaggerate runs the cartoon filter over every bone's angle and length and the root's path.
+    """
+    kind = animation_format(output)
+    if save_motion_to is not None:
+        options.suffix(save_motion_to, ".json", "a motion file")
+    character = api.load_project(project)
+    exaggeration = options.filter_settings(exaggerate, sigma, shift)
+    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width)
+    source: Motion | Timeline
+    if is_motion_file(keys_file):
+        if ease is not None:
+            raise SettingsError("--ease applies to key-frames; a motion has a pose for every frame")
+        motion = load_motion(keys_file)
+        source, what = motion, f"a motion of {motion.frame_count} frames"
+    else:
+        timeline = load_keyframes(keys_file, character.skeleton, fps=fps)
+        if ease is not None:
+            timeline = make_timeline(character.skeleton, timeline.keys, fps=timeline.fps, ease=ease)
+        source, what = timeline, f"{len(timeline.keys)} key-frames"
+    animation = api.animate_character(
+        character,
+        source,
+        settings=settings,
+        exaggeration=exaggeration,
+        fps=fps,
+        method="solve" if solve_inbetweens else "interpolate",
+    )
+    count, out_size = write(
+        output, character, animation, kind=kind, size=size, background=background, overlay=overlay
+    )
+    if save_motion_to is not None:
+        save_motion(save_motion_to, animation.motion)
+    typer.echo(
+        f"animated {what}"
+        + (f", exaggerated (A={exaggerate:g})" if exaggeration else "")
+        + f": {count} frames at {animation.motion.fps:g} fps, {out_size[0]}x{out_size[1]} -> {output}"
+        + (f" (motion -> {save_motion_to})" if save_motion_to is not None else "")
+    )
+    report_overlaps(
+        character,
+        [(key.frame, result.U) for key, result in zip(animation.keys, animation.solved, strict=True)],
+        keys=True,
+    )
+
+
+@app.command("filter")
+def filter_motion(
+    motion_file: Annotated[Path, typer.Argument(metavar="MOTION.json", help="A motion: a pose per frame.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Motion file to write (.json).")],
+    strength: options.Strength,
+    sigma: options.Sigma = 3.0,
+    shift: options.Shift = 0.0,
+    joints: Annotated[
+        str | None,
+        typer.Option(
+            "--joints",
+            help="Filter only these joints' paths (J[,J...]), carrying what hangs below "
+            "them \\[default: the root's path and every bone's angle and length].",
+        ),
+    ] = None,
+) -> None:
+    """Exaggerate a motion with the cartoon animation filter: anticipation, follow-through."""
+    options.suffix(output, ".json", "a motion file")
+    motion = load_motion(motion_file)
+    filtered = api.filter_motion(
+        motion, strength, sigma=sigma, shift=shift, joints=None if joints is None else options.names(joints)
+    )
+    save_motion(output, filtered)
+    moved = np.hypot(*(filtered.positions - motion.positions).reshape(-1, 2).T).max()
+    typer.echo(
+        f"filtered {motion.frame_count} frames (A={strength:g}, sigma={sigma:g}, shift={shift:g}): "
+        f"joints moved up to {moved:.1f} px -> {output}"
+    )
+
+
+def write(
+    output: Path,
+    character: Character,
+    animation: api.Animation,
+    *,
+    kind: str,
+    size: str | None,
+    background: str | None,
+    overlay: str,
+) -> tuple[int, tuple[int, int]]:
+    """Render and save an animation with the shared output options; ``(frames, (w, h))``."""
+    colour = options.colour(background or ("transparent" if kind == "png" else "white"))
+    with options.progress("rendering") as report:
+        return api.write_animation(
+            output,
+            character,
+            animation,
+            size=options.size(size),
+            background=colour,
+            overlays=options.overlays(overlay),
+            progress=report,
+        )
+
+
+def report_overlaps(
+    character: Character, results: Iterable[tuple[int, np.ndarray]], *, keys: bool = False
+) -> None:
+    """Warn once for each pair of regions at the same depth that overlap (in which key-frames)."""
+    for o in api.same_depth_overlaps(character, results):
+        where = (
+            f" in key-frame{'s' if len(o.frames) > 1 else ''} {', '.join(map(str, o.frames))}" if keys else ""
+        )
+        options.warn(
+            f"regions {o.bone_a} and {o.bone_b} overlap ({o.area:.0f} px²) at the same depth{where}; "
+            f"set their order with 'toonmotion depth'"
+        )

@@ -1,0 +1,190 @@
+"""Capture commands: ``track`` (joints through footage) and ``retarget`` (onto a rigged drawing)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from numpy.typing import NDArray
+
+from toonmotion import api
+from toonmotion.cli import options
+from toonmotion.cli.animation import write
+from toonmotion.cli.app import app
+from toonmotion.errors import SettingsError
+from toonmotion.io.frames import load_frames
+from toonmotion.io.motion_json import load_motion, save_motion, save_motion_csv
+from toonmotion.io.track_json import load_joints, save_joints
+from toonmotion.io.video import animation_format, save_animation
+from toonmotion.render.track_overlay import draw_tracking
+
+
+@app.command()
+def track(
+    source: Annotated[
+        Path,
+        typer.Argument(metavar="INPUT", help="A video, an animated GIF, or a folder (or pattern) of frames."),
+    ],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Motion file to write (.json).")],
+    joints: Annotated[
+        Path | None,
+        typer.Option(
+            "--joints", help="Joint rectangles to track (.json) \\[default: suggested from frame 1]."
+        ),
+    ] = None,
+    overlay: Annotated[
+        Path | None,
+        typer.Option(
+            "--overlay", help="Also draw the tracked joints on the footage: OUT.mp4, OUT.gif or a folder."
+        ),
+    ] = None,
+    csv: Annotated[Path | None, typer.Option("--csv", help="Also write the motion as CSV.")] = None,
+    search: Annotated[
+        float | None,
+        typer.Option("--search", help="Search radius in pixels \\[default: from each rectangle]."),
+    ] = None,
+    background: Annotated[
+        str | None,
+        typer.Option(
+            "--background",
+            help="Flat background colour #rrggbb for suggesting joints \\[default: "
+            "the border's colour if flat, else estimated from the sequence].",
+        ),
+    ] = None,
+    fps: Annotated[
+        float | None, typer.Option("--fps", help="Frame rate \\[default: the video's, else 24].")
+    ] = None,
+    resume: Annotated[
+        Path | None, typer.Option("--resume", help="Correct this earlier tracking (with --at and --set).")
+    ] = None,
+    at: Annotated[int | None, typer.Option("--at", help="Frame where --set places joints.")] = None,
+    corrections: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--set", help="NAME=X,Y: a joint's true position at --at (repeat); tracking resumes there."
+        ),
+    ] = None,
+) -> None:
+    """Track a character's joints through footage (thesis ch. 4) into a motion file."""
+    options.suffix(output, ".json", "a motion file")
+    if csv is not None:
+        options.suffix(csv, ".csv", "a CSV file")
+    if (resume is None) != (at is None) or (resume is None) != (not corrections):
+        raise SettingsError(
+            "--resume, --at and --set go together: the earlier motion, the frame and the joints"
+        )
+    if resume is not None and joints is None:
+        raise SettingsError("--resume needs the --joints file the tracking used (for the rectangle sizes)")
+    if overlay is not None:
+        animation_format(overlay)
+    frames, video_fps = load_frames(source)
+    rate = fps or video_fps or 24.0
+    start = 0
+    if joints is not None:
+        skeleton, sizes, start = load_joints(joints)
+    else:
+        skeleton, sizes = api.suggest_joints(
+            frames, colour=None if background is None else options.colour(background)
+        )
+        suggested = output.with_name(output.stem + ".joints.json")
+        save_joints(suggested, skeleton, sizes)
+        options.warn(f"suggested {len(skeleton)} joints from frame 0 -> {suggested} (edit it, pass --joints)")
+    with options.progress("tracking") as report:
+        captured = api.track_footage(
+            frames,
+            joints=(skeleton, sizes),
+            start=start,
+            fps=rate,
+            settings=api.TrackSettings(search=search),
+            earlier=None if resume is None else load_motion(resume),
+            corrections=dict(options.named_point(c, "--set") for c in corrections or ()),
+            at=at,
+            progress=report,
+        )
+    motion = captured.motion
+    save_motion(output, motion)
+    if csv is not None:
+        save_motion_csv(csv, motion)
+    if overlay is not None:
+        save_animation(
+            overlay, _tracking_pictures(frames, captured, sizes), fps=rate, background=(255, 255, 255)
+        )
+    unsure = float((motion.confidence < 0.5).mean()) if motion.confidence is not None else 0.0
+    typer.echo(
+        f"tracked {len(skeleton)} joints through {motion.frame_count} frames (from frame {captured.first}); "
+        f"{unsure:.0%} of joint-frames matched poorly (hidden or changed) -> {output}"
+    )
+
+
+@app.command("retarget")
+def retarget_command(
+    motion_file: Annotated[Path, typer.Argument(metavar="MOTION.json", help="A captured motion.")],
+    project: options.Project,
+    output: options.AnimationOutput,
+    joint_map: Annotated[
+        str | None,
+        typer.Option("--map", help="Target joints named differently: TARGET=SOURCE[,TARGET=SOURCE...]."),
+    ] = None,
+    size: options.Size = None,
+    background: options.AnimationBackground = None,
+    overlay: options.Overlay = "",
+    exaggerate: Annotated[
+        float | None, typer.Option("--exaggerate", help="Cartoon filter strength A on the retargeted motion.")
+    ] = None,
+    sigma: options.Sigma = 3.0,
+    shift: options.Shift = 0.0,
+    no_area: options.NoArea = False,
+    stage_one_only: options.StageOne = False,
+    weights: options.Weights = "1,1,1",
+    joint_width: options.JointWidth = 1.5,
+) -> None:
+    """Replay a captured motion on a rigged drawing (thesis 4.5); the result is kept in the project."""
+    kind = animation_format(output)
+    character = api.load_project(project)
+    captured = load_motion(motion_file)
+    motion = api.retarget(captured, character.skeleton, joint_map=_joint_map(joint_map))
+    motion = api.exaggerate(motion, options.filter_settings(exaggerate, sigma, shift))
+    animation = api.animate_character(
+        character, motion, settings=options.deform_settings(no_area, stage_one_only, weights, joint_width)
+    )
+    count, _ = write(
+        output, character, animation, kind=kind, size=size, background=background, overlay=overlay
+    )
+    kept = Path(project) / "motions" / f"{motion_file.stem}.json"
+    save_motion(kept, motion)
+    typer.echo(
+        f"retargeted {captured.frame_count} frames onto {project.name}: {count} frames at "
+        f"{motion.fps:g} fps -> {output} (motion kept in {kept})"
+    )
+
+
+def _joint_map(text: str | None) -> dict[str, str]:
+    mapping = {}
+    for item in (text or "").split(","):
+        if item.strip():
+            target, sep, source = item.partition("=")
+            if not sep or not target.strip() or not source.strip():
+                raise SettingsError(f"--map takes TARGET=SOURCE pairs separated by commas, got {item!r}")
+            mapping[target.strip()] = source.strip()
+    return mapping
+
+
+def _tracking_pictures(
+    frames: NDArray[np.uint8], captured: api.Capture, sizes: NDArray[np.float64]
+) -> Iterator[NDArray[np.uint8]]:
+    """The footage with the tracked rectangles and bones drawn on, opaque RGBA."""
+    motion = captured.motion
+    for t in range(motion.frame_count):
+        confidence = None if motion.confidence is None else motion.confidence[t]
+        rgb = draw_tracking(
+            frames[captured.first + t],
+            motion.positions[t],
+            sizes,
+            motion.skeleton.parents,
+            angles=captured.angles[t],
+            confidence=confidence,
+        )
+        yield np.concatenate([rgb, np.full(rgb.shape[:2] + (1,), 255, dtype=np.uint8)], axis=2)

@@ -1,0 +1,163 @@
+"""Options several commands share, the parsing of option text into values, and progress bars."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from toonmotion.animate.cartoon_filter import FilterSettings
+from toonmotion.deform.deformer import DeformSettings
+from toonmotion.errors import SettingsError
+from toonmotion.render.frame import check_overlays
+
+err = Console(stderr=True)
+
+Project = Annotated[Path, typer.Argument(help="Project folder made by 'toonmotion rig'.")]
+Size = Annotated[str | None, typer.Option("--size", help="Output WxH pixels \\[default: the view at 1:1].")]
+Overlay = Annotated[str, typer.Option("--overlay", help="Comma list of mesh, skeleton, rest.")]
+NoArea = Annotated[bool, typer.Option("--no-area", help="Do not preserve area when bones stretch.")]
+StageOne = Annotated[bool, typer.Option("--stage-one", help="Needle model only, no joint-area solve.")]
+Weights = Annotated[str, typer.Option("--weights", help="Stage-two weights w1,w2,w3.")]
+JointWidth = Annotated[
+    float, typer.Option("--joint-width", help="Joint-area size, in limb half-thicknesses.", min=0)
+]
+Strength = Annotated[
+    float, typer.Option("--strength", help="Filter strength A (0 leaves the motion as it is).")
+]
+Sigma = Annotated[float, typer.Option("--sigma", help="Filter width in frames.")]
+Shift = Annotated[float, typer.Option("--shift", help="Filter time shift in frames (> 0 delays it).")]
+AnimationOutput = Annotated[
+    Path,
+    typer.Option(
+        "-o", "--output", help="OUT.gif, OUT.mp4, or a folder (or frame_%04d.png pattern) for PNGs."
+    ),
+]
+AnimationBackground = Annotated[
+    str | None,
+    typer.Option(
+        "--background", help="transparent, white, black or #rrggbb \\[default: white; transparent for PNGs]."
+    ),
+]
+
+Report = Callable[[str, int, int], None]
+
+
+def deform_settings(no_area: bool, stage_one_only: bool, weights: str, joint_width: float) -> DeformSettings:
+    return DeformSettings(
+        preserve_area=not no_area,
+        stage_two=not stage_one_only,
+        weights=numbers(weights, 3, "--weights"),
+        joint_width=joint_width,
+    )
+
+
+def filter_settings(strength: float | None, sigma: float, shift: float) -> FilterSettings | None:
+    """The cartoon filter's settings, or None when no (or a zero) strength is given."""
+    return FilterSettings(strength=strength, sigma=sigma, shift=shift) if strength else None
+
+
+def numbers(text: str, count: int, option: str) -> tuple[float, ...]:
+    """``count`` finite comma-separated numbers."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != count or not all(np.isfinite(values)):
+        raise SettingsError(f"{option} takes {count} comma-separated numbers, got {text!r}")
+    return values
+
+
+def point(text: str, option: str) -> tuple[float, float]:
+    x, y = numbers(text, 2, option)
+    return x, y
+
+
+def names(text: str) -> tuple[str, ...]:
+    """Comma-separated joint names, at least one."""
+    found = tuple(n.strip() for n in text.split(",") if n.strip())
+    if not found:
+        raise SettingsError(f"give one or more joint names separated by commas, got {text!r}")
+    return found
+
+
+def named_point(text: str, option: str) -> tuple[str, tuple[float, float]]:
+    """``NAME=X,Y``."""
+    name, sep, rest = text.partition("=")
+    if not sep or not name.strip():
+        raise SettingsError(f"{option} takes NAME=X,Y, got {text!r}")
+    return name.strip(), point(rest, f"{option} {name.strip()}=X,Y")
+
+
+def size(text: str | None) -> tuple[int, int] | None:
+    """``WxH`` in pixels, each 1 to 16384."""
+    if text is None:
+        return None
+    w, _, h = text.lower().partition("x")
+    try:
+        wh = int(w), int(h)
+    except ValueError:
+        wh = (0, 0)
+    if min(wh) < 1 or max(wh) > 16384:
+        raise SettingsError(f"--size takes WxH in pixels, each 1 to 16384, e.g. 1024x1024; got {text!r}")
+    return wh
+
+
+def colour(text: str) -> tuple[int, int, int] | None:
+    """``transparent`` (None), ``white``, ``black`` or ``#rrggbb``."""
+    named: dict[str, tuple[int, int, int] | None] = {
+        "transparent": None,
+        "white": (255, 255, 255),
+        "black": (0, 0, 0),
+    }
+    if text.lower() in named:
+        return named[text.lower()]
+    hexa = text.lstrip("#")
+    if len(hexa) == 6:
+        try:
+            r, g, b = (int(hexa[i : i + 2], 16) for i in (0, 2, 4))
+            return r, g, b
+        except ValueError:
+            pass
+    raise SettingsError(f"--background takes transparent, white, black or #rrggbb, got {text!r}")
+
+
+def overlays(text: str) -> tuple[str, ...]:
+    return check_overlays(o.strip() for o in text.split(",") if o.strip())
+
+
+def suffix(path: Path, wanted: str | tuple[str, ...], what: str, *, why: str = "") -> None:
+    """Refuse a file whose name does not end in ``wanted`` (e.g. ``".png"``); ``why`` leads the message."""
+    endings = (wanted,) if isinstance(wanted, str) else wanted
+    if path.suffix.lower() not in endings:
+        raise SettingsError(f"{why}give {what} ending in {' or '.join(endings)}, not {path.name}")
+
+
+@contextmanager
+def progress(description: str) -> Iterator[Report]:
+    """A progress bar on a terminal's stderr (nothing otherwise), fed by ``report(stage, index, count)``."""
+    bar = Progress(
+        TextColumn("{task.description:<15}"),
+        BarColumn(),
+        TimeElapsedColumn(),
+        console=err,
+        transient=True,
+        disable=not err.is_terminal,
+    )
+    with bar:
+        task = bar.add_task(description, total=None)
+
+        def report(stage: str, index: int, count: int) -> None:
+            bar.update(task, completed=index, total=count, description=stage)
+
+        yield report
+
+
+def warn(message: str) -> None:
+    typer.echo(message, err=True)

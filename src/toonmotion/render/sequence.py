@@ -1,0 +1,94 @@
+"""Render an animation's frames in one view and write them as a GIF, an MP4 or PNG frames."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion.animate.animation import Animation
+from toonmotion.deform.depth import draw_order
+from toonmotion.io.video import save_animation
+from toonmotion.render.frame import check_overlays, fit_view, natural_size, render_frame
+from toonmotion.rig.character import Character
+
+Colour = tuple[int, int, int]
+View = tuple[float, float, float, float]
+Progress = Callable[[str, int, int], None]
+
+WHITE = (255, 255, 255)
+
+
+def animation_view(character: Character, animation: Animation) -> View:
+    """One view holding the drawing's canvas and every frame's mesh, so the camera stays still."""
+    return fit_view(character, [U for _, U in animation.meshes])
+
+
+def render_animation(
+    character: Character,
+    animation: Animation,
+    *,
+    size: tuple[int, int] | None = None,
+    background: Colour | None = None,
+    overlays: Sequence[str] = (),
+    view: View | None = None,
+) -> Iterator[NDArray[np.uint8]]:
+    """Yield every frame of ``animation`` as an ``(H, W, 4)`` uint8 RGBA picture.
+
+    Every frame shares one view (default :func:`animation_view`) and one output size (default one
+    output pixel per drawing pixel of the view). ``overlays`` are as for
+    :func:`toonmotion.render.frame.render_frame`.
+    """
+    overlays = check_overlays(overlays)
+    view = animation_view(character, animation) if view is None else view
+    out_size = natural_size(view, size=size)
+    order = draw_order(character.mesh, character.binding, character.depth)
+    for frame, U in animation.meshes:
+        posed = animation.motion.pose(frame) if overlays else None
+        yield render_frame(
+            character,
+            U,
+            pose=posed,
+            size=out_size,
+            view=view,
+            background=background,
+            overlays=overlays,
+            order=order,
+        )
+
+
+def write_animation(
+    path: str | Path,
+    character: Character,
+    animation: Animation,
+    *,
+    size: tuple[int, int] | None = None,
+    background: Colour | None = None,
+    overlays: Sequence[str] = (),
+    progress: Progress | None = None,
+) -> tuple[int, tuple[int, int]]:
+    """Render ``animation`` and save it to ``path`` (``.gif``, ``.mp4``, a folder or a PNG pattern).
+
+    GIF and MP4 have no partial transparency: their frames are composited over ``background``,
+    or white when it is None (transparent). ``progress(stage, index, count)`` is called after each
+    frame. Returns ``(frames written, (width, height))``.
+    """
+    view = animation_view(character, animation)
+    out_size = natural_size(view, size=size)
+    count = len(animation.meshes)
+
+    def frames() -> Iterator[NDArray[np.uint8]]:
+        pictures = render_animation(
+            character, animation, size=out_size, background=background, overlays=overlays, view=view
+        )
+        for index, picture in enumerate(pictures, start=1):
+            yield picture
+            if progress is not None:
+                progress("rendering", index, count)
+
+    written = save_animation(
+        path, frames(), fps=animation.motion.fps, background=background if background is not None else WHITE
+    )
+    return written, out_size
