@@ -1,6 +1,7 @@
 """Tests for toonmotion.io.motion_json: motion files."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -92,3 +93,54 @@ def test_confidence_round_trips_and_csv_has_every_number(motion, tmp_path):
     np.testing.assert_array_equal(table[:, 2::3], captured.positions[..., 0])
     np.testing.assert_array_equal(table[:, 3::3], captured.positions[..., 1])
     np.testing.assert_array_equal(table[:, 4::3], captured.confidence)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda d: d["joints"][2].update(name=7),
+         r"{path}: joints\[2\]\.name: Input should be a valid string"),
+        (lambda d: d["joints"][2].update(name=["neck"]),
+         r"{path}: joints\[2\]\.name: Input should be a valid string"),
+        (lambda d: d.update(version=True),
+         r"{path} is motion format version True; this toonmotion reads version 1"),
+        (lambda d: d.update(version=2),
+         r"{path} is motion format version 2; this toonmotion reads version 1"),
+        (lambda d: d.update(format="toonmotion.skeleton"),
+         r"{path} is not a motion file \(format 'toonmotion.motion'\)"),
+        (lambda d: d["frames"][3][1].__setitem__(0, True),
+         r"{path}: frames\[3\]\[1\]\[0\]: Input should be a valid number"),
+        (lambda d: d.update(fps=True), r"{path}: fps: Input should be a valid number"),
+    ],
+    ids=["int-name", "list-name", "bool-version", "future-version", "wrong-format", "bool-coordinate",
+         "bool-fps"],
+)
+def test_a_bad_value_is_one_line_naming_the_file_and_field(motion, tmp_path, change, message):
+    path = tmp_path / "m.json"
+    save_motion(path, motion)
+    data = json.loads(path.read_text())
+    change(data)
+    path.write_text(json.dumps(data))
+    with pytest.raises(MotionError) as info:
+        load_motion(path)
+    assert re.fullmatch(message.format(path=re.escape(str(path))), str(info.value)), str(info.value)
+
+
+def test_csv_bytes(tmp_path):
+    """The table as spreadsheets read it: a header, a row per frame, numbers in full, \\n endings."""
+    from toonmotion.io.motion_json import save_motion_csv
+    from toonmotion.rig.skeleton import Skeleton
+
+    skeleton = Skeleton.from_joints([("hip", None, (0.0, 0.0)), ("knee", "hip", (0.0, 10.0))])
+    positions = [[[1.0, 2.5], [0.1, 1 / 3]], [[-0.0, 1e-300], [123456789.0, 2.0]]]
+    save_motion_csv(tmp_path / "m.csv", Motion(skeleton, positions, fps=3))
+    assert (tmp_path / "m.csv").read_bytes() == (
+        b"frame,time,hip_x,hip_y,knee_x,knee_y\n"
+        b"0,0.0,1.0,2.5,0.1,0.3333333333333333\n"
+        b"1,0.3333333333333333,-0.0,1e-300,123456789.0,2.0\n"
+    )
+    save_motion_csv(tmp_path / "c.csv", Motion(skeleton, positions, fps=3, confidence=[[1, 0.5], [0, 0.25]]))
+    assert (tmp_path / "c.csv").read_text().splitlines()[:2] == [
+        "frame,time,hip_x,hip_y,hip_confidence,knee_x,knee_y,knee_confidence",
+        "0,0.0,1.0,2.5,1.0,0.1,0.3333333333333333,0.5",
+    ]

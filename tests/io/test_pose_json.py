@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from toonmotion.animate.timeline import Keyframe, make_timeline
-from toonmotion.errors import KeyframeError, PoseError
+from toonmotion.errors import EditError, KeyframeError, PoseError
 from toonmotion.io.pose_json import load_keyframes, load_pose, save_keyframes, save_pose
 from toonmotion.io.skeleton_json import save_skeleton_json
 from toonmotion.rig.pose import Pose, rest_pose, rotate_about
@@ -261,3 +261,59 @@ def test_malformed_edits_in_a_key_file(skeleton, tmp_path, edits, message):
             "keys": [{"frame": 0, "rest": True, "edits": edits}]}
     with pytest.raises(EditError, match=message):
         load_keyframes(_write(tmp_path / "k.json", data), skeleton)
+
+
+def _pose_file(skeleton, **changes):
+    return {"format": "toonmotion.pose", "version": 1, "joints": _joints(skeleton)} | changes
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"version": True}, r"{path} is format version True; this toonmotion reads version 1"),
+        ({"version": 2}, r"{path} is format version 2; this toonmotion reads version 1"),
+        ({"format": "toonmotion.motion"},
+         r"{path} is not a pose file \(format 'toonmotion.pose' or 'toonmotion.skeleton'\)"),
+        ({"format": "toonmotion.skeleton", "joints": [{"name": 1, "parent": None, "position": [0, 0]}]},
+         r"{path}: joints\[0\]\.name: Input should be a valid string"),
+        ({"joints": "neck"}, r"{path}: joints must be a mapping of joint name to \[x, y\]"),
+        ({"extra": 1}, r"{path}: extra: Extra inputs are not permitted"),
+    ],
+    ids=["bool-version", "future-version", "wrong-format", "skeleton-file-int-name", "joints-not-a-mapping",
+         "unknown-key"],
+)
+def test_a_bad_pose_file_is_one_line_naming_file_and_field(tmp_path, skeleton, changes, message):
+    path = _write(tmp_path / "pose.json", _pose_file(skeleton, **changes))
+    with pytest.raises(PoseError) as info:
+        load_pose(path, skeleton)
+    assert re.fullmatch(message.format(path=re.escape(str(path))), str(info.value)), str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("changes", "error", "message"),
+    [
+        ({"version": True}, KeyframeError, r"{path} is format version True; this toonmotion reads version 1"),
+        ({"version": 2}, KeyframeError, r"{path} is format version 2; this toonmotion reads version 1"),
+        ({"format": "toonmotion.pose"}, KeyframeError,
+         r"{path} is not a key-frames file \(format 'toonmotion.keyframes'\)"),
+        ({"keys": [{"frame": True, "rest": True}]}, KeyframeError,
+         r"{path}: keys\[0\]\.frame: Input should be a valid integer"),
+        ({"keys": [{"frame": 0, "rest": 1}]}, KeyframeError,
+         r"{path}: keys\[0\]\.rest: Input should be a valid boolean"),
+        ({"ease": 1}, KeyframeError, r"{path}: ease: Input should be a valid string"),
+        ({"fps": "12"}, KeyframeError, r"{path}: fps: Input should be a valid number"),
+        ({"keys": [{"frame": 0, "rest": True}, {"frame": 1, "joints": {"neck": [1, "a"]}}]}, PoseError,
+         r"{path}: keys\[1\]: joint 'neck' has position \[1, 'a'\]; give two numbers \[x, y\]"),
+        ({"keys": [{"frame": 0, "rest": True, "edits": [{"kind": "curve", "points": [[0, 0], [1, 1]]},
+                                                        {"kind": "blur"}]}]}, EditError,
+         r"{path}: keys\[0\]: edit 2 has kind 'blur'; use 'curve' or 'drag'"),
+    ],
+    ids=["bool-version", "future-version", "wrong-format", "bool-frame", "int-rest", "int-ease",
+         "string-fps", "bad-position", "bad-edit-kind"],
+)
+def test_a_bad_keyframes_file_is_one_line_naming_file_and_field(tmp_path, skeleton, changes, error, message):
+    path = _write(tmp_path / "keys.json", _keys_file(**changes))
+    with pytest.raises(error) as info:
+        load_keyframes(path, skeleton)
+    assert type(info.value) is error
+    assert re.fullmatch(message.format(path=re.escape(str(path))), str(info.value)), str(info.value)

@@ -2,6 +2,7 @@
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -391,3 +392,69 @@ def test_depth_layers_round_trip(tmp_path, saved):
 def test_depth_naming_an_unknown_bone(saved):
     _edit(saved, lambda d: d["depth"].update(tail=2))
     _expect(saved, ProjectError, "unknown bone 'tail'")
+
+
+def test_a_bool_version_is_not_version_1(saved):
+    _edit(saved, lambda d: d.update(version=True))
+    _expect(saved, ProjectVersionError, r".*project.json has unknown project version True; .*1, 2, 3$")
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda d: d["skeleton"]["joints"][1].update(name=5),
+         r"skeleton\.joints\[1\]\.name: Input should be a valid string"),
+        (lambda d: d["skeleton"]["joints"][1].update(name=["left"]),
+         r"skeleton\.joints\[1\]\.name: Input should be a valid string"),
+        (lambda d: d["skeleton"]["joints"][1].update(parent=0),
+         r"skeleton\.joints\[1\]\.parent: Input should be a valid string"),
+        (lambda d: d["skeleton"]["joints"][1].pop("position"),
+         r"skeleton: joint 2 needs a 'name' and a 'position: \[x, y\]'"),
+        (lambda d: d["mesh"]["triangles"][0].__setitem__(0, True),
+         r"mesh\.triangles\[0\]\[0\]: Input should be a valid integer"),
+        (lambda d: d["binding"]["vertex_bone"].__setitem__(0, 0.0),
+         r"binding\.vertex_bone\[0\]: Input should be a valid integer"),
+        (lambda d: d.update(width=62.0), r"width: Input should be a valid integer"),
+        (lambda d: d["edits"][1].update(value=True),
+         r"edits\[1\]\.depth\.value: Input should be a valid integer"),
+        (lambda d: d["settings"].update(vertices=300.0),
+         r"settings\.vertices: Input should be a valid integer"),
+        (lambda d: d["settings"].update(spacing="3"), r"settings\.spacing: Input should be a valid number"),
+        (lambda d: d["settings"].update(refine_joints=1),
+         r"settings\.refine_joints: Input should be a valid boolean"),
+        (lambda d: d["settings"].update(colour="red"), r"settings\.colour: Extra inputs are not permitted"),
+        (lambda d: d["settings"].update(spacing=0.5), r"spacing must be at least 1 pixel, got 0\.5"),
+        (lambda d: d["settings"].update(segmentation="sky"),
+         r"segmentation must be one of auto, flat, paper, got 'sky'"),
+        (lambda d: d["settings"].update(vertices=300), r"give either a spacing or a vertex count, not both"),
+    ],
+    ids=["int-name", "list-name", "int-parent", "joint-without-position", "bool-index", "float-index",
+         "float-width", "bool-depth", "float-vertices", "string-spacing", "int-flag", "unknown-setting",
+         "small-spacing", "unknown-segmentation", "spacing-and-vertices"],
+)
+def test_a_bad_value_names_the_file_and_field(saved, change, message):
+    _edit(saved, change)
+    where = re.escape(str(saved / PROJECT_FILE))
+    _expect(saved, ProjectError, rf"^{where} is not a valid project: {message}$")
+
+
+def test_settings_are_saved_field_by_field_from_the_dataclass(character, tmp_path):
+    save_project(tmp_path / "p", character)
+    settings = json.loads((tmp_path / "p" / PROJECT_FILE).read_text())["settings"]
+    assert list(settings) == [f.name for f in dataclasses.fields(RigSettings)]
+    assert settings == dataclasses.asdict(character.settings)
+    _edit(tmp_path / "p", lambda d: d["settings"].pop("prune"))  # a missing setting takes its default
+    assert load_project(tmp_path / "p").settings.prune == RigSettings().prune
+
+
+def test_version_2_depth_edits_follow_the_bone_order(saved, character):
+    _edit(saved, _to_version_2)
+    loaded = load_project(saved)
+    depth_bones = [e.bone for e in loaded.edits if isinstance(e, DepthEdit)]
+    names = loaded.skeleton.bone_names
+    assert len(depth_bones) == 2
+    assert depth_bones == [n for n, d in zip(names, character.depth, strict=True) if d != 0]
+    # A migrated project saves as version 3 and reads back the same.
+    save_project(saved, loaded)
+    assert json.loads((saved / PROJECT_FILE).read_text())["version"] == 3
+    _assert_same(load_project(saved), loaded)

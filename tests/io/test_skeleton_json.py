@@ -1,6 +1,7 @@
 """Tests for toonmotion.io.skeleton_json and load_skeleton_file."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -160,3 +161,44 @@ def test_image_size_mismatch(tmp_path, suffix):
     with pytest.raises(SkeletonError, match=f"s{suffix} was made for a 320x200 drawing but "
                                             "this one is 200x320; use the skeleton made for"):
         load_skeleton_file(path, image_size=(200, 320))
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"joints": [{"name": 1, "parent": None, "position": [1, 2]}]},
+         r"{path}: joints\[0\]\.name: Input should be a valid string"),
+        ({"joints": [{"name": ["root"], "parent": None, "position": [1, 2]}]},
+         r"{path}: joints\[0\]\.name: Input should be a valid string"),
+        ({"joints": [{"name": "root", "parent": False, "position": [1, 2]}]},
+         r"{path}: joints\[0\]\.parent: Input should be a valid string"),
+        ({"joints": [{"name": "root", "parent": None, "position": [1, True]}]},
+         r"{path}: joints\[0\]\.position\[1\]: Input should be a valid number"),
+        ({"version": True}, r"{path} is skeleton format version True; this toonmotion reads version 1"),
+        ({"version": 2}, r"{path} is skeleton format version 2; this toonmotion reads version 1"),
+        ({"format": "toonmotion.pose"},
+         r"{path} is not a toonmotion skeleton file \(format 'toonmotion.skeleton'\)"),
+        ({"width": True}, r"{path}: width and height must be whole numbers of pixels above 0"),
+        ({"width": 0}, r"{path}: width and height must be whole numbers of pixels above 0"),
+        ({"colour": "red"}, r"{path}: colour: Extra inputs are not permitted"),
+    ],
+    ids=["int-name", "list-name", "bool-parent", "bool-coordinate", "bool-version", "future-version",
+         "wrong-format", "bool-width", "zero-width", "unknown-key"],
+)
+def test_a_bad_value_is_one_line_naming_the_file_and_field(tmp_path, changes, message):
+    path = _json(tmp_path, _valid(**changes))
+    with pytest.raises(SkeletonError) as info:
+        load_skeleton_json(path)
+    assert re.fullmatch(message.format(path=re.escape(str(path))), str(info.value)), str(info.value)
+
+
+def test_skeleton_problems_name_the_file(tmp_path):
+    path = _json(tmp_path, _valid(joints=[{"name": "a", "parent": "b", "position": [0, 0]},
+                                          {"name": "b", "parent": "a", "position": [1, 1]}]))
+    with pytest.raises(SkeletonError, match=rf"^{re.escape(str(path))}: the skeleton has a cycle"):
+        load_skeleton_json(path)
+
+
+def test_skeleton_from_dict_refuses_a_non_string_name():
+    with pytest.raises(SkeletonError, match=r"^here: \[0\]\.name: Input should be a valid string$"):
+        skeleton_from_dict([{"name": 1, "parent": None, "position": [0, 0]}], where="here")

@@ -1,6 +1,7 @@
 """Tests for toonmotion.io.track_json."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -109,3 +110,33 @@ def test_save_rejects_bad_sizes_and_frames(tmp_path):
     with pytest.raises(TrackingError, match="frame"):
         save_joints(tmp_path / "j.json", skeleton, np.ones((3, 2)), frame=-1)
     assert not (tmp_path / "j.json").exists()
+
+
+@pytest.mark.parametrize(
+    ("changes", "error", "message"),
+    [
+        ({"joints": [{"name": 3, "parent": None, "position": [1, 2]}]}, TrackingError,
+         r"{path}: joints\[0\]\.name: Input should be a valid string"),
+        ({"joints": [{"name": {"a": 1}, "parent": None, "position": [1, 2]}]}, TrackingError,
+         r"{path}: joints\[0\]\.name: Input should be a valid string"),
+        ({"version": True}, TrackingError,
+         r"{path} is joints format version True; this toonmotion reads version 1"),
+        ({"version": 2}, TrackingError,
+         r"{path} is joints format version 2; this toonmotion reads version 1"),
+        ({"format": "toonmotion.skeleton"}, TrackingError,
+         r"{path} is not a toonmotion joints file \(format 'toonmotion.joints'\)"),
+        ({"joints": {"hip": [1, 2]}}, SkeletonError,
+         r"{path}: 'joints' must be a list of \{{name, parent, position, size\}} objects"),
+        ({"extra": 1}, TrackingError, r"{path}: extra: Extra inputs are not permitted"),
+    ],
+    ids=["int-name", "dict-name", "bool-version", "future-version", "wrong-format", "joints-not-a-list",
+         "unknown-key"],
+)
+def test_a_bad_value_is_one_line_naming_the_file_and_field(tmp_path, changes, error, message):
+    data = {"format": FORMAT, "version": VERSION,
+            "joints": [{"name": "hip", "parent": None, "position": [1, 2]}]}
+    path = _write(tmp_path / "j.json", data | changes)
+    with pytest.raises(error) as info:
+        load_joints(path)
+    assert type(info.value) is error
+    assert re.fullmatch(message.format(path=re.escape(str(path))), str(info.value)), str(info.value)

@@ -4,7 +4,10 @@ The format: ``width`` and ``height`` of the drawing, and ``skeleton``, a list of
 ``{name, parent, loc: [x, y]}`` in pixels (x right, y down), ``parent: null`` for the root.
 """
 
+from __future__ import annotations
+
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -13,7 +16,7 @@ from toonmotion.io.atomic import write_text
 from toonmotion.rig.skeleton import Skeleton
 
 
-def load_char_cfg(path):
+def load_char_cfg(path: str | Path) -> tuple[Skeleton, tuple[int, int] | None]:
     """Read a char_cfg.yaml.
 
     Returns
@@ -32,7 +35,7 @@ def load_char_cfg(path):
         raise SkeletonError(f"cannot read {path} as YAML: {problem}") from None
     if not isinstance(data, dict) or not isinstance(data.get("skeleton"), list):
         raise SkeletonError(f"{path} has no 'skeleton' list of joints; is it a char_cfg.yaml?")
-    joints = []
+    joints: list[tuple[str, str | None, Any]] = []
     for i, joint in enumerate(data["skeleton"]):
         if not isinstance(joint, dict) or not {"name", "loc"} <= joint.keys():
             raise SkeletonError(f"{path}: joint {i + 1} needs a 'name' and a 'loc: [x, y]'")
@@ -47,7 +50,7 @@ def load_char_cfg(path):
     return Skeleton.from_joints(joints), size
 
 
-def save_char_cfg(path, skeleton, size):
+def save_char_cfg(path: str | Path, skeleton: Skeleton, size: tuple[int, int]) -> None:
     """Write a skeleton as a char_cfg.yaml for a drawing of ``size`` (width, height)."""
     data = {
         "width": int(size[0]),

@@ -17,58 +17,184 @@ A pose or a key may carry fine-tuning edits, applied in order after it is deform
 
     "edits": [{"kind": "curve", "points": [[x, y], ...]},
               {"kind": "drag", "from": [[x, y], ...], "to": [[x, y], ...]}]
+
+The file models check types; which joints a pose must name, and how many points an edit
+needs, are checked against the skeleton and by the edits themselves.
 """
 
-import json
-from pathlib import Path
+from __future__ import annotations
 
-from toonmotion.animate.timeline import Keyframe, make_timeline
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import Field, StrictBool, StrictStr, model_validator
+from pydantic_core import ErrorDetails
+
+from toonmotion.animate.timeline import Keyframe, Timeline, make_timeline
 from toonmotion.deform.tuning import CurveEdit, DragEdit
 from toonmotion.errors import EditError, KeyframeError, PoseError
 from toonmotion.io.atomic import write_text
-from toonmotion.io.json_file import read_json
-from toonmotion.rig.pose import pose_from_joints, pose_to_joints, rest_pose
+from toonmotion.io.schema import (
+    Float,
+    Int,
+    JsonFormat,
+    Model,
+    Point,
+    explained,
+    location,
+    parse_versioned,
+    problem,
+    read_json,
+    read_versioned,
+    validate,
+)
+from toonmotion.io.skeleton_json import FORMAT as SKELETON_FORMAT
+from toonmotion.io.skeleton_json import SkeletonFile
+from toonmotion.rig.pose import Pose, pose_from_joints, pose_to_joints, rest_pose
+from toonmotion.rig.skeleton import Skeleton
 
 POSE_FORMAT = "toonmotion.pose"
 KEYS_FORMAT = "toonmotion.keyframes"
 VERSION = 1
 
 
-def load_pose(path, skeleton):
+def _position_problem(value: Any, errors: list[ErrorDetails]) -> str:
+    if not isinstance(value, dict):
+        return "joints must be a mapping of joint name to [x, y]"
+    name = errors[0]["loc"][0]
+    finite = "finite " if errors[0]["type"] == "finite_number" else ""
+    return f"joint {name!r} has position {value[name]!r}; give two {finite}numbers [x, y]"
+
+
+# Joint name -> [x, y].
+JointPositions = Annotated[dict[str, Point], explained(_position_problem, error=PoseError)]
+
+
+class CurveEditModel(Model):
+    """A sketch curve the outline is pulled onto."""
+
+    kind: Literal["curve"]
+    points: list[Point]
+
+
+class DragEditModel(Model):
+    """Outline points dragged from ``from`` to ``to``."""
+
+    kind: Literal["drag"]
+    start: list[Point] = Field(alias="from")
+    end: list[Point] = Field(alias="to")
+
+
+_POINTS = {"points": "a sketch curve", "from": "a drag's start points", "to": "a drag's end points"}
+
+
+def _edit_problem(value: Any, errors: list[ErrorDetails]) -> str:
+    first = errors[0]
+    loc = first["loc"]
+    if first["type"].startswith("union_tag") or not loc:
+        kind = value.get("kind") if isinstance(value, dict) else None
+        return f"edit {{n}} has kind {kind!r}; use 'curve' or 'drag'"
+    if len(loc) > 1 and loc[1] in _POINTS:
+        return f"edit {{n}} {_POINTS[str(loc[1])]} must be a list of [x, y] points"
+    return f"edit {{n}}: {location(loc[1:])}: {first['msg']}"
+
+
+# Fine-tuning edits, in the order they apply.
+Edits = Annotated[
+    list[Annotated[CurveEditModel | DragEditModel, Field(discriminator="kind"),
+                   explained(_edit_problem, error=EditError)]],
+    explained("'edits' must be a list of curve and drag edits", error=EditError),
+]
+
+
+class PoseFile(Model):
+    """A pose file (see the module docstring)."""
+
+    format: Literal["toonmotion.pose"]
+    version: Literal[1]
+    joints: JointPositions
+    edits: Edits = []
+
+
+def _key_needs(value: Any, errors: list[ErrorDetails]) -> str | None:
+    loc = errors[0]["loc"]
+    if not loc or (errors[0]["type"] == "missing" and loc == ("frame",)):
+        return "key {n} needs a 'frame' number"
+    return None
+
+
+class KeyModel(Model):
+    """One key of a key-frames file."""
+
+    frame: Int
+    rest: StrictBool = False
+    joints: JointPositions | None = None
+    edits: Edits = []
+
+    @model_validator(mode="after")
+    def _has_a_pose(self) -> KeyModel:
+        if not self.rest and self.joints is None:
+            raise problem(f"key at frame {self.frame} needs 'joints' (or 'rest': true)")
+        return self
+
+
+class KeyframesFile(Model):
+    """A key-frames file (see the module docstring)."""
+
+    format: Literal["toonmotion.keyframes"]
+    version: Literal[1]
+    fps: Float = 24.0
+    ease: StrictStr = "linear"
+    keys: Annotated[
+        list[Annotated[KeyModel, explained(_key_needs)]],
+        explained("'keys' must be a list of {'frame': N, 'joints': {...}}"),
+    ]
+
+
+POSE = JsonFormat[PoseFile | SkeletonFile](
+    models={POSE_FORMAT: PoseFile, SKELETON_FORMAT: SkeletonFile}, version=VERSION, error=PoseError,
+    title="pose file", label="format",
+)
+KEYFRAMES = JsonFormat(models={KEYS_FORMAT: KeyframesFile}, version=VERSION, error=KeyframeError,
+                       title="key-frames file", label="format")
+
+Edit = CurveEdit | DragEdit
+
+
+def load_pose(path: str | Path, skeleton: Skeleton) -> Pose:
     """Read a pose (or skeleton) file for ``skeleton``; returns a :class:`Pose`."""
     path = Path(path)
-    data = read_json(path, PoseError)
-    kind = data.get("format") if isinstance(data, dict) else None
-    if kind == "toonmotion.skeleton":
-        _check_version(data, path, PoseError)
-        joints = data.get("joints")
-        if not isinstance(joints, list) or not all(isinstance(j, dict) and "name" in j for j in joints):
-            raise PoseError(f"{path}: 'joints' must be a list of {{'name', 'position'}} objects")
-        return pose_from_joints(skeleton, {j["name"]: j.get("position") for j in joints}, where=str(path))
-    if kind != POSE_FORMAT:
-        raise PoseError(f"{path} is not a pose file (format {POSE_FORMAT!r} or 'toonmotion.skeleton')")
-    _check_version(data, path, PoseError)
-    return pose_from_joints(skeleton, data.get("joints"), where=str(path))
+    model = read_versioned(path, POSE)
+    if isinstance(model, SkeletonFile):
+        joints = {joint.name: joint.position for joint in model.joints}
+    else:
+        joints = dict(model.joints)
+    return pose_from_joints(skeleton, joints, where=str(path))
 
 
-def load_pose_edits(path):
+def load_pose_edits(path: str | Path) -> tuple[Edit, ...]:
     """The fine-tuning edits of a pose file, a tuple (empty for a skeleton file or none)."""
     path = Path(path)
     data = read_json(path, PoseError)
     if not isinstance(data, dict) or data.get("format") != POSE_FORMAT:
         return ()
-    return edits_from_json(data.get("edits", []), where=str(path))
+    model = parse_versioned(data, path, POSE)
+    return _edits(model.edits if isinstance(model, PoseFile) else [], where=str(path))
 
 
-def save_pose(path, skeleton, pose, edits=()):
+def save_pose(path: str | Path, skeleton: Skeleton, pose: Pose, edits: Sequence[Edit] = ()) -> None:
     """Write ``pose`` (and its fine-tuning ``edits``) as a pose file."""
-    data = {"format": POSE_FORMAT, "version": VERSION, "joints": pose_to_joints(skeleton, pose)}
+    data: dict[str, Any] = {"format": POSE_FORMAT, "version": VERSION,
+                            "joints": pose_to_joints(skeleton, pose)}
     if edits:
         data["edits"] = edits_to_json(edits)
     write_text(path, json.dumps(data, indent=1) + "\n")
 
 
-def edits_to_json(edits):
+def edits_to_json(edits: Sequence[Edit]) -> list[dict[str, Any]]:
     """Fine-tuning edits as JSON-ready dicts."""
     out = []
     for edit in edits:
@@ -79,59 +205,46 @@ def edits_to_json(edits):
     return out
 
 
-def edits_from_json(items, *, where):
+def edits_from_json(items: Any, *, where: str) -> tuple[Edit, ...]:
     """Fine-tuning edits from their JSON dicts; :class:`EditError` naming ``where`` if malformed."""
-    if not isinstance(items, list):
-        raise EditError(f"{where}: 'edits' must be a list")
-    out = []
-    for n, item in enumerate(items, start=1):
-        kind = item.get("kind") if isinstance(item, dict) else None
+    return _edits(validate(Edits, items, where=where, error=EditError), where=where)
+
+
+def _edits(models: Sequence[CurveEditModel | DragEditModel], *, where: str) -> tuple[Edit, ...]:
+    out: list[Edit] = []
+    for n, m in enumerate(models, start=1):
         try:
-            if kind == "curve":
-                out.append(CurveEdit(points=item.get("points")))
-            elif kind == "drag":
-                out.append(DragEdit(start=item.get("from"), end=item.get("to")))
+            if isinstance(m, CurveEditModel):
+                out.append(CurveEdit(points=np.array(m.points, dtype=float)))
             else:
-                raise EditError(f"has kind {kind!r}; use 'curve' or 'drag'")
+                out.append(DragEdit(start=np.array(m.start, dtype=float), end=np.array(m.end, dtype=float)))
         except EditError as error:
             raise EditError(f"{where}: edit {n} {error}") from None
     return tuple(out)
 
 
-def load_keyframes(path, skeleton, *, fps=None):
+def load_keyframes(path: str | Path, skeleton: Skeleton, *, fps: float | None = None) -> Timeline:
     """Read a key-frames file for ``skeleton``; returns a :class:`Timeline`.
 
     ``fps`` overrides the file's frame rate (default 24 when the file gives none).
     """
     path = Path(path)
-    data = read_json(path, KeyframeError)
-    if not isinstance(data, dict) or data.get("format") != KEYS_FORMAT:
-        raise KeyframeError(f"{path} is not a key-frames file (format {KEYS_FORMAT!r})")
-    _check_version(data, path, KeyframeError)
-    keys = data.get("keys")
-    if not isinstance(keys, list):
-        raise KeyframeError(f"{path}: 'keys' must be a list of {{'frame': N, 'joints': {{...}}}}")
+    model = read_versioned(path, KEYFRAMES)
     out = []
-    for n, key in enumerate(keys, start=1):
-        if not isinstance(key, dict) or "frame" not in key:
-            raise KeyframeError(f"{path}: key {n} needs a 'frame' number")
-        where = f"{path}: key at frame {key['frame']}"
-        if key.get("rest") is True:
+    for key in model.keys:
+        where = f"{path}: key at frame {key.frame}"
+        if key.rest:
             pose = rest_pose(skeleton)
-        elif "joints" in key:
-            pose = pose_from_joints(skeleton, key["joints"], where=where)
         else:
-            raise KeyframeError(f"{where} needs 'joints' (or 'rest': true)")
-        edits = edits_from_json(key.get("edits", []), where=where)
-        out.append(Keyframe(frame=key["frame"], pose=pose, edits=edits))
+            pose = pose_from_joints(skeleton, dict(key.joints or {}), where=where)
+        out.append(Keyframe(frame=key.frame, pose=pose, edits=_edits(key.edits, where=where)))
     try:
-        return make_timeline(skeleton, out, fps=data.get("fps", 24) if fps is None else fps,
-                             ease=data.get("ease", "linear"))
+        return make_timeline(skeleton, out, fps=model.fps if fps is None else fps, ease=model.ease)
     except KeyframeError as error:
         raise KeyframeError(f"{path}: {error}") from None
 
 
-def save_keyframes(path, skeleton, timeline):
+def save_keyframes(path: str | Path, skeleton: Skeleton, timeline: Timeline) -> None:
     """Write a :class:`Timeline` as a key-frames file."""
     data = {
         "format": KEYS_FORMAT,
@@ -143,15 +256,8 @@ def save_keyframes(path, skeleton, timeline):
     write_text(path, json.dumps(data, indent=1) + "\n")
 
 
-def _key_to_json(skeleton, key):
+def _key_to_json(skeleton: Skeleton, key: Keyframe) -> dict[str, Any]:
     out = {"frame": key.frame, "joints": pose_to_joints(skeleton, key.pose)}
     if key.edits:
         out["edits"] = edits_to_json(key.edits)
     return out
-
-
-def _check_version(data, path, error):
-    if data.get("version") != VERSION:
-        raise error(
-            f"{path} is format version {data.get('version')!r}; this toonmotion reads version {VERSION}"
-        )

@@ -10,147 +10,205 @@ A project is a folder::
 Saving is safe at every moment: image assets are named by their content and written first,
 ``project.json`` is written to a temporary file and renamed over the old one last, and only then
 are assets no longer referenced removed. Other files in the folder are left alone. Loading
-validates the schema (pydantic) and the cross-references (indices, sizes), and a save followed
-by a load gives back exactly the same arrays, so a second save writes the same bytes.
+validates the schema (pydantic, :mod:`toonmotion.io.schema`) and the cross-references (indices,
+sizes), and a save followed by a load gives back exactly the same arrays, so a second save writes
+the same bytes. Projects of versions 1 and 2 load by stepping their JSON up to version 3 first.
 """
 
+from __future__ import annotations
+
+import dataclasses
 import hashlib
 import json
 import re
+import typing
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import ConfigDict, Field, StrictInt, StrictStr, create_model, model_validator
 
 from toonmotion import __version__
 from toonmotion.errors import ProjectError, ProjectVersionError, ToonmotionError
 from toonmotion.io.atomic import write_bytes, write_text
 from toonmotion.io.image import load_image, png_bytes
-from toonmotion.io.skeleton_json import skeleton_from_dict, skeleton_to_dict
-from toonmotion.rig.binding import Correction, binding_from_bones
+from toonmotion.io.schema import Float, Joints, JsonFormat, Model, Point, problem, read_versioned
+from toonmotion.io.skeleton_json import skeleton_from_joints, skeleton_to_dict
+from toonmotion.rig.binding import Binding, Correction, binding_from_bones
 from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.edits import DepthEdit
+from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.curve_skeleton import NODE_KINDS, CurveSkeleton
 from toonmotion.shape.mesh import Mesh, check_mesh
 from toonmotion.shape.silhouette import Part, Silhouette
 
 FORMAT = "toonmotion.project"
 VERSION = 3
-# Version 1 had no depth layers; it loads with every region at depth 0. Versions 1 and 2 kept
-# corrections in the binding and depth as a result only; they load as an edit history of the
-# corrections followed by a depth edit per region not at depth 0.
-READABLE = (1, 2, 3)
 PROJECT_FILE = "project.json"
 
-Point = tuple[float, float]
 
-
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
-
-
-class _Part(_Model):
+class _Part(Model):
     outer: list[Point]
     holes: list[list[Point]] = []
 
 
-class _Silhouette(_Model):
-    tolerance: float = Field(ge=0)
+class _Silhouette(Model):
+    tolerance: Annotated[Float, Field(ge=0)]
     parts: list[_Part]
 
 
-class _Node(_Model):
+class _Node(Model):
     position: Point
     kind: Literal[NODE_KINDS]  # type: ignore[valid-type]
-    radius: float = Field(ge=0)
+    radius: Annotated[Float, Field(ge=0)]
 
 
-class _Branch(_Model):
-    nodes: tuple[int, int]
+class _Branch(Model):
+    nodes: tuple[StrictInt, StrictInt]
     path: list[Point] = Field(min_length=2)
 
 
-class _CurveSkeleton(_Model):
+class _CurveSkeleton(Model):
     nodes: list[_Node]
     branches: list[_Branch]
 
 
-class _Joint(_Model):
-    name: str = Field(min_length=1)
-    parent: str | None
-    position: Point
+class _Skeleton(Model):
+    joints: Joints
 
 
-class _Skeleton(_Model):
-    joints: list[_Joint] = Field(min_length=1)
-
-
-class _Mesh(_Model):
-    spacing: float = Field(gt=0)
+class _Mesh(Model):
+    spacing: Annotated[Float, Field(gt=0)]
     vertices: list[Point] = Field(min_length=3)
-    triangles: list[tuple[int, int, int]] = Field(min_length=1)
-    boundary: list[list[int]] = Field(min_length=1)
+    triangles: list[tuple[StrictInt, StrictInt, StrictInt]] = Field(min_length=1)
+    boundary: list[list[StrictInt]] = Field(min_length=1)
 
 
-class _Correction(_Model):
-    bone: str
+class _Binding(Model):
+    bones: list[StrictStr]
+    vertex_bone: list[StrictInt]
+    fallback: list[StrictInt] = []
+
+    @model_validator(mode="before")
+    @classmethod
+    def _corrections_are_edits(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "corrections" in data:
+            raise problem("a version 3 project keeps its corrections in 'edits', not in the binding")
+        return data
+
+
+class _CorrectionEdit(Model):
+    kind: Literal["correction"]
+    bone: StrictStr
     curve: list[Point] = Field(min_length=3)
 
 
-class _Binding(_Model):
-    bones: list[str]
-    vertex_bone: list[int]
-    fallback: list[int] = []
-    corrections: list[_Correction] = []  # versions 1 and 2; version 3 keeps them in edits
-
-
-class _CorrectionEdit(_Correction):
-    kind: Literal["correction"]
-
-
-class _DepthEdit(_Model):
+class _DepthEdit(Model):
     kind: Literal["depth"]
-    value: int
-    bone: str | None = None
+    value: StrictInt
+    bone: StrictStr | None = None
     at: Point | None = None
 
 
 _Edit = Annotated[_CorrectionEdit | _DepthEdit, Field(discriminator="kind")]
 
 
-class _Settings(_Model):
-    spacing: float | None = None
-    vertices: int | None = None
-    tolerance: float | None = None
-    refine_joints: bool = False
-    largest_only: bool = False
-    min_part: float = 0.01
-    prune: float = 0.5
-    max_bone: float | None = None
-    segmentation: str = "auto"
+class _Strict(Model):
+    model_config = ConfigDict(strict=True)
 
 
-class _Project(_Model):
+# RigSettings' own fields, types and defaults (the dataclass checks ranges when it is built).
+_HINTS = typing.get_type_hints(RigSettings)
+_Settings = create_model(  # type: ignore[call-overload]
+    "_Settings",
+    __base__=_Strict,
+    **{f.name: (_HINTS[f.name], f.default) for f in dataclasses.fields(RigSettings)},
+)
+
+
+class ProjectFile(Model):
+    """``project.json`` as this toonmotion writes it (version 3)."""
+
     format: Literal["toonmotion.project"]
-    version: Literal[1, 2, 3]
-    toonmotion: str
-    width: int = Field(gt=0)
-    height: int = Field(gt=0)
-    texture: str
-    mask: str
+    version: Literal[3]
+    toonmotion: StrictStr
+    width: Annotated[StrictInt, Field(gt=0)]
+    height: Annotated[StrictInt, Field(gt=0)]
+    texture: StrictStr
+    mask: StrictStr
     settings: _Settings
     silhouette: _Silhouette
     curve_skeleton: _CurveSkeleton
     skeleton: _Skeleton
     mesh: _Mesh
     binding: _Binding
-    depth: dict[str, int] = {}
+    depth: dict[str, StrictInt] = {}
     edits: list[_Edit] = []
     undone: list[_Edit] = []
 
 
-def save_project(path, character):
+def _version_1_to_2(data: dict[str, Any]) -> dict[str, Any]:
+    """Version 1 had no depth layers: every region is at depth 0."""
+    data.setdefault("depth", {})
+    return data
+
+
+def _version_2_to_3(data: dict[str, Any]) -> dict[str, Any]:
+    """Versions 1 and 2 kept corrections in the binding and depth as a result only: they become
+    an edit history of the corrections followed by a depth edit per region not at depth 0."""
+    binding = data.get("binding")
+    corrections: Any = []
+    if isinstance(binding, dict) and "corrections" in binding:
+        binding = dict(binding)
+        corrections = binding.pop("corrections")
+        data["binding"] = binding
+    if not isinstance(corrections, list):
+        return data  # left for validation to refuse
+    edits = [{"kind": "correction", **c} if isinstance(c, dict) else c for c in corrections]
+    depth, bones = data.get("depth"), binding.get("bones") if isinstance(binding, dict) else None
+    if isinstance(depth, dict) and isinstance(bones, list):
+        edits += [{"kind": "depth", "value": depth[bone], "bone": bone}
+                  for bone in bones if isinstance(bone, str) and depth.get(bone, 0) != 0]
+    data["edits"] = edits
+    return data
+
+
+class _ProjectFormat(JsonFormat[ProjectFile]):
+    """The project format, with the messages ``toonmotion`` has always given for projects."""
+
+    def read(self, path: Path) -> Any:
+        if not path.is_file():
+            raise ProjectError(f"no project at {path}: give a project folder made by 'toonmotion rig'")
+        try:
+            return json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+            raise ProjectError(f"cannot read {path}: {error}") from None
+
+    def not_this_format(self, path: Path) -> ToonmotionError:
+        return ProjectError(f"{path} is not a toonmotion project (no 'format': {FORMAT!r})")
+
+    def unreadable_version(self, path: Path, version: Any) -> ToonmotionError:
+        if isinstance(version, int) and not isinstance(version, bool) and version > VERSION:
+            return ProjectVersionError(
+                f"{path} is project version {version}, newer than this toonmotion "
+                f"{__version__} reads (version {VERSION}); upgrade toonmotion"
+            )
+        return ProjectVersionError(
+            f"{path} has unknown project version {version!r}; this toonmotion reads versions "
+            f"{', '.join(map(str, self.readable))}"
+        )
+
+    def invalid(self, path: Path, text: str, error: type[ToonmotionError] | None) -> ToonmotionError:
+        return ProjectError(f"{path} is not a valid project: {text}")
+
+
+PROJECT = _ProjectFormat(models={FORMAT: ProjectFile}, version=VERSION, error=ProjectError,
+                         title="toonmotion project", label="project",
+                         migrations={1: _version_1_to_2, 2: _version_2_to_3})
+READABLE = PROJECT.readable
+
+
+def save_project(path: str | Path, character: Character) -> None:
     """Save a character as a project folder (created if needed).
 
     Parameters
@@ -184,63 +242,29 @@ def save_project(path, character):
         (folder / name).unlink(missing_ok=True)
 
 
-def load_project(path):
+def load_project(path: str | Path) -> Character:
     """Load a project folder (or its ``project.json``) as a :class:`Character`."""
     path = Path(path)
     file = path / PROJECT_FILE if path.is_dir() else path
-    folder = file.parent
-    data = _read_json(file)
-    _check_version(data, file)
+    model = read_versioned(file, PROJECT)
     try:
-        model = _Project.model_validate(data)
-    except ValidationError as error:
-        first = error.errors()[0]
-        where = ".".join(str(p) for p in first["loc"])
-        raise ProjectError(f"{file} is not a valid project: {where}: {first['msg']}") from None
-    try:
-        return _from_model(model, folder)
+        return _from_model(model, file.parent)
     except ProjectError:
         raise
-    except ToonmotionError as error:
+    except (ToonmotionError, ValueError) as error:
         raise ProjectError(f"{file} is not a valid project: {error}") from None
-
-
-def _read_json(file):
-    if not file.is_file():
-        raise ProjectError(f"no project at {file}: give a project folder made by 'toonmotion rig'")
-    try:
-        return json.loads(file.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise ProjectError(f"cannot read {file}: {error}") from None
-
-
-def _check_version(data, file):
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise ProjectError(f"{file} is not a toonmotion project (no 'format': {FORMAT!r})")
-    version = data.get("version")
-    if version in READABLE:
-        return
-    if isinstance(version, int) and version > VERSION:
-        raise ProjectVersionError(
-            f"{file} is project version {version}, newer than this toonmotion "
-            f"{__version__} reads (version {VERSION}); upgrade toonmotion"
-        )
-    raise ProjectVersionError(
-        f"{file} has unknown project version {version!r}; this toonmotion reads versions "
-        f"{', '.join(map(str, READABLE))}"
-    )
 
 
 _NUMBER_LIST = re.compile(r"\[\s+([-+0-9.eE,\s]+?)\s+\]")
 
 
-def _dumps(data):
+def _dumps(data: dict[str, Any]) -> str:
     """Indented JSON with every innermost list of numbers on one line (a point per line)."""
     text = json.dumps(data, indent=1, allow_nan=False)
     return _NUMBER_LIST.sub(lambda m: "[" + " ".join(m.group(1).split()) + "]", text) + "\n"
 
 
-def _referenced_assets(folder):
+def _referenced_assets(folder: Path) -> set[str]:
     file = folder / PROJECT_FILE
     try:
         data = json.loads(file.read_text(encoding="utf-8"))
@@ -249,16 +273,11 @@ def _referenced_assets(folder):
         return set()
 
 
-def _float_or_none(value):
-    return None if value is None else float(value)
-
-
-def _points(array):
+def _points(array: Any) -> list[Any]:
     return np.asarray(array, dtype=float).tolist()
 
 
-def _to_dict(ch, assets):
-    s = ch.settings
+def _to_dict(ch: Character, assets: dict[str, str]) -> dict[str, Any]:
     bone_names = ch.skeleton.bone_names
     return {
         "format": FORMAT,
@@ -268,18 +287,8 @@ def _to_dict(ch, assets):
         "height": ch.size[1],
         "texture": assets["texture"],
         "mask": assets["mask"],
-        # Typed as loading types them, so an int spacing is saved as 4.0 the first time too.
-        "settings": {
-            "spacing": _float_or_none(s.spacing),
-            "vertices": None if s.vertices is None else int(s.vertices),
-            "tolerance": _float_or_none(s.tolerance),
-            "refine_joints": bool(s.refine_joints),
-            "largest_only": bool(s.largest_only),
-            "min_part": float(s.min_part),
-            "prune": float(s.prune),
-            "max_bone": _float_or_none(s.max_bone),
-            "segmentation": str(s.segmentation),
-        },
+        # RigSettings holds its numbers as floats, so an int spacing is saved as 4.0 too.
+        "settings": dataclasses.asdict(ch.settings),
         "silhouette": {
             "tolerance": ch.silhouette.tolerance,
             "parts": [
@@ -322,31 +331,32 @@ def _to_dict(ch, assets):
     }
 
 
-def _edit_to_dict(edit):
+def _edit_to_dict(edit: Correction | DepthEdit) -> dict[str, Any]:
     if isinstance(edit, Correction):
         return {"kind": "correction", "bone": edit.bone, "curve": _points(edit.curve)}
-    out = {"kind": "depth", "value": edit.value}
+    out: dict[str, Any] = {"kind": "depth", "value": edit.value}
     if edit.bone is not None:
         out["bone"] = edit.bone
-    else:
+    elif edit.at is not None:
         out["at"] = list(edit.at)
     return out
 
 
-def _edit_from_model(m, bone_names):
-    if m.kind == "correction":
+def _edit_from_model(m: _CorrectionEdit | _DepthEdit, bone_names: tuple[str, ...]) -> Correction | DepthEdit:
+    edit: Correction | DepthEdit
+    if isinstance(m, _CorrectionEdit):
         edit = Correction(curve=np.array(m.curve, dtype=float), bone=m.bone)
     else:
         try:
             edit = DepthEdit(value=m.value, bone=m.bone, at=m.at)
         except ToonmotionError as error:
             raise ProjectError(f"a depth edit is malformed: {error}") from None
-    if getattr(edit, "bone", None) is not None and edit.bone not in bone_names:
+    if edit.bone is not None and edit.bone not in bone_names:
         raise ProjectError(f"an edit names an unknown bone {edit.bone!r}")
     return edit
 
 
-def _from_model(m, folder):
+def _from_model(m: ProjectFile, folder: Path) -> Character:
     size = (m.width, m.height)
     texture = load_image(folder / m.texture)
     mask = load_image(folder / m.mask)[..., 0] >= 128
@@ -364,7 +374,7 @@ def _from_model(m, folder):
         tolerance=m.silhouette.tolerance,
     )
     curve_skeleton = _curve_skeleton(m.curve_skeleton)
-    skeleton = skeleton_from_dict([j.model_dump() for j in m.skeleton.joints])
+    skeleton = skeleton_from_joints(m.skeleton.joints)
     mesh = _mesh(m.mesh)
     names = skeleton.bone_names
     unknown = set(m.depth) - set(names)
@@ -372,31 +382,16 @@ def _from_model(m, folder):
         raise ProjectError(f"the depth layers name an unknown bone {sorted(unknown)[0]!r}")
     edits = tuple(_edit_from_model(e, names) for e in m.edits)
     undone = tuple(_edit_from_model(e, names) for e in m.undone)
-    if m.version < 3:
-        corrections = tuple(_edit_from_model(_CorrectionEdit(kind="correction", **c.model_dump()), names)
-                            for c in m.binding.corrections)
-        edits = corrections + tuple(DepthEdit(value=m.depth[n], bone=n) for n in names
-                                    if m.depth.get(n, 0) != 0)
-    elif m.binding.corrections:
-        raise ProjectError("a version 3 project keeps its corrections in 'edits', not in the binding")
     binding = _binding(m.binding, mesh, skeleton,
                        tuple(e for e in edits if isinstance(e, Correction)))
-    return Character(
-        texture=texture,
-        mask=mask,
-        silhouette=silhouette,
-        curve_skeleton=curve_skeleton,
-        skeleton=skeleton,
-        mesh=mesh,
-        binding=binding,
-        settings=RigSettings(**m.settings.model_dump()),
-        depth=[m.depth.get(name, 0) for name in skeleton.bone_names],
-        edits=edits,
-        undone=undone,
-    )
+    depth = np.array([m.depth.get(name, 0) for name in skeleton.bone_names], dtype=np.int64)
+    return Character(texture=texture, mask=mask, silhouette=silhouette, curve_skeleton=curve_skeleton,
+                     skeleton=skeleton, mesh=mesh, binding=binding,
+                     settings=RigSettings(**m.settings.model_dump()), depth=depth, edits=edits,
+                     undone=undone)
 
 
-def _curve_skeleton(m):
+def _curve_skeleton(m: _CurveSkeleton) -> CurveSkeleton:
     k = len(m.nodes)
     if any(not (0 <= i < k) for b in m.branches for i in b.nodes):
         raise ProjectError("a curve-skeleton branch names a node that does not exist")
@@ -409,7 +404,7 @@ def _curve_skeleton(m):
     )
 
 
-def _mesh(m):
+def _mesh(m: _Mesh) -> Mesh:
     V = np.array(m.vertices, dtype=float)
     F = np.array(m.triangles, dtype=np.int64)
     boundary = tuple(np.array(loop, dtype=np.int64) for loop in m.boundary)
@@ -425,7 +420,7 @@ def _mesh(m):
     return mesh
 
 
-def _binding(m, mesh, skeleton, corrections):
+def _binding(m: _Binding, mesh: Mesh, skeleton: Skeleton, corrections: tuple[Correction, ...]) -> Binding:
     if tuple(m.bones) != skeleton.bone_names:
         raise ProjectError("the binding's bone list does not match the skeleton's bones")
     bone = np.array(m.vertex_bone, dtype=np.int64)

@@ -5,19 +5,48 @@
 (width and height are optional: the drawing the joints were placed on).
 """
 
+from __future__ import annotations
+
 import json
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import Field, model_validator
+from pydantic_core import PydanticCustomError
 
 from toonmotion.errors import SkeletonError
 from toonmotion.io.atomic import write_text
-from toonmotion.io.json_file import read_json
+from toonmotion.io.schema import Int, Joint, Joints, JsonFormat, Model, explained, read_versioned, validate
 from toonmotion.rig.skeleton import Skeleton
 
 FORMAT = "toonmotion.skeleton"
 VERSION = 1
 
+_Pixels = Annotated[Int, Field(gt=0), explained("width and height must be whole numbers of pixels above 0")]
 
-def skeleton_to_dict(skeleton):
+
+class SkeletonFile(Model):
+    """A skeleton file (see the module docstring)."""
+
+    format: Literal["toonmotion.skeleton"]
+    version: Literal[1]
+    width: _Pixels | None = None
+    height: _Pixels | None = None
+    joints: Joints
+
+    @model_validator(mode="after")
+    def _width_with_height(self) -> SkeletonFile:
+        if (self.width is None) != (self.height is None):
+            raise PydanticCustomError("size", "give the drawing's width and height both, or neither")
+        return self
+
+
+SKELETON = JsonFormat(models={FORMAT: SkeletonFile}, version=VERSION, error=SkeletonError,
+                      title="toonmotion skeleton file", label="skeleton format")
+
+
+def skeleton_to_dict(skeleton: Skeleton) -> list[dict[str, Any]]:
     """The ``joints`` list of a skeleton, as JSON-ready dicts, parents first."""
     return [
         {"name": name, "parent": parent, "position": [x, y]}
@@ -25,48 +54,41 @@ def skeleton_to_dict(skeleton):
     ]
 
 
-def skeleton_from_dict(joints, *, where="skeleton"):
-    """Build a Skeleton from a ``joints`` list as written by :func:`skeleton_to_dict`."""
-    if not isinstance(joints, list):
-        raise SkeletonError(f"{where}: 'joints' must be a list")
-    triples = []
-    for i, joint in enumerate(joints):
-        if not isinstance(joint, dict) or not {"name", "position"} <= joint.keys():
-            raise SkeletonError(f"{where}: joint {i + 1} needs a 'name' and a 'position: [x, y]'")
-        triples.append((joint["name"], joint.get("parent"), joint["position"]))
-    return Skeleton.from_joints(triples)
+def skeleton_from_joints(joints: Sequence[Joint]) -> Skeleton:
+    """Build a Skeleton from validated joints (raises :class:`SkeletonError` for cycles,
+    unknown parents, repeated names)."""
+    return Skeleton.from_joints((joint.name, joint.parent, joint.position) for joint in joints)
 
 
-def load_skeleton_json(path):
+def skeleton_from_dict(joints: Any, *, where: str = "skeleton") -> Skeleton:
+    """Build a Skeleton from a ``joints`` list as written by :func:`skeleton_to_dict`.
+
+    Raises :class:`SkeletonError` naming ``where`` if the list is malformed.
+    """
+    return skeleton_from_joints(validate(Joints, joints, where=where, error=SkeletonError))
+
+
+def load_skeleton_json(path: str | Path) -> tuple[Skeleton, tuple[int, int] | None]:
     """Read a skeleton JSON file; returns ``(skeleton, (width, height) or None)``."""
     path = Path(path)
-    data = read_json(path, SkeletonError)
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise SkeletonError(f"{path} is not a toonmotion skeleton file (format {FORMAT!r})")
-    if data.get("version") != VERSION:
-        raise SkeletonError(
-            f"{path} is skeleton format version {data.get('version')!r}; this toonmotion reads "
-            f"version {VERSION}"
-        )
-    size = None
-    if "width" in data or "height" in data:
-        try:
-            size = (int(data["width"]), int(data["height"]))
-        except (KeyError, TypeError, ValueError):
-            raise SkeletonError(f"{path}: width and height must be whole numbers") from None
-    return skeleton_from_dict(data.get("joints"), where=str(path)), size
+    model = read_versioned(path, SKELETON)
+    size = None if model.width is None or model.height is None else (model.width, model.height)
+    try:
+        return skeleton_from_joints(model.joints), size
+    except SkeletonError as error:
+        raise SkeletonError(f"{path}: {error}") from None
 
 
-def save_skeleton_json(path, skeleton, size=None):
+def save_skeleton_json(path: str | Path, skeleton: Skeleton, size: tuple[int, int] | None = None) -> None:
     """Write a skeleton JSON file atomically."""
-    data = {"format": FORMAT, "version": VERSION}
+    data: dict[str, Any] = {"format": FORMAT, "version": VERSION}
     if size is not None:
         data.update(width=int(size[0]), height=int(size[1]))
     data["joints"] = skeleton_to_dict(skeleton)
     write_text(path, json.dumps(data, indent=1) + "\n")
 
 
-def load_skeleton_file(path, *, image_size=None):
+def load_skeleton_file(path: str | Path, *, image_size: tuple[int, int] | None = None) -> Skeleton:
     """Read a skeleton from a char_cfg ``.yaml``/``.yml`` or a toonmotion ``.json`` file.
 
     Parameters

@@ -3,18 +3,22 @@
 This is the one place the steps are put in order; each step lives in its own module.
 """
 
-import numpy as np
+from __future__ import annotations
 
-from toonmotion.errors import MaskError, SettingsError, SkeletonError
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from toonmotion.errors import MaskError, SkeletonError
 from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
 from toonmotion.rig.binding import decompose
 from toonmotion.rig.character import Character, RigSettings
-from toonmotion.rig.edits import replay
-from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+from toonmotion.rig.edits import Edit, replay
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
 from toonmotion.shape.curve_skeleton import curve_skeleton
 from toonmotion.shape.mesh import choose_spacing, triangulate
 from toonmotion.shape.segment import (
-    METHODS,
     check_mask,
     clean_mask,
     mask_from_alpha,
@@ -31,7 +35,18 @@ _FAR_MIN_PX = 8.0
 _BASE_TOLERANCE = 1.0
 
 
-def rig_drawing(texture, *, mask=None, skeleton=None, settings=None, progress=None):
+Progress = Callable[[str, int, int], None]
+"""A progress callback: ``progress(stage, index, count)``."""
+
+
+def rig_drawing(
+    texture: ArrayLike,
+    *,
+    mask: ArrayLike | None = None,
+    skeleton: Skeleton | None = None,
+    settings: RigSettings | None = None,
+    progress: Progress | None = None,
+) -> Character:
     """Rig a drawing.
 
     Parameters
@@ -52,24 +67,23 @@ def rig_drawing(texture, *, mask=None, skeleton=None, settings=None, progress=No
     Character
     """
     settings = settings or RigSettings()
-    _check_settings(settings)
     report = progress or (lambda stage, index, count: None)
-    texture = _as_rgba(texture)
+    rgba = _as_rgba(texture)
 
     report("mask", 0, len(STAGES))
-    mask = _figure_mask(texture, mask, settings)
+    figure = _figure_mask(rgba, mask, settings)
 
     report("silhouette", 1, len(STAGES))
-    silhouette = trace_silhouette(mask, tolerance=settings.tolerance or _BASE_TOLERANCE)
+    silhouette = trace_silhouette(figure, tolerance=settings.tolerance or _BASE_TOLERANCE)
 
     report("curve skeleton", 2, len(STAGES))
-    cskel = curve_skeleton(mask, prune=settings.prune)
+    cskel = curve_skeleton(figure, prune=settings.prune)
 
     report("skeleton", 3, len(STAGES))
     if skeleton is None:
         skeleton = skeleton_from_curve_skeleton(cskel, max_bone=settings.max_bone)
     else:
-        check_skeleton_on_figure(skeleton, mask)
+        check_skeleton_on_figure(skeleton, figure)
 
     report("mesh", 4, len(STAGES))
     refine = _meeting_joints(skeleton) if settings.refine_joints else None
@@ -78,27 +92,21 @@ def rig_drawing(texture, *, mask=None, skeleton=None, settings=None, progress=No
         target = settings.vertices or 1500
         spacing = choose_spacing(silhouette, target, refine_points=refine)
         if settings.tolerance is None and spacing / 10 > _BASE_TOLERANCE:
-            silhouette = trace_silhouette(mask, tolerance=spacing / 10)
+            silhouette = trace_silhouette(figure, tolerance=spacing / 10)
             spacing = choose_spacing(silhouette, target, refine_points=refine)
     elif settings.tolerance is None and spacing / 10 > _BASE_TOLERANCE:
-        silhouette = trace_silhouette(mask, tolerance=spacing / 10)
+        silhouette = trace_silhouette(figure, tolerance=spacing / 10)
     mesh = triangulate(silhouette, spacing=spacing, refine_points=refine)
 
     report("binding", 5, len(STAGES))
-    binding = decompose(mesh, skeleton, mask)
-    return Character(
-        texture=texture,
-        mask=mask,
-        silhouette=silhouette,
-        curve_skeleton=cskel,
-        skeleton=skeleton,
-        mesh=mesh,
-        binding=binding,
-        settings=settings,
-    )
+    binding = decompose(mesh, skeleton, figure)
+    return Character(texture=rgba, mask=figure, silhouette=silhouette, curve_skeleton=cskel,
+                     skeleton=skeleton, mesh=mesh, binding=binding, settings=settings)
 
 
-def remesh(character, settings, *, progress=None):
+def remesh(
+    character: Character, settings: RigSettings, *, progress: Progress | None = None
+) -> tuple[Character, list[tuple[Edit, str]]]:
     """Rig ``character``'s drawing again with new ``settings`` (a finer or coarser mesh), keeping
     its mask and skeleton, and replay its edits on the new mesh.
 
@@ -113,7 +121,7 @@ def remesh(character, settings, *, progress=None):
     return replay(fresh, character.edits)
 
 
-def check_skeleton_on_figure(skeleton, mask):
+def check_skeleton_on_figure(skeleton: Skeleton, mask: NDArray[np.bool_]) -> None:
     """Raise :class:`SkeletonError` when a joint lies far from the figure."""
     from scipy import ndimage as ndi
 
@@ -133,20 +141,7 @@ def check_skeleton_on_figure(skeleton, mask):
             )
 
 
-def _check_settings(settings):
-    if settings.segmentation not in METHODS:
-        raise SettingsError(
-            f"segmentation must be one of {', '.join(METHODS)}, got {settings.segmentation!r}"
-        )
-    if settings.spacing is not None and settings.vertices is not None:
-        raise SettingsError("give either a spacing or a vertex count, not both")
-    if settings.tolerance is not None and not 0 <= settings.tolerance <= 100:
-        raise SettingsError(f"tolerance must be between 0 and 100 px, got {settings.tolerance}")
-    if not 0 <= settings.min_part < 1:
-        raise SettingsError(f"min_part must be in [0, 1), got {settings.min_part}")
-
-
-def _as_rgba(texture):
+def _as_rgba(texture: ArrayLike) -> NDArray[np.uint8]:
     texture = np.asarray(texture)
     if texture.ndim != 3 or texture.shape[2] not in (3, 4) or texture.dtype != np.uint8:
         raise ValueError("texture must be an (h, w, 3|4) uint8 array")
@@ -156,7 +151,8 @@ def _as_rgba(texture):
     return np.ascontiguousarray(texture)
 
 
-def _figure_mask(texture, mask, settings):
+def _figure_mask(texture: NDArray[np.uint8], mask: ArrayLike | None, settings: RigSettings
+                 ) -> NDArray[np.bool_]:
     if mask is not None:
         mask = np.asarray(mask, dtype=bool)
         if mask.shape != texture.shape[:2]:
