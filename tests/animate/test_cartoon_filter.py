@@ -12,7 +12,8 @@ from toonmotion.animate.cartoon_filter import (
     joint_indices,
 )
 from toonmotion.errors import FilterError
-from toonmotion.rig.pose import bone_angles, descendants, rotate_about
+from toonmotion.rig.kinematics import bone_angles
+from toonmotion.rig.pose import descendants, rotate_about
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.samples import sample_character
 

@@ -14,7 +14,8 @@ from toonmotion.animate.timeline import (
     segment_at,
 )
 from toonmotion.errors import KeyframeError, PoseError
-from toonmotion.rig.pose import Pose, bone_angles, descendants, rest_pose, rotate_about
+from toonmotion.rig.kinematics import bone_angles
+from toonmotion.rig.pose import Pose, descendants, rest_pose, rotate_about
 from toonmotion.samples import sample_character
 
 

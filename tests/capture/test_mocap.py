@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import SHARED_DATA, _require
+from toonmotion.capture.bvh_kinematics import forward_kinematics
 from toonmotion.capture.mocap import (
     STANDARD_JOINTS,
     fit_to_frame,
@@ -12,7 +13,7 @@ from toonmotion.capture.mocap import (
     standard_skeleton_parents,
 )
 from toonmotion.errors import MotionError, SettingsError
-from toonmotion.io.bvh import forward_kinematics, load_bvh
+from toonmotion.io.bvh import load_bvh
 from toonmotion.rig.skeleton import Skeleton
 
 MOCAP_DIR = SHARED_DATA / "mocap"

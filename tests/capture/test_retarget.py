@@ -6,7 +6,8 @@ import pytest
 from toonmotion.animate.motion import Motion
 from toonmotion.capture.retarget import retarget
 from toonmotion.errors import MotionError
-from toonmotion.rig.pose import bone_angles, rotate_about
+from toonmotion.rig.kinematics import bone_angles
+from toonmotion.rig.pose import rotate_about
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.samples import sample_character
 

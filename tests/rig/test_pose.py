@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from toonmotion.errors import PoseError
+from toonmotion.rig.kinematics import bone_angles
 from toonmotion.rig.pose import (
     MIN_POSED_FRACTION,
     Pose,
-    bone_angles,
     check_pose,
     descendants,
     pose_from_joints,
@@ -129,7 +129,7 @@ def test_check_pose_counts_joints(skeleton):
         check_pose(skeleton, Pose(P))
 
 
-# --- descendants, rotate_about, bone_angles ---------------------------------------------------------
+# --- descendants, rotate_about ---------------------------------------------------------------------
 
 
 def test_descendants_are_every_joint_below_parents_first(skeleton):
@@ -187,21 +187,3 @@ def test_rotate_about_scales_the_bones_below(skeleton):
 def test_rotate_about_a_leaf_changes_nothing(skeleton):
     Q = rotate_about(skeleton, skeleton.positions, "left_foot", 1.0)
     np.testing.assert_array_equal(Q, skeleton.positions)
-
-
-def test_bone_angles_are_batched_over_leading_axes(skeleton):
-    rng = np.random.default_rng(5)
-    P = skeleton.positions + rng.normal(0, 20, size=(2, 3, len(skeleton), 2))
-    angle, length = bone_angles(skeleton, P)
-    assert angle.shape == length.shape == (2, 3, len(skeleton.bones))
-    for a in range(2):
-        for b in range(3):
-            one_angle, one_length = bone_angles(skeleton, P[a, b])
-            np.testing.assert_array_equal(angle[a, b], one_angle)
-            np.testing.assert_array_equal(length[a, b], one_length)
-    # Each bone runs from its parent joint to its child: atan2(dy, dx) with y down.
-    d = P[..., skeleton.bones[:, 1], :] - P[..., skeleton.bones[:, 0], :]
-    np.testing.assert_allclose(length * np.cos(angle), d[..., 0], atol=1e-12)
-    np.testing.assert_allclose(length * np.sin(angle), d[..., 1], atol=1e-12)
-    np.testing.assert_allclose(bone_angles(skeleton, skeleton.positions)[1], skeleton.bone_lengths,
-                               rtol=1e-15)

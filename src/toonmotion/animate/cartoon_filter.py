@@ -44,14 +44,20 @@ Choices where the paper leaves them open:
   arbitrary jump in angle there, which the filter then exaggerates.
 """
 
+from __future__ import annotations
+
 import math
 import numbers
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.ndimage import convolve1d
 
 from toonmotion.errors import FilterError
-from toonmotion.rig.pose import bone_angles
+from toonmotion.rig.kinematics import bone_angles, positions_from_bones
+from toonmotion.rig.skeleton import Skeleton
 
 # A filtered bone keeps at least this fraction of its longest length in the clip.
 MIN_LENGTH_FRACTION = 0.1
@@ -80,19 +86,19 @@ class FilterSettings:
     sigma: float = 3.0
     shift: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         # Kept as plain floats.
         object.__setattr__(self, "strength", _number(self.strength, "the filter strength", ">= 0"))
         object.__setattr__(self, "sigma", _number(self.sigma, "the filter width sigma (frames)", "> 0"))
         object.__setattr__(self, "shift", _number(self.shift, "the filter time shift (frames)"))
 
     @property
-    def radius(self):
+    def radius(self) -> int:
         """How many frames either side of its centre the kernel reaches: ``ceil(3 sigma + |shift|)``."""
         return math.ceil(KERNEL_SIGMAS * self.sigma + abs(self.shift))
 
 
-def cartoon_filter(signal, settings):
+def cartoon_filter(signal: ArrayLike, settings: FilterSettings) -> NDArray[np.float64]:
     """Filter a motion signal: ``x*(t) = x(t) - x''(t) (*) A exp(-((t - shift)/sigma)^2)``.
 
     Eq. 5.1, 5.3 and 5.4, with time in frames; see the module notes for the differences, the
@@ -126,7 +132,9 @@ def cartoon_filter(signal, settings):
     return x - _smoothed_second_derivative(x, settings)
 
 
-def filter_trajectories(skeleton, positions, settings, *, joints):
+def filter_trajectories(
+    skeleton: Skeleton, positions: ArrayLike, settings: FilterSettings, *, joints: Sequence[str]
+) -> NDArray[np.float64]:
     """Filter the 2D paths of some joints; everything below a filtered joint follows it.
 
     Every other joint moves by the change of its nearest filtered ancestor-or-self, so the
@@ -162,7 +170,7 @@ def filter_trajectories(skeleton, positions, settings, *, joints):
     return out
 
 
-def filter_bones(skeleton, positions, settings):
+def filter_bones(skeleton: Skeleton, positions: ArrayLike, settings: FilterSettings) -> NDArray[np.float64]:
     """Filter a captured motion the thesis' way (5.2.2, eq. 5.6): roots, bone lengths, bone angles.
 
     Every root joint's path, every bone's length and every bone's angle are filtered as
@@ -184,20 +192,15 @@ def filter_bones(skeleton, positions, settings):
     """
     _check_settings(settings)
     P = _check_positions(skeleton, positions)
-    roots = np.flatnonzero(skeleton.parents < 0)
+    roots = cartoon_filter(P[:, skeleton.parents < 0], settings)
     angle, length = bone_angles(skeleton, P)  # (T, b) each
     angle = cartoon_filter(np.unwrap(angle, axis=0), settings)
     floor = MIN_LENGTH_FRACTION * length.max(axis=0)
     length = np.maximum(cartoon_filter(length, settings), floor)
-    offset = length[..., None] * np.stack([np.cos(angle), np.sin(angle)], axis=-1)  # (T, b, 2)
-    out = np.empty_like(P)
-    out[:, roots] = cartoon_filter(P[:, roots], settings)
-    for row, (parent, child) in enumerate(skeleton.bones):  # child order: parents come first
-        out[:, child] = out[:, parent] + offset[:, row]
-    return out
+    return positions_from_bones(skeleton, roots, angle, length)
 
 
-def joint_indices(skeleton, names, *, what="joints"):
+def joint_indices(skeleton: Skeleton, names: Sequence[str], *, what: str = "joints") -> list[int]:
     """Indices of the joints called ``names`` (a sequence of str), in the given order, unrepeated.
 
     Raises :class:`FilterError` on unknown names, listing the skeleton's joints.
@@ -218,15 +221,12 @@ def joint_indices(skeleton, names, *, what="joints"):
 
 def _smoothed_second_derivative(x, settings):
     """``x'' (*) k`` over frames, ``x''`` zero at the first and last frame and beyond (see notes)."""
-    T, r = len(x), settings.radius
-    d2 = np.zeros((T + 2 * r,) + x.shape[1:])  # frame t sits at row t + r
-    d2[r + 1 : r + T - 1] = x[2:] - 2 * x[1:-1] + x[:-2]
-    offsets = np.arange(-r, r + 1)
+    d2 = np.zeros_like(x)
+    d2[1:-1] = x[2:] - 2 * x[1:-1] + x[:-2]
+    offsets = np.arange(-settings.radius, settings.radius + 1)
     kernel = settings.strength * np.exp(-(((offsets - settings.shift) / settings.sigma) ** 2))
-    out = np.zeros_like(x)
-    for tau, k in zip(offsets, kernel, strict=True):
-        out += k * d2[r - tau : r - tau + T]  # x''(t - tau) k(tau) for every t at once
-    return out
+    # out[t] = sum over tau of kernel(tau) d2[t - tau], d2 zero beyond the clip.
+    return convolve1d(d2, kernel, axis=0, mode="constant", cval=0.0)
 
 
 def _nearest_chosen_ancestor(skeleton, chosen):

@@ -7,14 +7,18 @@ length changes linearly, so a stretched bone stretches smoothly. Easing reshapes
 within each stretch between two keys.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
+from toonmotion.deform.tuning import CurveEdit, DragEdit
 from toonmotion.errors import KeyframeError
 from toonmotion.geometry.angles import lerp_angle
-from toonmotion.rig.pose import Pose, bone_angles, check_pose
-from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+from toonmotion.geometry.arrays import finite_float
+from toonmotion.rig.kinematics import bone_angles, positions_from_bones
+from toonmotion.rig.pose import Pose, check_pose
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
 
 EASES = ("linear", "in-out", "in", "out")
 
@@ -25,11 +29,23 @@ class Keyframe:
 
     ``edits`` are :mod:`toonmotion.deform.tuning` edits (sketch curves, point drags), applied in
     order after the key is deformed; in-betweens carry them along with stage two's displacement.
+
+    Construction raises ``TypeError`` unless ``pose`` is a :class:`Pose` and every edit a
+    ``CurveEdit`` or ``DragEdit``. The frame number is checked where key-frames are gathered,
+    by :class:`Timeline` (and :func:`make_timeline`, whose caller names the file it read).
     """
 
     frame: int
     pose: Pose
-    edits: tuple = ()
+    edits: tuple[CurveEdit | DragEdit, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.pose, Pose):
+            raise TypeError(f"a key-frame's pose must be a Pose, got {type(self.pose).__name__}")
+        edits = tuple(self.edits)
+        if not all(isinstance(edit, CurveEdit | DragEdit) for edit in edits):
+            raise TypeError("a key-frame's edits must be CurveEdit or DragEdit objects")
+        object.__setattr__(self, "edits", edits)
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,24 +60,47 @@ class Timeline:
         Frames per second.
     ease : str
         One of :data:`EASES`: how the parameter runs between two keys.
+
+    Construction raises :class:`KeyframeError` unless that holds and there is at least one
+    key; :func:`make_timeline` sorts and checks key-frames against a skeleton first.
     """
 
-    keys: tuple
+    keys: tuple[Keyframe, ...]
     fps: float
     ease: str = "linear"
 
-    @property
-    def frame_count(self):
-        """Frames from 0 to the last key, inclusive."""
-        return self.keys[-1].frame + 1
+    def __post_init__(self) -> None:
+        keys = tuple(self.keys)
+        if not all(isinstance(key, Keyframe) for key in keys):
+            raise TypeError("a timeline's keys must be Keyframe objects")
+        if not keys:
+            raise KeyframeError("there are no key-frames; give at least one key pose")
+        for key in keys:
+            if isinstance(key.frame, bool) or not isinstance(key.frame, int | np.integer) or key.frame < 0:
+                raise KeyframeError(f"key-frame numbers must be whole numbers >= 0, got {key.frame!r}")
+        frames = [int(key.frame) for key in keys]
+        if any(b <= a for a, b in zip(frames, frames[1:], strict=False)):
+            raise KeyframeError(f"a timeline's keys must be in frame order, each frame once; got {frames}")
+        if self.ease not in EASES:
+            raise KeyframeError(f"ease must be one of {', '.join(EASES)}, got {self.ease!r}")
+        object.__setattr__(self, "keys", keys)
+        object.__setattr__(self, "fps", finite_float(self.fps, name="fps", error=KeyframeError, minimum=0,
+                                                     strict=True))
 
     @property
-    def duration(self):
+    def frame_count(self) -> int:
+        """Frames from 0 to the last key, inclusive."""
+        return int(self.keys[-1].frame) + 1
+
+    @property
+    def duration(self) -> float:
         """Seconds, from frame 0 to the last key."""
         return (self.frame_count - 1) / self.fps
 
 
-def make_timeline(skeleton, keys, *, fps=24.0, ease="linear"):
+def make_timeline(
+    skeleton: Skeleton, keys: Iterable[Keyframe], *, fps: float = 24.0, ease: str = "linear"
+) -> Timeline:
     """Check and sort key-frames; returns a :class:`Timeline`.
 
     Parameters
@@ -100,7 +139,7 @@ def make_timeline(skeleton, keys, *, fps=24.0, ease="linear"):
     return Timeline(keys=keys, fps=fps, ease=ease)
 
 
-def segment_at(timeline, frame):
+def segment_at(timeline: Timeline, frame: int) -> tuple[int, float]:
     """``(i, t)``: frame lies between keys ``i`` and ``i + 1`` at eased parameter ``t`` in [0, 1).
 
     Frames before the first key or after the last hold that key (``t = 0``).
@@ -115,7 +154,7 @@ def segment_at(timeline, frame):
     return i, ease(t, timeline.ease)
 
 
-def ease(t, kind):
+def ease(t: float, kind: str) -> float:
     """The eased parameter for ``t`` in [0, 1].
 
     >>> ease(0.5, "in-out"), ease(0.25, "linear")
@@ -130,7 +169,7 @@ def ease(t, kind):
     return t
 
 
-def interpolate_pose(skeleton, a, b, t):
+def interpolate_pose(skeleton: Skeleton, a: Pose, b: Pose, t: float) -> Pose:
     """The pose a fraction ``t`` of the way from pose ``a`` to pose ``b``.
 
     Roots move linearly; each bone turns the short way (which way an exact half turn goes
@@ -146,24 +185,15 @@ def interpolate_pose(skeleton, a, b, t):
     angle_b, length_b = bone_angles(skeleton, pb)
     angle = lerp_angle(angle_a, angle_b, t)
     length = (1 - t) * length_a + t * length_b
-    out = (1 - t) * pa + t * pb  # right for roots and for direction-less bones
-    bones = skeleton.bones
+    roots = (1 - t) * pa + t * pb  # only its root rows are used
+    parent, child = skeleton.bones.T
+    offsets = (1 - t) * (pa[child] - pa[parent]) + t * (pb[child] - pb[parent])
     directed = (length_a > MIN_BONE_LENGTH) & (length_b > MIN_BONE_LENGTH)
-    row_of_child = {int(c): r for r, c in enumerate(bones[:, 1])}
-    for joint in range(len(skeleton)):  # parents come first
-        parent = skeleton.parents[joint]
-        if parent < 0:
-            continue
-        r = row_of_child[joint]
-        if directed[r]:
-            offset = length[r] * np.array([np.cos(angle[r]), np.sin(angle[r])])
-        else:
-            offset = (1 - t) * (pa[joint] - pa[parent]) + t * (pb[joint] - pb[parent])
-        out[joint] = out[parent] + offset
-    return Pose(positions=out)
+    positions = positions_from_bones(skeleton, roots, angle, length, offsets=offsets, given=~directed)
+    return Pose(positions=positions)
 
 
-def pose_at(skeleton, timeline, frame):
+def pose_at(skeleton: Skeleton, timeline: Timeline, frame: int) -> Pose:
     """The (interpolated) pose at ``frame``."""
     i, t = segment_at(timeline, frame)
     keys = timeline.keys

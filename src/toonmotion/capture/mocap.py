@@ -1,6 +1,7 @@
 """From 3D motion capture to 2D joints: pick a standard skeleton, project it, fit it to a frame.
 
-No file IO here. With a BVH clip (:mod:`toonmotion.io.bvh`)::
+No file IO here. With a BVH clip (read by ``toonmotion.io.bvh.load_bvh``, forward kinematics in
+:mod:`toonmotion.capture.bvh_kinematics`)::
 
     clip = load_bvh(path)
     picks = pick_joints(clip.names, clip.parents)            # standard name -> joint index
@@ -11,9 +12,14 @@ Frames: 3D positions are in the mocap's world frame (its units, its up axis, rig
 BVH is); 2D points are ``(x, y)`` with x right and y DOWN, like image pixels.
 """
 
+from __future__ import annotations
+
 import re
+from collections.abc import Mapping, Sequence
+from typing import Literal, overload
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import MotionError, SettingsError
 
@@ -51,7 +57,7 @@ _PREFIX = re.compile(r"^(mixamorig\d*_|bip\d+[\s_]*|character\d*_)", re.IGNORECA
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
-def standard_skeleton_parents():
+def standard_skeleton_parents() -> dict[str, str | None]:
     """Each of the :data:`STANDARD_JOINTS` and its parent's name (None for ``hips``).
 
     Examples
@@ -63,7 +69,7 @@ def standard_skeleton_parents():
     return dict(_PARENTS)
 
 
-def pick_joints(names, parents):
+def pick_joints(names: Sequence[str], parents: ArrayLike) -> dict[str, int]:
     """Find the 16 :data:`STANDARD_JOINTS` among a mocap skeleton's joints, by name.
 
     Names are matched case-insensitively, with rig prefixes (``mixamorig:``, ``Bip01 ``) and
@@ -141,7 +147,28 @@ def pick_joints(names, parents):
     return {n: int(picks[n]) for n in STANDARD_JOINTS}
 
 
-def project_orthographic(positions, *, joints=None, up=None, facing=None, with_depth=False):
+@overload
+def project_orthographic(
+    positions: ArrayLike, *, joints: Mapping[str, int] | None = None, up: ArrayLike | None = None,
+    facing: ArrayLike | None = None, with_depth: Literal[False] = False,
+) -> NDArray[np.float64]: ...
+
+
+@overload
+def project_orthographic(
+    positions: ArrayLike, *, joints: Mapping[str, int] | None = None, up: ArrayLike | None = None,
+    facing: ArrayLike | None = None, with_depth: Literal[True],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+
+
+def project_orthographic(
+    positions: ArrayLike,
+    *,
+    joints: Mapping[str, int] | None = None,
+    up: ArrayLike | None = None,
+    facing: ArrayLike | None = None,
+    with_depth: bool = False,
+) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Look at 3D joints from in front of the character, orthographically.
 
     The camera looks at the character's chest from the side it faces, so nothing is
@@ -216,7 +243,9 @@ def project_orthographic(positions, *, joints=None, up=None, facing=None, with_d
     return points, -(P @ toward_camera)
 
 
-def fit_to_frame(points2d, size=(640, 480), *, margin=0.1):
+def fit_to_frame(
+    points2d: ArrayLike, size: Sequence[float] = (640, 480), *, margin: float = 0.1
+) -> NDArray[np.float64]:
     """Scale and move 2D points so that the whole clip fits inside a frame.
 
     One uniform scale (aspect kept) and one translation for every frame, so the motion itself

@@ -24,17 +24,22 @@ Choices where the thesis leaves them open:
   jumps proportionally lower. A root with no captured joint stays put.
 """
 
+from __future__ import annotations
+
+from collections.abc import Mapping
+
 import numpy as np
 
 from toonmotion.animate.motion import Motion
 from toonmotion.errors import MotionError
-from toonmotion.rig.pose import bone_angles
+from toonmotion.rig.kinematics import bone_angles, positions_from_bones
+from toonmotion.rig.skeleton import Skeleton
 
 # Captured bones shorter than this (px) at frame 0 keep the target's length.
 _MIN_LENGTH = 1e-6
 
 
-def retarget(motion, skeleton, *, joint_map=None):
+def retarget(motion: Motion, skeleton: Skeleton, *, joint_map: Mapping[str, str] | None = None) -> Motion:
     """Replay ``motion`` on ``skeleton`` (the target's rest pose at frame 0).
 
     Parameters
@@ -122,22 +127,14 @@ def _size_ratio(rest_length, source_length, followed):
 
 def _pose_frames(target, S, match, turn, stretch, scale, rest_angle, rest_length, followed):
     T, k = len(S), len(target)
-    out = np.empty((T, k, 2))
-    bone_of_child = {int(c): r for r, (p, c) in enumerate(target.bones)}
+    roots = np.empty((T, k, 2))  # only the root rows are filled and used
+    for j in np.flatnonzero(target.parents < 0):
+        moved = (S[:, match[j]] - S[0, match[j]]) * scale if j in match else 0.0
+        roots[:, j] = target.positions[j] + moved
+    angle = rest_angle + turn  # (T, b); unmatched bones are set below
     total_turn = np.zeros((T, k))  # how far each joint's bone frame has turned, for unmatched children
-    for j in range(k):  # parents come first
-        parent = target.parents[j]
-        if parent < 0:
-            moved = (S[:, match[j]] - S[0, match[j]]) * scale if j in match else 0.0
-            out[:, j] = target.positions[j] + moved
-            continue
-        b = bone_of_child[j]
-        if followed[b] is not None:
-            a = rest_angle[b] + turn[:, b]
-            length = rest_length[b] * stretch[:, b]
-        else:
-            a = rest_angle[b] + total_turn[:, parent]
-            length = np.full(T, rest_length[b])
-        total_turn[:, j] = a - rest_angle[b]
-        out[:, j] = out[:, parent] + length[:, None] * np.stack([np.cos(a), np.sin(a)], axis=1)
-    return out
+    for b, (parent, child) in enumerate(target.bones):  # parents come first
+        if followed[b] is None:
+            angle[:, b] = rest_angle[b] + total_turn[:, parent]
+        total_turn[:, child] = angle[:, b] - rest_angle[b]
+    return positions_from_bones(target, roots, angle, rest_length * stretch)

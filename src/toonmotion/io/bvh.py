@@ -1,28 +1,25 @@
 """Biovision ``.bvh`` motion capture files: a joint hierarchy and one row of channels per frame.
 
-Glossary: ``J`` joints (End Sites included), ``T`` frames, ``C`` channels in all. World
-coordinates are the file's own: its units (often inches or centimetres) and its up axis
-(usually +Y, sometimes +Z); nothing is converted.
+:func:`load_bvh` only reads: it returns a :class:`~toonmotion.capture.bvh_kinematics.BvhClip`
+of plain arrays, and :func:`toonmotion.capture.bvh_kinematics.forward_kinematics` turns that
+into joint positions (the module states what the channels mean).
 
-Conventions, as BVH means them:
+Reading conventions:
 
-- Angles are degrees. A joint with channels ``Zrotation Yrotation Xrotation`` has the local
-  rotation ``R = Rz @ Ry @ Rx`` (intrinsic, composed in the order listed) acting on column
-  vectors; any order of the three is allowed, per joint.
-- A joint sits at its OFFSET in its parent's frame. Position channels, on any joint, replace
-  the matching OFFSET component, so a root's ``Xposition Yposition Zposition`` are where it is.
+- Channel names are matched case-insensitively; any order of the six is allowed, per joint.
 - ``End Site`` blocks are joints with no channels, named ``<parent>_end``. A joint with no
   OFFSET line sits at its parent.
-
-The loader only reads; :func:`forward_kinematics` turns a clip into joint positions.
 """
 
+from __future__ import annotations
+
+import os
 import re
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from toonmotion.capture.bvh_kinematics import BvhClip
 from toonmotion.errors import MotionError
 
 AXES = "XYZ"
@@ -32,69 +29,7 @@ _FRAMES = re.compile(r"frames\s*:\s*(.*)", re.IGNORECASE)
 _FRAME_TIME = re.compile(r"frame\s*time\s*:\s*(.*)", re.IGNORECASE)
 
 
-@dataclass(frozen=True, eq=False)
-class BvhClip:
-    """A BVH file's contents, as plain arrays.
-
-    Attributes
-    ----------
-    names : tuple of str
-        Joint names in file order, parents first; End Sites are named ``<parent>_end``.
-    parents : (J,) int
-        Index of each joint's parent, -1 for a root (a file may have several ROOTs).
-    offsets : (J, 3) float
-        Rest offset of each joint from its parent, in the parent's frame (a root's own OFFSET).
-    channels : tuple of tuple of str
-        Each joint's channel names in file order, e.g. ``("Zrotation", "Yrotation",
-        "Xrotation")``; ``()`` for End Sites.
-    motion : (T, C) float
-        The MOTION section: one row per frame, the joints' channels in file order.
-    frame_time : float
-        Seconds per frame.
-    """
-
-    names: tuple
-    parents: np.ndarray
-    offsets: np.ndarray
-    channels: tuple
-    motion: np.ndarray
-    frame_time: float
-
-    def __post_init__(self):
-        channels = tuple(tuple(c) for c in self.channels)
-        arrays = {
-            "parents": np.array(self.parents, dtype=np.int64),
-            "offsets": np.array(self.offsets, dtype=float),
-            "motion": np.array(self.motion, dtype=float),
-        }
-        J, width = len(self.names), sum(len(c) for c in channels)
-        if arrays["parents"].shape != (J,) or arrays["offsets"].shape != (J, 3) or len(channels) != J:
-            raise MotionError(f"a BVH clip of {J} joints needs {J} parents, offsets and channel lists")
-        if np.any((arrays["parents"] < -1) | (arrays["parents"] >= np.arange(J))):
-            raise MotionError("a BVH clip lists parents first: each parent index must be -1 or smaller")
-        if arrays["motion"].ndim != 2 or arrays["motion"].shape[1] != width:
-            raise MotionError(
-                f"a BVH clip with {width} channels needs motion of shape (frames, {width}), "
-                f"got {arrays['motion'].shape}"
-            )
-        object.__setattr__(self, "names", tuple(self.names))
-        object.__setattr__(self, "channels", channels)
-        for field, array in arrays.items():
-            array.setflags(write=False)
-            object.__setattr__(self, field, array)
-        object.__setattr__(self, "frame_time", float(self.frame_time))
-
-    @property
-    def fps(self):
-        """Frames per second, ``1 / frame_time``."""
-        return 1.0 / self.frame_time
-
-    @property
-    def frame_count(self):
-        return len(self.motion)
-
-
-def load_bvh(path):
+def load_bvh(path: str | os.PathLike[str]) -> BvhClip:
     """Read a ``.bvh`` file.
 
     Tokens may be separated by any whitespace (tabs, CRLF line ends); channel orders may
@@ -124,83 +59,6 @@ def load_bvh(path):
     except UnicodeDecodeError:
         raise MotionError(f"{path} is not a BVH file: it is not text") from None
     return _parse(text.splitlines(), str(path))
-
-
-def forward_kinematics(clip):
-    """World positions of every joint at every frame.
-
-    Vectorised over frames: one pass over the joints, parents first, each step a batch of
-    ``(T, 3, 3)`` matrix products.
-
-    Parameters
-    ----------
-    clip : BvhClip
-
-    Returns
-    -------
-    (T, J, 3) float
-        Joint positions in the file's world frame and units.
-
-    Examples
-    --------
-    A root turned 90 degrees about Z carries its child's offset from +X to +Y:
-
-    >>> clip = BvhClip(names=("root", "root_end"), parents=np.array([-1, 0]),
-    ...                offsets=np.array([[0.0, 0, 0], [1, 0, 0]]),
-    ...                channels=(("Zrotation",), ()), motion=np.array([[90.0]]), frame_time=0.04)
-    >>> forward_kinematics(clip).round(12)[0].tolist()
-    [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
-    """
-    T = clip.frame_count
-    starts = np.cumsum([0] + [len(c) for c in clip.channels])
-    world_R, world_p = [], []
-    for j, channels in enumerate(clip.channels):
-        values = clip.motion[:, starts[j]:starts[j + 1]]
-        local_R, local_t = _local_transform(channels, values, clip.offsets[j], T)
-        p = clip.parents[j]
-        if p < 0:
-            R = np.broadcast_to(np.eye(3), (T, 3, 3)) if local_R is None else local_R
-            position = np.broadcast_to(local_t, (T, 3))
-        else:
-            R = world_R[p] if local_R is None else world_R[p] @ local_R
-            # (T,3,3) @ (3,) or (T,3,3) @ (T,3,1): the offset turned into the world frame.
-            turned = world_R[p] @ local_t if local_t.ndim == 1 else (world_R[p] @ local_t[..., None])[..., 0]
-            position = world_p[p] + turned
-        world_R.append(R)
-        world_p.append(position)
-    if not world_p:
-        return np.zeros((T, 0, 3))
-    return np.stack(world_p, axis=1)
-
-
-def _local_transform(channels, values, offset, T):
-    """A joint's local rotation ``(T, 3, 3)`` (None if it has none) and translation ``(3,)`` or
-    ``(T, 3)``, from its channel names and ``(T, n)`` channel values."""
-    R = None
-    t = offset
-    for k, name in enumerate(channels):
-        axis = AXES.index(name[0])
-        if name.endswith("position"):
-            if t.ndim == 1:
-                t = np.repeat(offset[None], T, axis=0)
-            t[:, axis] = values[:, k]
-        else:
-            step = _axis_rotation(axis, np.radians(values[:, k]))
-            R = step if R is None else R @ step
-    return R, t
-
-
-def _axis_rotation(axis, angle):
-    """``(T, 3, 3)`` rotations by ``angle`` (T,) radians about ``axis`` (0, 1, 2 = X, Y, Z)."""
-    c, s = np.cos(angle), np.sin(angle)
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    R = np.zeros((len(angle), 3, 3))
-    R[:, axis, axis] = 1.0
-    R[:, i, i] = c
-    R[:, j, j] = c
-    R[:, i, j] = -s
-    R[:, j, i] = s
-    return R
 
 
 # -- parsing ---------------------------------------------------------------------------------

@@ -5,12 +5,17 @@ length is non-zero must keep a length of at least :data:`MIN_POSED_FRACTION` of 
 because the needle model divides by the bone's stretch.
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import PoseError
-from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+from toonmotion.geometry.arrays import finite_point, frozen_array
+from toonmotion.rig.kinematics import rotation, transform
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
 
 # A posed bone may squash to 2% of its rest length, no further.
 MIN_POSED_FRACTION = 0.02
@@ -24,22 +29,25 @@ class Pose:
     ----------
     positions : (k, 2) float
         (x, y) pixels, y down, one row per joint of the skeleton.
+
+    Construction copies the positions (read-only; the caller's array stays writeable) and
+    raises :class:`PoseError` unless they are ``(k, 2)`` numbers. Whether they fit a skeleton
+    and are finite is :func:`check_pose`'s business, which names the joint.
     """
 
-    positions: np.ndarray
+    positions: NDArray[np.float64]
 
-    def __post_init__(self):
-        positions = np.array(self.positions, dtype=float)  # a copy: the caller's array stays writable
-        positions.setflags(write=False)
-        object.__setattr__(self, "positions", positions)
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "positions", frozen_array(self.positions, dtype=np.float64, shape=(None, 2),
+                                                           name="a pose's positions", error=PoseError))
 
 
-def rest_pose(skeleton):
+def rest_pose(skeleton: Skeleton) -> Pose:
     """The skeleton's own rest positions as a pose."""
     return Pose(positions=np.array(skeleton.positions, dtype=float))
 
 
-def pose_from_joints(skeleton, joints, *, where="pose"):
+def pose_from_joints(skeleton: Skeleton, joints: Mapping[str, Any], *, where: str = "pose") -> Pose:
     """A pose from a mapping of joint name to ``(x, y)``.
 
     Every joint of the skeleton must be given, and no other; positions must be finite.
@@ -63,11 +71,12 @@ def pose_from_joints(skeleton, joints, *, where="pose"):
     if missing:
         raise PoseError(f"{where}: joint {missing[0]!r} has no position; give every joint [x, y]"
                         + (f" ({len(missing)} are missing)" if len(missing) > 1 else ""))
-    positions = np.array([_point(joints[name], name, where) for name in skeleton.names])
+    positions = np.array([finite_point(joints[name], name=f"{where}: joint {name!r}", error=PoseError)
+                          for name in skeleton.names])
     return check_pose(skeleton, Pose(positions=positions), where=where)
 
 
-def pose_to_joints(skeleton, pose):
+def pose_to_joints(skeleton: Skeleton, pose: Pose) -> dict[str, list[float]]:
     """The pose as a name -> ``[x, y]`` dict in joint order (for JSON)."""
     return {
         name: [float(x), float(y)]
@@ -75,7 +84,7 @@ def pose_to_joints(skeleton, pose):
     }
 
 
-def check_pose(skeleton, pose, *, where="pose"):
+def check_pose(skeleton: Skeleton, pose: Pose, *, where: str = "pose") -> Pose:
     """Raise :class:`PoseError` unless ``pose`` fits ``skeleton``; returns the pose."""
     positions = pose.positions
     if positions.shape != (len(skeleton), 2):
@@ -99,27 +108,7 @@ def check_pose(skeleton, pose, *, where="pose"):
     return pose
 
 
-def bone_angles(skeleton, positions):
-    """Angle (radians, ``atan2(dy, dx)``) and length of every bone, ``(..., b)`` each.
-
-    ``positions`` is ``(..., k, 2)``; leading axes are batched.
-    """
-    bones = skeleton.bones
-    d = positions[..., bones[:, 1], :] - positions[..., bones[:, 0], :]
-    return np.arctan2(d[..., 1], d[..., 0]), np.hypot(d[..., 0], d[..., 1])
-
-
-def _point(value, name, where):
-    try:
-        x, y = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise PoseError(f"{where}: joint {name!r} has position {value!r}; give two numbers [x, y]") from None
-    if not (np.isfinite(x) and np.isfinite(y)):
-        raise PoseError(f"{where}: joint {name!r} has a non-finite position ({x}, {y})")
-    return x, y
-
-
-def descendants(skeleton, joint):
+def descendants(skeleton: Skeleton, joint: int) -> NDArray[np.intp]:
     """Indices of every joint below ``joint`` (an index), in parents-first order."""
     below = np.zeros(len(skeleton), dtype=bool)
     for i in range(joint + 1, len(skeleton)):
@@ -128,7 +117,9 @@ def descendants(skeleton, joint):
     return np.flatnonzero(below)
 
 
-def rotate_about(skeleton, positions, joint, angle, *, scale=1.0):
+def rotate_about(
+    skeleton: Skeleton, positions: ArrayLike, joint: str, angle: float, *, scale: float = 1.0
+) -> NDArray[np.float64]:
     """Turn everything below ``joint`` (a name) about it by ``angle`` radians, scaled by ``scale``.
 
     Bends an elbow (rotate about the elbow), raises an arm (about the shoulder). Angles are
@@ -144,7 +135,5 @@ def rotate_about(skeleton, positions, joint, angle, *, scale=1.0):
     j = skeleton.index(joint)
     out = np.array(positions, dtype=float)
     below = descendants(skeleton, j)
-    c, s = np.cos(angle) * scale, np.sin(angle) * scale
-    rel = out[below] - out[j]
-    out[below] = out[j] + np.stack([c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1]], axis=1)
+    out[below] = transform(out[below], rotation(angle) * scale, about=out[j])
     return out
