@@ -244,12 +244,12 @@ def test_tracking_can_start_and_stop_inside_the_sequence():
     frames, truth = _translation()
     calls = []
     tracking = track(frames, _setup([("dot", None)], truth[0]), start=5, stop=30, initial=truth[5, :],
-                     progress=lambda frame, count: calls.append((frame, count)))
+                     progress=lambda stage, index, count: calls.append((stage, index, count)))
     assert tracking.tracked.tolist() == [5 <= t < 30 for t in range(40)]
     assert np.isnan(tracking.positions[:5]).all() and np.isnan(tracking.positions[30:]).all()
     assert np.all(tracking.confidence[:5] == 0)
     assert _errors(tracking, truth)[5:30].max() <= 0.5
-    assert calls == [(t, 30) for t in range(5, 30)]
+    assert calls == [("tracking", t, 30) for t in range(5, 30)]
 
 
 def test_the_tracking_is_read_only_and_checks_its_shapes():
@@ -286,9 +286,12 @@ def test_retrack_tracks_as_far_as_the_tracking_went():
     frames, truth = _translation()
     setup = _setup([("dot", None)], truth[0])
     tracking = track(frames, setup, stop=25)
-    again = retrack(tracking, frames, setup, 12, {})
+    calls = []
+    again = retrack(tracking, frames, setup, 12, {},
+                    progress=lambda stage, index, count: calls.append((stage, index, count)))
     assert again.tracked.tolist() == tracking.tracked.tolist()
     assert _errors(again, truth)[:25].max() <= 0.5
+    assert calls == [("tracking", t, 25) for t in range(12, 25)]
 
 
 # --- bad input --------------------------------------------------------------------------------------

@@ -217,3 +217,25 @@ def test_points_in_polygon_with_separate_outer_loops():
     loops = [_square(0, 0, 2, 2), _square(5, 0, 7, 2)]
     points = np.array([[1, 1], [6, 1], [3.5, 1]], float)
     assert points_in_polygon(points, loops).tolist() == [True, True, False]
+
+
+def test_points_in_polygon_edges_and_corners_are_outside():
+    square = _square(0, 0, 2, 2)
+    points = np.array([[0, 1], [2, 1], [1, 0], [1, 2], [0, 0], [2, 2], [1, 1]], float)
+    assert points_in_polygon(points, [square]).tolist() == [False] * 6 + [True]
+
+
+def test_points_in_polygon_is_even_odd_for_a_loop_that_crosses_itself():
+    """A loop wound twice round a region leaves it outside; a bow tie holds both wings."""
+    twice = np.concatenate([_square(0, 0, 4, 4), _square(1, 1, 3, 3)])  # in, then round again
+    assert points_in_polygon(np.array([[2, 2], [0.5, 2]], float), [twice]).tolist() == [False, True]
+    bow_tie = np.array([[0, 0], [4, 4], [4, 0], [0, 4]], float)
+    points = np.array([[0.5, 2], [3.5, 2], [2, 0.5], [2, 3.5]], float)
+    assert points_in_polygon(points, [bow_tie]).tolist() == [True, True, False, False]
+
+
+def test_points_in_polygon_loops_without_area_hold_nothing():
+    points = np.array([[0.5, 0.5], [1, 1]], float)
+    segment = np.array([[0, 0], [2, 2]], float)
+    assert points_in_polygon(points, [segment, segment[:1]]).tolist() == [False, False]
+    assert points_in_polygon(np.zeros((0, 2)), [_square(0, 0, 1, 1)]).shape == (0,)

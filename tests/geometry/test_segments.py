@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import shapely
 
-from toonmotion.geometry.segments import closest_points_on_segments
+from toonmotion.geometry.segments import arc_lengths, closest_points_on_segments, resample_by_arc_length
 
 
 def test_closest_points_shapes():
@@ -78,3 +78,33 @@ def test_few_points(n_points):
     )
     assert closest.shape == (n_points, 2, 2)
     assert np.all(distance == 1.0)
+
+
+# arc length and resampling -----------------------------------------------------------------------
+
+
+def test_arc_lengths_sum_the_steps_and_start_at_zero():
+    P = np.array([[0, 0], [3, 4], [3, 4], [0, 0]], float)
+    assert arc_lengths(P).tolist() == [0.0, 5.0, 5.0, 10.0]
+    assert arc_lengths(P[:1]).tolist() == [0.0]
+
+
+def test_resampling_evenly_spaces_points_along_the_polyline():
+    rng = np.random.default_rng(3)
+    P = np.cumsum(rng.normal(0, 5, (30, 2)), axis=0)
+    total = arc_lengths(P)[-1]
+    Q = resample_by_arc_length(P, np.linspace(0, total, 200))
+    np.testing.assert_allclose(Q[[0, -1]], P[[0, -1]], atol=1e-9)
+    # Every resampled point lies on the polyline, and consecutive ones are at most one step apart.
+    _, distance = closest_points_on_segments(Q, P[:-1], P[1:])
+    assert distance.min(axis=1).max() < 1e-9
+    assert np.linalg.norm(np.diff(Q, axis=0), axis=1).max() <= total / 199 + 1e-9
+    # The vertices themselves come back at their own arc lengths.
+    np.testing.assert_allclose(resample_by_arc_length(P, arc_lengths(P)), P, atol=1e-9)
+
+
+def test_resampling_by_fraction_clamps_to_the_ends():
+    P = np.array([[0, 0], [4, 0], [4, 2]], float)
+    out = resample_by_arc_length(P, [-0.5, 0.0, 0.25, 1.0, 2.0], fraction=True)
+    assert out.tolist() == [[0, 0], [0, 0], [1.5, 0], [4, 2], [4, 2]]
+    assert resample_by_arc_length(P, [-3.0, 10.0]).tolist() == [[0, 0], [4, 2]]

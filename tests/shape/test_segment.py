@@ -77,6 +77,21 @@ def test_flat_background_is_recovered_and_auto_picks_flat(monkeypatch, backgroun
     assert _iou(auto, ndi.binary_fill_holes(truth)) >= 0.99
 
 
+def test_holes_are_filled_with_background_4_connected():
+    """A gap in an outline that is only diagonal does not let the outside in; an open side does."""
+    ring = np.zeros((12, 24), bool)
+    ring[2:10, 2:10] = True
+    ring[3:9, 3:9] = False
+    ring[2, 2] = False  # a corner gap: the inside meets it only diagonally
+    cup = np.zeros((12, 24), bool)
+    cup[2:10, 13:21] = True
+    cup[2:9, 14:20] = False  # open at the top
+    found = segment_foreground(_paint(ring | cup, (255, 255, 255), (30, 110, 200)), method="flat")
+    expected = ring.copy()
+    expected[3:9, 3:9] = True
+    np.testing.assert_array_equal(found, expected | cup)
+
+
 # Paper backgrounds -----------------------------------------------------------------------
 
 

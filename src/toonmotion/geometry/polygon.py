@@ -5,10 +5,16 @@ screen with y pointing down. :func:`signed_area` is positive for such loops, so 
 outlines have positive area and holes negative.
 """
 
+from __future__ import annotations
+
+from collections.abc import Sequence
+
 import numpy as np
+import shapely
+from numpy.typing import ArrayLike, NDArray
 
 
-def signed_area(P):
+def signed_area(P: ArrayLike) -> float:
     """Signed area of a closed polygon, positive when counter-clockwise on screen.
 
     Parameters
@@ -28,7 +34,7 @@ def signed_area(P):
     return -0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
-def triangle_areas(V, F):
+def triangle_areas(V: NDArray[np.float64], F: NDArray[np.int_]) -> NDArray[np.float64]:
     """Signed areas of triangles, positive when counter-clockwise on screen.
 
     Parameters
@@ -47,7 +53,7 @@ def triangle_areas(V, F):
     return -0.5 * (ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0])
 
 
-def triangle_min_angles(V, F):
+def triangle_min_angles(V: NDArray[np.float64], F: NDArray[np.int_]) -> NDArray[np.float64]:
     """Smallest interior angle of each triangle, in radians, ``(m,)``."""
     P = V[F]  # (m, 3, 2)
     e = np.roll(P, -1, axis=1) - P  # edge i goes from corner i to corner i + 1
@@ -58,7 +64,7 @@ def triangle_min_angles(V, F):
     return np.arccos(np.clip(cos, -1.0, 1.0)).min(axis=1)
 
 
-def subdivide_loop(P, max_edge):
+def subdivide_loop(P: ArrayLike, max_edge: float) -> NDArray[np.float64]:
     """Insert evenly spaced points on every edge of a closed loop longer than ``max_edge``.
 
     The loop's own vertices are kept, so the result traces exactly the same polygon.
@@ -88,42 +94,42 @@ def subdivide_loop(P, max_edge):
     return P[edge] + t[:, None] * (Q[edge] - P[edge])
 
 
-def loop_edges(loops):
+def loop_edges(loops: Sequence[NDArray[np.int_]]) -> NDArray[np.int_]:
     """Directed edges ``(k, 2)`` of closed loops given as index arrays."""
     if not loops:
         return np.zeros((0, 2), dtype=np.int64)
     return np.concatenate([np.stack([L, np.roll(L, -1)], axis=1) for L in loops])
 
 
-def points_in_polygon(points, loops):
+def points_in_polygon(points: ArrayLike, loops: Sequence[ArrayLike]) -> NDArray[np.bool_]:
     """Even-odd test of points against a polygon made of closed loops (outers and holes).
 
     Parameters
     ----------
     points : (n, 2) float
     loops : sequence of (k, 2) float
-        Closed loops, not repeating their first vertex. Orientation does not matter.
+        Closed loops, not repeating their first vertex. Orientation does not matter, nor do
+        crossings: a point is inside when an odd number of loops (or a self-crossing loop an odd
+        number of times) surround it.
 
     Returns
     -------
     (n,) bool
-        True for points strictly inside; points on an edge may go either way.
+        True for points strictly inside; points on an edge are outside.
 
     Examples
     --------
     >>> square = np.array([[0, 0], [0, 2], [2, 2], [2, 0]], float)
-    >>> points_in_polygon(np.array([[1, 1], [3, 1]], float), [square]).tolist()
-    [True, False]
+    >>> points_in_polygon(np.array([[1, 1], [3, 1], [2, 1]], float), [square]).tolist()
+    [True, False, False]
     """
-    points = np.asarray(points, dtype=float)
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
     inside = np.zeros(len(points), dtype=bool)
-    x, y = points[:, 0:1], points[:, 1:2]
     for loop in loops:
-        a = np.asarray(loop, dtype=float)
-        b = np.roll(a, -1, axis=0)
-        ax, ay, bx, by = a[:, 0], a[:, 1], b[:, 0], b[:, 1]
-        straddles = (ay > y) != (by > y)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x_cross = ax + (y - ay) * (bx - ax) / (by - ay)
-        inside ^= (np.sum(straddles & (x < x_cross), axis=1) % 2).astype(bool)
+        ring = np.asarray(loop, dtype=float)
+        if len(ring) < 3:  # no area: it holds no point
+            continue
+        polygon = shapely.Polygon(ring)
+        shapely.prepare(polygon)
+        inside ^= shapely.contains_xy(polygon, points[:, 0], points[:, 1])
     return inside

@@ -10,18 +10,23 @@ into place only once all of them are written. If the frames raise midway (a user
 KeyboardInterrupt), the previous output is untouched and no temporary file is left.
 """
 
+from __future__ import annotations
+
 import os
 import shutil
 import tempfile
+from collections.abc import Iterable, Sequence
 from itertools import chain
 from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 from PIL import Image
 
 from toonmotion.errors import ExportError
 from toonmotion.io.atomic import atomic_path
+from toonmotion.render.composite import over, premultiply
 
 FORMATS = ("gif", "mp4", "png")
 
@@ -30,7 +35,7 @@ _ACCEPTED = "a .gif or .mp4 file, a folder for PNG frames, or a pattern like fra
 _CRF = 18
 
 
-def animation_format(path):
+def animation_format(path: str | os.PathLike[str]) -> str:
     """The format an animation path asks for.
 
     Parameters
@@ -63,7 +68,8 @@ def animation_format(path):
     raise ExportError(f"cannot write an animation to {path.name}: give {_ACCEPTED}")
 
 
-def save_animation(path, frames, *, fps, background=(255, 255, 255)):
+def save_animation(path: str | os.PathLike[str], frames: Iterable[NDArray[np.uint8]], *, fps: float,
+                   background: Sequence[int] = (255, 255, 255)) -> int:
     """Write frames as an animated GIF, an MP4 video or a sequence of PNGs.
 
     Parameters
@@ -236,12 +242,10 @@ def _checked(frames):
 
 def _flatten(rgba, background):
     """(H, W, 3) uint8: RGBA composited over an opaque background colour, rounded."""
-    alpha = rgba[..., 3:]
-    if alpha.min() == 255:
+    if rgba[..., 3].min() == 255:
         return rgba[..., :3]
-    a = alpha.astype(np.uint16)
-    mixed = rgba[..., :3] * a + np.array(background, np.uint16) * (255 - a)
-    return ((mixed + 127) // 255).astype(np.uint8)
+    flat = over(premultiply(rgba).reshape(-1, 4), (*background, 255))
+    return flat.reshape(rgba.shape)[..., :3]
 
 
 def _check_background(background):

@@ -18,13 +18,19 @@ Sampling uses premultiplied alpha, so colours of transparent texels never bleed 
 figure's edge. Fully transparent texels come out as (0, 0, 0, 0).
 """
 
+from __future__ import annotations
+
 import math
+from collections.abc import Sequence
 from numbers import Integral, Real
+from typing import Any
 
 import cv2
 import numpy as np
+from numpy.typing import NDArray
 
 from toonmotion.errors import SettingsError
+from toonmotion.render.composite import over
 
 # A deformed triangle whose doubled area is below this fraction of its longest edge squared
 # is degenerate (zero area up to rounding) and is skipped.
@@ -36,7 +42,7 @@ _FAR = 2.0**24
 _OUTSIDE = -16.0
 
 
-def view_transform(view, size):
+def view_transform(view: Sequence[float], size: Sequence[int]) -> tuple[float, NDArray[np.float64]]:
     """Scale and offset mapping drawing points to output pixels.
 
     The view rectangle is fitted inside the output with a uniform scale, centred, and the
@@ -63,13 +69,16 @@ def view_transform(view, size):
     (2.0, array([10.5,  0.5]))
     """
     x0, y0, x1, y1 = _check_view(view)
-    W, H = _check_size(size)
+    W, H = check_size(size)
     scale = min(W / (x1 - x0), H / (y1 - y0))
     offset = np.array([(W - 1) / 2 - (x0 + x1) / 2 * scale, (H - 1) / 2 - (y0 + y1) / 2 * scale])
     return float(scale), offset
 
 
-def render_mesh(texture, V, U, F, *, size, view=None, order=None, background=None, mask=None):
+def render_mesh(texture: NDArray[np.uint8], V: NDArray[np.float64], U: NDArray[np.float64],
+                F: NDArray[np.int_], *, size: Sequence[int], view: Sequence[float] | None = None,
+                order: NDArray[np.int_] | None = None, background: Sequence[int] | None = None,
+                mask: np.ndarray | None = None) -> NDArray[np.uint8]:
     """Render a drawing mapped through a deformed triangle mesh.
 
     Parameters
@@ -113,7 +122,7 @@ def render_mesh(texture, V, U, F, *, size, view=None, order=None, background=Non
     ([0, 200, 200, 200], [0, 255, 255, 255])
     """
     texture, V, U, F = _check_mesh(texture, V, U, F)
-    W, H = _check_size(size)
+    W, H = check_size(size)
     h, w = texture.shape[:2]
     if view is None:
         view = (-0.5, -0.5, w - 0.5, h - 0.5)
@@ -136,7 +145,7 @@ def render_mesh(texture, V, U, F, *, size, view=None, order=None, background=Non
         _premultiplied(texture, mask), map_x, map_y, interpolation=cv2.INTER_LINEAR,
         borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0),
     ).reshape(-1, 4)[:n]
-    pixels = _composite(sampled, bg)
+    pixels = over(sampled, bg)
     # One uint32 per RGBA pixel: scattering words is much faster than scattering rows.
     out.view(np.uint32).reshape(-1)[lin] = pixels.view(np.uint32).reshape(-1)
     return out
@@ -262,7 +271,7 @@ def _compact_shape(n):
 
 
 def _premultiplied(texture, mask):
-    """The texture as float32 premultiplied RGBA ``(r a, g a, b a, 255 a)``, integers <= 65025."""
+    """The texture times ``mask``, premultiplied: float32 in the units of ``composite.premultiply``."""
     alpha = np.ascontiguousarray(texture[..., 3])
     if mask is None or mask.dtype == bool:
         opaque = np.full_like(alpha, 255)
@@ -273,29 +282,6 @@ def _premultiplied(texture, mask):
     alpha = alpha * mask
     scale = cv2.merge([alpha, alpha, alpha, mask * np.float32(255)])
     return cv2.multiply(texture.astype(np.float32), scale)
-
-
-def _composite(sampled, bg):
-    """Straight-alpha RGBA ``(k, 4)`` uint8 from premultiplied samples, over ``bg`` if given.
-
-    ``sampled`` is float32 in the units of :func:`_premultiplied`; it may be overwritten.
-    """
-    p, full = sampled, 65025  # alpha units
-    if bg is not None:
-        # Premultiplied "over" in 0-255 units: p + bg * bg_alpha * (1 - alpha).
-        p *= np.float32(1 / 255)
-        full = 255
-        uncovered = 1 - p[:, 3] * np.float32(1 / 255)
-        bga = bg[3] / 255
-        for channel, value in enumerate((bg[0] * bga, bg[1] * bga, bg[2] * bga, bg[3])):
-            if value:
-                p[:, channel] += np.float32(value) * uncovered
-        if bg[3] == 255:
-            return cv2.convertScaleAbs(p)  # opaque: no division needed
-    # Unpremultiply and round: colour * 255 / alpha, alpha * 255 / full (0 / 0 gives 0).
-    divisor = np.repeat(p[:, 3:], 4, axis=1)
-    divisor[:, 3] = full
-    return cv2.divide(p, divisor, scale=255, dtype=cv2.CV_8U)
 
 
 def _check_mesh(texture, V, U, F):
@@ -361,12 +347,13 @@ def _check_order(order, m):
     return order.astype(np.int64)
 
 
-def _check_size(size):
+def check_size(size: Any) -> tuple[int, int]:
+    """``size`` as ``(width, height)``, two positive ints; SettingsError otherwise."""
     try:
         W, H = size
     except (TypeError, ValueError):
         raise SettingsError(f"size must be (width, height) in pixels, got {size!r}") from None
-    if not all(isinstance(v, Integral) and not isinstance(v, bool) and v > 0 for v in (W, H)):
+    if not all(isinstance(v, Integral) and not isinstance(v, bool) and int(v) > 0 for v in (W, H)):
         raise SettingsError(f"size must be two positive integers (width, height), got {size!r}")
     return int(W), int(H)
 
@@ -383,17 +370,18 @@ def _check_view(view):
     return x0, y0, x1, y1
 
 
-def check_colour(colour, name):
+def check_colour(colour: Any, name: str) -> tuple[int, int, int, int]:
     """``colour`` as an RGBA tuple of ints 0-255 (alpha 255 when three are given); SettingsError otherwise."""
     try:
         values = tuple(colour)
     except TypeError:
         values = ()
     if len(values) not in (3, 4) or not all(
-        isinstance(v, Real) and not isinstance(v, bool) and float(v).is_integer() and 0 <= v <= 255
+        isinstance(v, Real) and not isinstance(v, bool) and float(v).is_integer() and 0 <= float(v) <= 255
         for v in values
     ):
         raise SettingsError(
             f"{name} must be an (r, g, b) or (r, g, b, a) tuple of ints 0-255, got {colour!r}"
         )
-    return tuple(int(v) for v in values) + ((255,) if len(values) == 3 else ())
+    r, g, b, a = [int(v) for v in values] + ([255] if len(values) == 3 else [])
+    return r, g, b, a

@@ -10,16 +10,21 @@ Joints are named ``root`` (``root2``, ... for further pieces) and ``joint1``, ``
 in the order they are made; rename them in the project or give a skeleton file to use your own.
 """
 
+from __future__ import annotations
+
 from collections import deque
 
 import numpy as np
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import connected_components
 
 from toonmotion.errors import SkeletonError
+from toonmotion.geometry.segments import arc_lengths
 from toonmotion.rig.skeleton import Skeleton
-from toonmotion.shape.curve_skeleton import default_bone_length, split_points
+from toonmotion.shape.curve_skeleton import CurveSkeleton, default_bone_length, split_points
 
 
-def skeleton_from_curve_skeleton(curve_skeleton, *, max_bone=None):
+def skeleton_from_curve_skeleton(curve_skeleton: CurveSkeleton, *, max_bone: float | None = None) -> Skeleton:
     """Build an animation skeleton along a curve skeleton.
 
     Parameters
@@ -91,22 +96,15 @@ def _adjacency(cs):
 
 
 def _pieces(cs, adjacency):
-    """Node sets of the connected pieces, largest (by total branch length) first."""
-    seen = np.zeros(len(cs.nodes), dtype=bool)
-    pieces = []
-    for start in range(len(cs.nodes)):
-        if seen[start]:
-            continue
-        seen[start] = True
-        nodes, stack = [], [start]
-        while stack:
-            node = stack.pop()
-            nodes.append(node)
-            for _, other, _ in adjacency[node]:
-                if not seen[other]:
-                    seen[other] = True
-                    stack.append(other)
-        pieces.append(sorted(nodes))
+    """Node sets of the connected pieces, largest (by total branch length) first.
+
+    Each is a sorted list; pieces of equal size keep the order of their lowest node.
+    """
+    n = len(cs.nodes)
+    ends = np.asarray(cs.branches, dtype=np.int64).reshape(-1, 2)
+    graph = coo_array((np.ones(len(ends)), (ends[:, 0], ends[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    pieces = sorted((np.flatnonzero(label == piece).tolist() for piece in np.unique(label)), key=min)
     lengths = cs.lengths
 
     def size(nodes):
@@ -124,7 +122,7 @@ def _root_on_longest_branch(cs, nodes, adjacency, root_name, joints, chain):
         return [(nodes[0], root_name)]
     b = max(branches, key=lambda k: cs.lengths[k])
     path = cs.paths[b]
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+    arc = arc_lengths(path)
     middle = int(np.searchsorted(arc, arc[-1] / 2))
     middle = min(max(middle, 1), len(path) - 2) if len(path) > 2 else 0
     joints.append((root_name, None, tuple(map(float, path[middle]))))

@@ -10,11 +10,17 @@ Short spurs (branches ending in an end point that barely leave the junction's in
 circle, the usual artefacts of bumps in an outline) are pruned, repeatedly, until none is left.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
 
+from toonmotion.errors import SkeletonError
+from toonmotion.geometry.arrays import frozen_array, frozen_arrays
+from toonmotion.geometry.segments import resample_by_arc_length
 from toonmotion.shape.thinning import hilditch_thin
 
 NODE_KINDS = ("end", "junction", "loop", "point")
@@ -39,21 +45,48 @@ class CurveSkeleton:
         The two nodes each branch joins (equal for a loop).
     paths : tuple of (p, 2) float
         Each branch's pixel path from its first node to its second, ends included.
+
+    Construction copies the arrays (read-only) and raises :class:`SkeletonError` unless the
+    shapes agree, every kind is one of :data:`NODE_KINDS` and every branch names existing nodes.
     """
 
-    nodes: np.ndarray
-    kinds: tuple
-    radius: np.ndarray
-    branches: np.ndarray
-    paths: tuple
+    nodes: NDArray[np.float64]
+    kinds: tuple[str, ...]
+    radius: NDArray[np.float64]
+    branches: NDArray[np.int64]
+    paths: tuple[NDArray[np.float64], ...]
+
+    def __post_init__(self) -> None:
+        error = SkeletonError
+        nodes = frozen_array(self.nodes, dtype=np.float64, shape=(None, 2), name="a curve skeleton's nodes",
+                             error=error, finite=True)
+        k = len(nodes)
+        radius = frozen_array(self.radius, dtype=np.float64, shape=(k,), name="a curve skeleton's radius",
+                              error=error, finite=True)
+        branches = frozen_array(self.branches, dtype=np.int64, shape=(None, 2),
+                                name="a curve skeleton's branches", error=error)
+        paths = frozen_arrays(self.paths, dtype=np.float64, shape=(None, 2), name="a curve skeleton's paths",
+                              error=error, finite=True)
+        kinds = tuple(self.kinds)
+        if len(kinds) != k or not all(kind in NODE_KINDS for kind in kinds):
+            raise error(f"a curve skeleton needs one kind per node ({k}), each of {', '.join(NODE_KINDS)}")
+        if len(paths) != len(branches):
+            raise error(f"a curve skeleton has {len(branches)} branches but {len(paths)} paths")
+        if branches.size and (branches.min() < 0 or branches.max() >= k):
+            raise error("a curve-skeleton branch names a node that does not exist")
+        object.__setattr__(self, "nodes", nodes)
+        object.__setattr__(self, "kinds", kinds)
+        object.__setattr__(self, "radius", radius)
+        object.__setattr__(self, "branches", branches)
+        object.__setattr__(self, "paths", paths)
 
     @property
-    def lengths(self):
+    def lengths(self) -> NDArray[np.float64]:
         """Length of each branch in pixels, ``(b,)``."""
         return np.array([_path_length(p) for p in self.paths])
 
 
-def curve_skeleton(mask, *, prune=0.5, min_spur=3.0):
+def curve_skeleton(mask: ArrayLike, *, prune: float = 0.5, min_spur: float = 3.0) -> CurveSkeleton:
     """Thin a mask and describe its skeleton as a graph.
 
     Parameters
@@ -120,7 +153,9 @@ def _shifted(graph, dx, dy):
     )
 
 
-def joint_suggestions(skeleton, *, max_bone=None):
+def joint_suggestions(
+    skeleton: CurveSkeleton, *, max_bone: float | None = None
+) -> tuple[NDArray[np.float64], tuple[str, ...]]:
     """Where joints could go: end points, junctions, and evenly along long branches.
 
     Parameters
@@ -145,12 +180,12 @@ def joint_suggestions(skeleton, *, max_bone=None):
     return np.concatenate(points), tuple(kinds)
 
 
-def split_points(path, max_bone):
+def split_points(path: NDArray[np.float64], max_bone: float) -> NDArray[np.float64]:
     """Points that split a path into equal pieces no longer than ``max_bone``, ``(k, 2)``."""
     return np.array(_along(path, max_bone)).reshape(-1, 2)
 
 
-def default_bone_length(skeleton):
+def default_bone_length(skeleton: CurveSkeleton) -> float:
     """A fifth of the diagonal of the skeleton's bounding box: the default longest bone."""
     return _default_bone(skeleton)
 
@@ -165,9 +200,7 @@ def _along(path, max_bone):
     pieces = int(np.ceil(length / max_bone - 1e-9))
     if pieces < 2:
         return []
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
-    at = np.arange(1, pieces) * length / pieces
-    return list(np.stack([np.interp(at, arc, path[:, 0]), np.interp(at, arc, path[:, 1])], 1))
+    return list(resample_by_arc_length(path, np.arange(1, pieces) * length / pieces))
 
 
 def _path_length(path):
