@@ -40,8 +40,7 @@ import numpy as np  # noqa: E402
 from toonmotion.animate.timeline import interpolate_pose  # noqa: E402
 from toonmotion.deform.deformer import Deformer  # noqa: E402
 from toonmotion.deform.depth import draw_order  # noqa: E402
-from toonmotion.io.char_cfg import load_char_cfg  # noqa: E402
-from toonmotion.io.image import load_image, load_mask  # noqa: E402
+from toonmotion.io.drawing_folder import rig_drawing_folder  # noqa: E402
 from toonmotion.render.raster import render_mesh  # noqa: E402
 from toonmotion.rig.pipeline import rig_drawing  # noqa: E402
 from toonmotion.rig.pose import Pose, rotate_about  # noqa: E402
@@ -88,12 +87,8 @@ def handles(mesh, skeleton):
 def bench_drawing(folder):
     import igl  # the benchmark extra
 
-    texture = load_image(folder / "texture.png")
-    size = (texture.shape[1], texture.shape[0])
-    mask = load_mask(folder / "mask.png", size=size) if (folder / "mask.png").is_file() else None
-    skeleton, _ = load_char_cfg(folder / "char_cfg.yaml")
-    character = rig_drawing(texture, mask=mask, skeleton=skeleton)
-    mesh = character.mesh
+    character = rig_drawing_folder(folder)
+    skeleton, mesh = character.skeleton, character.mesh
 
     start = time.perf_counter()
     deformer = Deformer(character)

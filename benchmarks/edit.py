@@ -33,11 +33,9 @@ from toonmotion.animate.cartoon_filter import FilterSettings, filter_bones  # no
 from toonmotion.animate.pose_filter import exaggerate_pose  # noqa: E402
 from toonmotion.deform.deformer import Deformer  # noqa: E402
 from toonmotion.deform.fine_tune import drag_points, tune_with_curve  # noqa: E402
-from toonmotion.io.char_cfg import load_char_cfg  # noqa: E402
-from toonmotion.io.image import load_image, load_mask  # noqa: E402
+from toonmotion.io.drawing_folder import rig_drawing_folder  # noqa: E402
 from toonmotion.rig.binding import Correction  # noqa: E402
 from toonmotion.rig.edits import DepthEdit, apply_edit, undo  # noqa: E402
-from toonmotion.rig.pipeline import rig_drawing  # noqa: E402
 from toonmotion.rig.pose import Pose, rest_pose, rotate_about  # noqa: E402
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "drawings"
@@ -75,10 +73,8 @@ def _pushed_arc(mesh, U, length=9, offset=4.0):
 
 
 def bench(folder):
-    texture = load_image(folder / "texture.png")
-    size = (texture.shape[1], texture.shape[0])
-    skeleton, _ = load_char_cfg(folder / "char_cfg.yaml")
-    character = rig_drawing(texture, mask=load_mask(folder / "mask.png", size=size), skeleton=skeleton)
+    character = rig_drawing_folder(folder)
+    skeleton = character.skeleton
     deformer = Deformer(character)
     motion = _motion(skeleton)
     settings = FilterSettings(strength=1.5)

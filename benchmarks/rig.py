@@ -28,8 +28,7 @@ import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from toonmotion.io.image import load_image, load_mask  # noqa: E402
-from toonmotion.io.skeleton_json import load_skeleton_file  # noqa: E402
+from toonmotion.io.drawing_folder import load_drawing_folder  # noqa: E402
 from toonmotion.rig.character import RigSettings  # noqa: E402
 from toonmotion.rig.pipeline import rig_drawing  # noqa: E402
 
@@ -66,11 +65,9 @@ def _silhouette_iou(character, mask):
 
 
 def bench(folder):
-    texture = load_image(folder / "texture.png")
+    drawing = load_drawing_folder(folder)
+    texture, mask, skeleton = drawing.texture, drawing.mask, drawing.skeleton
     size = (texture.shape[1], texture.shape[0])
-    mask = load_mask(folder / "mask.png", size=size) if (folder / "mask.png").is_file() else None
-    cfg = folder / "char_cfg.yaml"
-    skeleton = load_skeleton_file(cfg, image_size=size) if cfg.is_file() else None
     settings = RigSettings(vertices=1500)
     rig_ms, stage_ms, character = _timed_rig(
         texture, mask=mask, skeleton=skeleton, settings=settings

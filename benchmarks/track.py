@@ -5,10 +5,10 @@
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
 usual naming conventions (CMU, FAIR, Mixamo, Rokoko), projected orthographically from the front,
 fitted into 640x480, resampled to about 30 fps (a leading T-pose frame the motion jumps away
-from is dropped), and rendered as a textured limb figure over a
-textured background, drawn far to near so limbs cross and hide each other
-(``toonmotion.capture.synthetic``). Every tracker starts from the true frame-1 rectangles (a
-square of the joint disc's diameter, ~30 px) and runs on one core.
+from is dropped), and rendered as a textured limb figure over a textured background, drawn far
+to near so limbs cross and hide each other (``toonmotion.testing.mocap_tracking``, which also
+scores). Every tracker starts from the true frame-1 rectangles (a square of the joint disc's
+diameter, ~30 px) and runs on one core.
 
 Keys, one line per clip and tracker:
   clip, tracker, joints, frames
@@ -35,55 +35,11 @@ from pathlib import Path  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from toonmotion.capture.mocap import (  # noqa: E402
-    STANDARD_JOINTS,
-    fit_to_frame,
-    pick_joints,
-    project_orthographic,
-    standard_skeleton_parents,
-)
-from toonmotion.capture.synthetic import limb_figure_frames  # noqa: E402
-from toonmotion.capture.tracker import TrackSetup, track  # noqa: E402
-from toonmotion.io.bvh import forward_kinematics, load_bvh  # noqa: E402
-from toonmotion.rig.skeleton import Skeleton  # noqa: E402
+from toonmotion.testing.mocap_tracking import render_bvh_clip, track_from_truth, tracking_scores  # noqa: E402
 
 cv2.setNumThreads(1)
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
-SIZE = (640, 480)
-FPS = 30.0
 OPENCV = {"MIL": "TrackerMIL_create", "CSRT": "TrackerCSRT_create", "KCF": "TrackerKCF_create"}
-
-
-def rendered_clip(path, *, frames=None, fps=FPS, seed=0):
-    """A clip as ``(images (T, h, w, 3), truth (T, 16, 2), skeleton, box side, fps)``."""
-    clip = load_bvh(path)
-    X = forward_kinematics(clip)
-    # The MotionBuilder-style CMU files start with a T-pose frame that the motion jumps away from.
-    jumps = np.linalg.norm(np.diff(X, axis=0), axis=2).max(axis=1)
-    if len(jumps) > 2 and jumps[0] > 5 * np.median(jumps):
-        X = X[1:]
-    step = max(1, round(clip.fps / fps))
-    X = X[::step][:frames]
-    picks = pick_joints(clip.names, clip.parents)
-    X = X[:, [picks[n] for n in STANDARD_JOINTS]]
-    points, depth = project_orthographic(X, with_depth=True)
-    truth = fit_to_frame(points, SIZE)
-    parents_by_name = standard_skeleton_parents()
-    parents = np.array([-1 if parents_by_name[n] is None else STANDARD_JOINTS.index(parents_by_name[n])
-                        for n in STANDARD_JOINTS])
-    images, radius = limb_figure_frames(truth, parents, depth=depth, size=SIZE, seed=seed)
-    skeleton = Skeleton.from_joints(
-        [(n, parents_by_name[n], tuple(truth[0, i])) for i, n in enumerate(STANDARD_JOINTS)]
-    )
-    order = [STANDARD_JOINTS.index(n) for n in skeleton.names]
-    return images, truth[:, order], skeleton, 2 * radius, clip.fps / step
-
-
-def run_toonmotion(images, skeleton, side):
-    setup = TrackSetup(skeleton=skeleton, sizes=np.full((len(skeleton), 2), side))
-    start = time.perf_counter()
-    result = track(images, setup)
-    return result.positions, time.perf_counter() - start
 
 
 def run_opencv(kind, images, start_points, side):
@@ -106,26 +62,17 @@ def run_opencv(kind, images, start_points, side):
     return out, time.perf_counter() - start
 
 
-def scores(found, truth):
-    error = np.hypot(*(found[1:] - truth[1:]).reshape(-1, 2).T)
-    return {
-        "mean_px": round(float(error.mean()), 3),
-        "median_px": round(float(np.median(error)), 3),
-        "pck5": round(float((error <= 5).mean()), 4),
-        "lost": round(float((error > 20).mean()), 4),
-    }
-
-
 def bench(path, trackers, frames=None):
-    images, truth, skeleton, side, fps = rendered_clip(path, frames=frames)
+    clip = render_bvh_clip(path, frames=frames)
+    images = clip.images
     lines, ours = [], None
     for name in trackers:
         if name == "toonmotion":
-            found, seconds = run_toonmotion(images, skeleton, side)
+            found, seconds = track_from_truth(clip)
         else:
-            found, seconds = run_opencv(name, images, truth[0], side)
-        line = {"clip": Path(path).stem, "tracker": name, "joints": len(skeleton), "frames": len(images),
-                **scores(found, truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
+            found, seconds = run_opencv(name, images, clip.truth[0], clip.side)
+        line = {"clip": Path(path).stem, "tracker": name, "joints": len(clip.skeleton), "frames": len(images),
+                **tracking_scores(found, clip.truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
         if name == "toonmotion":
             ours = line["mean_px"]
         elif ours:

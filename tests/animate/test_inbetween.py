@@ -3,14 +3,15 @@
 import numpy as np
 import pytest
 
-from tests.conftest import rig_character
+from tests.conftest import expect_every_case_to_fail, rig_character
 from toonmotion.animate.inbetween import METHODS, animate_frames, solve_keys
 from toonmotion.animate.timeline import EASES, Keyframe, make_timeline
 from toonmotion.deform.deformer import Deformer
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.polygon import triangle_areas
+from toonmotion.rig.kinematics import bone_angles
 from toonmotion.rig.pipeline import rig_drawing
-from toonmotion.rig.pose import Pose, bone_angles, check_pose, rest_pose, rotate_about
+from toonmotion.rig.pose import Pose, check_pose, rest_pose, rotate_about
 from toonmotion.sample_animation import sample_keyframes
 from toonmotion.samples import sample_character
 
@@ -121,6 +122,9 @@ def _worst_step(frames, timeline):
     return np.array(worst)
 
 
+# The design gap behind the known failures of the two tests below; one test covers them all.
+SOLVE_DRIFT = "'solve' warm-starts each frame from the last and stage two stops early: frames drift from keys"
+
 SMOOTHNESS_FAILS = {
     ("sample", "linear", "solve"): "frame 6 (a key) pops 31.7 px from frame 5 where its neighbours move "
                                    "~14.5 px: 2.18x the key difference per frame. The key is solved from "
@@ -130,19 +134,18 @@ SMOOTHNESS_FAILS = {
 
 
 def _smooth_cases():
-    out = []
-    for who in ("sample", "char1"):
-        for ease in ("linear", "in-out"):
-            for method in METHODS:
-                reason = SMOOTHNESS_FAILS.get((who, ease, method))
-                marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
-                out.append(pytest.param(who, ease, method, marks=marks, id=f"{who}-{ease}-{method}"))
-    return out
+    """Every case but the known failures (:func:`test_solved_frames_stay_with_their_keys` has those)."""
+    return [pytest.param(who, ease, method, id=f"{who}-{ease}-{method}")
+            for who in ("sample", "char1") for ease in ("linear", "in-out") for method in METHODS
+            if (who, ease, method) not in SMOOTHNESS_FAILS]
 
 
 @pytest.mark.parametrize(("who", "ease", "method"), _smooth_cases())
 def test_in_betweens_move_smoothly_from_key_to_key(request, who, ease, method):
-    deformer = request.getfixturevalue(who)
+    _check_smooth(request.getfixturevalue(who), who, ease, method)
+
+
+def _check_smooth(deformer, who, ease, method):
     skeleton = deformer.character.skeleton
     if who == "sample":
         timeline = make_timeline(skeleton, sample_keyframes(skeleton).keys, fps=12, ease=ease)
@@ -165,12 +168,14 @@ HOLD_FAILS = {
 
 
 @pytest.mark.parametrize(("who", "method"), [
-    pytest.param(w, m, id=f"{w}-{m}", marks=[pytest.mark.xfail(strict=True, reason=HOLD_FAILS[w, m])]
-                 if (w, m) in HOLD_FAILS else [])
-    for w in ("sample", "char1") for m in METHODS
+    pytest.param(w, m, id=f"{w}-{m}")
+    for w in ("sample", "char1") for m in METHODS if (w, m) not in HOLD_FAILS
 ])
 def test_a_held_pose_holds_still(request, who, method):
-    deformer = request.getfixturevalue(who)
+    _check_hold(request.getfixturevalue(who), who, method)
+
+
+def _check_hold(deformer, who, method):
     skeleton = deformer.character.skeleton
     P = skeleton.positions
     bent = Pose(rotate_about(skeleton, rotate_about(skeleton, P, "right_elbow", 1.0), "left_elbow", -1.0))
@@ -181,6 +186,16 @@ def test_a_held_pose_holds_still(request, who, method):
     drift = np.abs(frames - keys[0].U).max()
     print(f"\n{who} {method}: keys {keys_apart:.3g} px apart, frames drift {drift:.3g} px")
     assert drift <= keys_apart + 1e-9
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=SOLVE_DRIFT)
+def test_solved_frames_stay_with_their_keys(request):
+    """Every case of ``SMOOTHNESS_FAILS`` and ``HOLD_FAILS``, each as strict as its plain test."""
+    cases = {f"smooth {who}-{ease}-{method}": lambda who=who, ease=ease, method=method: _check_smooth(
+        request.getfixturevalue(who), who, ease, method) for who, ease, method in SMOOTHNESS_FAILS}
+    cases.update({f"hold {who}-{method}": lambda who=who, method=method: _check_hold(
+        request.getfixturevalue(who), who, method) for who, method in HOLD_FAILS})
+    expect_every_case_to_fail(cases)
 
 
 # --- the sample animation ---------------------------------------------------------------------------

@@ -1,14 +1,17 @@
 """Tests for toonmotion.deform: the needle model, stage two, joint areas and depth layers.
 
 Every property runs on the bundled sample character and on each shared drawing (rigged with
-its mask and char_cfg skeleton). Cases that fail today are marked ``xfail(strict=True)`` with
-what was measured, so they neither hide nor break the build, and flag when they start passing.
+its mask and char_cfg skeleton). Cases that fail today are left out of the plain tests and
+checked together, one ``xfail(strict=True)`` test per design gap (at the end), with what was
+measured, so they neither hide nor break the build, and flag when any of them starts passing.
 """
+
+from functools import partial
 
 import numpy as np
 import pytest
 
-from tests.conftest import rig_character
+from tests.conftest import expect_every_case_to_fail
 from toonmotion.deform.deformer import Deformation, Deformer, DeformSettings
 from toonmotion.deform.depth import (
     default_depth,
@@ -31,48 +34,37 @@ STRETCH = 1.5
 STRETCHED_BONES = {"forearm": "right_hand", "shin": "right_foot", "torso": "torso"}
 
 
-@pytest.fixture(scope="module")
-def rigs():
-    """Rigged characters and their deformers by name, each rigged once for this module."""
-    return _Rigs()
-
-
-class _Rigs:
-    def __init__(self):
-        self._characters, self._deformers = {}, {}
-
-    def character(self, name, root):
-        if name not in self._characters:
-            self._characters[name] = _rig(name, root)
-        return self._characters[name]
-
-    def deformer(self, name, root, **settings):
-        key = (name, tuple(sorted(settings.items())))
-        if key not in self._deformers:
-            self._deformers[key] = Deformer(self.character(name, root), DeformSettings(**settings))
-        return self._deformers[key]
-
-
-def _rig(name, root):
-    return rig_character(None if name == "sample" else root / name)
-
-
 @pytest.fixture
-def rigged(name, request, rigs):
+def rigged(name, rigs):
     """``get(**settings) -> Deformer`` for the parametrized character ``name``."""
-    root = None if name == "sample" else request.getfixturevalue("drawings_root")
-    return lambda **settings: rigs.deformer(name, root, **settings)
+    return lambda **settings: rigs.deformer(name, **settings)
 
 
 def _cases(names, items, failing):
-    """``(name, item)`` parameters, each known failure marked strictly with its reason."""
-    out = []
-    for name in names:
-        for item in items:
-            reason = failing.get((name, item))
-            marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
-            out.append(pytest.param(name, item, marks=marks, id=f"{name}-{item}"))
-    return out
+    """``(name, item)`` parameters but the known failures (each is a case of its gap's test)."""
+    return [pytest.param(name, item, id=f"{name}-{item}")
+            for name in names for item in items if (name, item) not in failing]
+
+
+def _gap_cases(rigs, gap, checks):
+    """``{case: check}`` for every known failure of ``gap``.
+
+    ``checks`` holds ``(label, failing, check)``: ``failing`` maps ``(name, item)`` to ``(gap,
+    what was measured)`` and ``check(rigged, name, item)`` is the body of the plain test.
+    """
+    return {
+        f"{label} {name}-{item}": lambda check=check, name=name, item=item: check(
+            lambda **settings: rigs.deformer(name, **settings), name, item)
+        for label, failing, check in checks
+        for (name, item), (case_gap, _) in failing.items() if case_gap == gap
+    }
+
+
+# The design gaps behind the known failures, one test each at the end of this module.
+TORSO_BANDS = "a stretched torso stretches its joint bands, whose area stage two does not keep"
+CHAR4_ARMS = "char4's arm bones run outside its thin curved arms, which the decomposition splits lengthwise"
+BENT_JOINTS = "stage two leaves inverted triangles in bent joints"
+SMALL_LIMBS = "a limb of under ~3.5% of the figure cannot add the 2% bar when stretched 1.5x"
 
 
 # --- poses -------------------------------------------------------------------------------
@@ -180,18 +172,23 @@ def test_stage_one_scales_a_stretched_bones_region_exactly(rigged, bone, preserv
 
 
 AREA_KEPT_FAILS = {
-    ("sample", "torso"): "measured +8.59% (stage one +8.31%): the joint bands torso/hips and "
-                         "torso/shoulders stretch",
-    ("char1", "torso"): "measured +11.38% (stage one +13.91%): torso/hip and arm/hip joint bands stretch",
-    ("char2", "torso"): "measured +7.21% (stage one +6.02%)",
-    ("char3", "torso"): "measured +14.04% (stage one +11.80%)",
-    ("char4", "torso"): "measured +6.86% (stage one +6.03%)",
-    ("char4", "forearm"): "measured +3.64% (stage one +3.71%): char4's arm bones run outside its thin arms",
+    ("sample", "torso"): (TORSO_BANDS, "measured +8.59% (stage one +8.31%): the joint bands torso/hips "
+                                       "and torso/shoulders stretch"),
+    ("char1", "torso"): (TORSO_BANDS, "measured +11.38% (stage one +13.91%): torso/hip and arm/hip joint "
+                                      "bands stretch"),
+    ("char2", "torso"): (TORSO_BANDS, "measured +7.21% (stage one +6.02%)"),
+    ("char3", "torso"): (TORSO_BANDS, "measured +14.04% (stage one +11.80%)"),
+    ("char4", "torso"): (TORSO_BANDS, "measured +6.86% (stage one +6.03%)"),
+    ("char4", "forearm"): (CHAR4_ARMS, "measured +3.64% (stage one +3.71%)"),
 }
 
 
 @pytest.mark.parametrize(("name", "part"), _cases(CHARACTERS, STRETCHED_BONES, AREA_KEPT_FAILS))
 def test_stretching_one_bone_keeps_the_figures_area(rigged, name, part, record_property):
+    _check_area_kept(rigged, name, part, record_property)
+
+
+def _check_area_kept(rigged, name, part, record_property):
     deformer = rigged()
     skeleton, mesh = deformer.character.skeleton, deformer.character.mesh
     P = _stretch(skeleton, skeleton.positions, STRETCHED_BONES[part], STRETCH)
@@ -202,17 +199,22 @@ def test_stretching_one_bone_keeps_the_figures_area(rigged, name, part, record_p
 
 
 AREA_GROWS_FAILS = {
-    ("sample", "torso"): "measured +8.60% off vs +8.61% on: the sample's torso bone holds few vertices, and "
-                         "the gain comes from the stretched torso/hip and torso/shoulder joint bands",
-    ("char2", "forearm"): "measured +1.68% (on: +0.14%): the forearm is ~3.4% of char2's area, "
-                          "so 1.5x adds ~1.7%; the 2% bar is above what this limb can add",
-    ("char2", "shin"): "measured +1.58% (on: +0.16%): char2's shin is ~3% of its area",
-    ("char4", "shin"): "measured +1.69% (on: +0.13%): char4's shin is ~3.4% of its area",
+    ("sample", "torso"): (TORSO_BANDS, "measured +8.60% off vs +8.61% on: the sample's torso bone holds "
+                                       "few vertices, and the gain comes from the stretched torso/hip and "
+                                       "torso/shoulder joint bands"),
+    ("char2", "forearm"): (SMALL_LIMBS, "measured +1.68% (on: +0.14%): the forearm is ~3.4% of char2's "
+                                        "area, so 1.5x adds ~1.7%"),
+    ("char2", "shin"): (SMALL_LIMBS, "measured +1.58% (on: +0.16%): char2's shin is ~3% of its area"),
+    ("char4", "shin"): (SMALL_LIMBS, "measured +1.69% (on: +0.13%): char4's shin is ~3.4% of its area"),
 }
 
 
 @pytest.mark.parametrize(("name", "part"), _cases(CHARACTERS, STRETCHED_BONES, AREA_GROWS_FAILS))
 def test_without_area_preservation_a_stretch_grows_the_figure(rigged, name, part, record_property):
+    _check_area_grows(rigged, name, part, record_property)
+
+
+def _check_area_grows(rigged, name, part, record_property):
     skeleton, mesh = rigged().character.skeleton, rigged().character.mesh
     P = Pose(_stretch(skeleton, skeleton.positions, STRETCHED_BONES[part], STRETCH))
     rest = _area(mesh.V, mesh.F)
@@ -230,21 +232,23 @@ POSES = ("elbows+", "elbows-", "knees+", "knees-", "arms up")
 
 # Inverted joint triangles after stage two, measured (after stage one in brackets).
 INVERSION_FAILS = {
-    ("sample", "elbows-"): "1 joint triangle inverted (stage one: 9), area -7% of rest",
-    ("char1", "arms up"): "2 joint triangles inverted (stage one: 27), areas -10% and -3% of rest",
-    ("char2", "elbows+"): "1 joint triangle inverted (stage one: 1), area -5% of rest",
-    ("char3", "elbows-"): "3 joint triangles inverted (stage one: 5), down to -43% of rest",
-    ("char4", "elbows+"): "3 joint triangles inverted (stage one: 17): char_cfg arm bones run "
-                          "outside the thin curved arms, which the decomposition splits lengthwise",
-    ("char4", "elbows-"): "4 joint triangles inverted (stage one: 42), down to -98% of rest: "
-                          "arm bones outside the arms",
-    ("char4", "arms up"): "3 joint triangles inverted (stage one: 11), down to -94% of rest: "
-                          "arm bones outside the arms",
+    ("sample", "elbows-"): (BENT_JOINTS, "1 joint triangle inverted (stage one: 9), area -7% of rest"),
+    ("char1", "arms up"): (BENT_JOINTS, "2 joint triangles inverted (stage one: 27), areas -10% and -3% "
+                                        "of rest"),
+    ("char2", "elbows+"): (BENT_JOINTS, "1 joint triangle inverted (stage one: 1), area -5% of rest"),
+    ("char3", "elbows-"): (BENT_JOINTS, "3 joint triangles inverted (stage one: 5), down to -43% of rest"),
+    ("char4", "elbows+"): (CHAR4_ARMS, "3 joint triangles inverted (stage one: 17)"),
+    ("char4", "elbows-"): (CHAR4_ARMS, "4 joint triangles inverted (stage one: 42), down to -98% of rest"),
+    ("char4", "arms up"): (CHAR4_ARMS, "3 joint triangles inverted (stage one: 11), down to -94% of rest"),
 }
 
 
 @pytest.mark.parametrize(("name", "kind"), _cases(CHARACTERS, POSES, INVERSION_FAILS))
 def test_stage_two_lowers_its_energy_and_leaves_no_joint_triangle_inverted(rigged, name, kind):
+    _check_stage_two(rigged, name, kind)
+
+
+def _check_stage_two(rigged, name, kind):
     deformer = rigged()
     character = deformer.character
     F, joint = character.mesh.F, character.binding.joint_triangle
@@ -344,7 +348,7 @@ def test_a_warm_start_worse_than_stage_one_is_ignored(rigged):
     ],
 )
 def test_bad_settings_are_refused(settings, message, rigs):
-    character = rigs.character("sample", None)
+    character = rigs.character("sample")
     with pytest.raises(SettingsError, match=message):
         Deformer(character, DeformSettings(**settings))
 
@@ -463,3 +467,21 @@ def test_find_overlaps_reports_an_arm_across_the_body_and_its_depth(rigged):
     ordered = find_overlaps(mesh, binding, skeleton, U, depth)
     assert [(o.bone_a, o.bone_b, o.area) for o in ordered] == [(o.bone_a, o.bone_b, o.area) for o in overlaps]
     assert not any(o.same_depth for o in ordered)
+
+
+# --- known design gaps: one strict xfail each, over every case it breaks ------------------------
+
+GAPS = {"torso-bands": TORSO_BANDS, "char4-arms": CHAR4_ARMS, "bent-joints": BENT_JOINTS,
+        "small-limbs": SMALL_LIMBS}
+
+
+@pytest.mark.parametrize("gap", [
+    pytest.param(gap, id=key, marks=pytest.mark.xfail(strict=True, raises=AssertionError, reason=gap))
+    for key, gap in GAPS.items()
+])
+def test_known_design_gap(rigs, record_property, gap):
+    """Every known failure of ``gap``, each as strict as its plain test above."""
+    checks = [("area kept", AREA_KEPT_FAILS, partial(_check_area_kept, record_property=record_property)),
+              ("area grows", AREA_GROWS_FAILS, partial(_check_area_grows, record_property=record_property)),
+              ("stage two", INVERSION_FAILS, _check_stage_two)]
+    expect_every_case_to_fail(_gap_cases(rigs, gap, checks))

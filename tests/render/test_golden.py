@@ -1,7 +1,9 @@
 """Golden image: the bundled character, posed and rendered, against a stored picture.
 
-Regenerate (after a deliberate change to rigging, deformation or rendering, and a look at
-the picture) with ``TOONMOTION_UPDATE_GOLDEN=1 pytest tests/render/test_golden.py``.
+Regenerate (after a deliberate change to rigging, deformation or rendering) with
+``TOONMOTION_UPDATE_GOLDEN=1 pytest tests/render/test_golden.py``: that writes the picture and
+skips the comparison, which does not pass against itself. Look at the new picture, then run the
+test again without the variable before committing it.
 """
 
 import os
@@ -39,6 +41,7 @@ def rendered():
 def test_the_posed_sample_character_matches_its_golden_image(rendered):
     if os.environ.get("TOONMOTION_UPDATE_GOLDEN") == "1":
         save_png(GOLDEN, rendered)
+        pytest.skip(f"golden image updated: {GOLDEN.name}; look at it, then rerun without the variable")
     golden = load_image(GOLDEN)
     assert golden.shape == rendered.shape
     difference = np.abs(golden.astype(int) - rendered.astype(int))
