@@ -4,15 +4,18 @@ The poses are built from the character's own skeleton by turning limbs about the
 they fit it at any scale. 36 frames at 12 fps: three seconds.
 """
 
+from __future__ import annotations
+
 import numpy as np
 
-from toonmotion.animate.timeline import Keyframe, make_timeline
+from toonmotion.animate.timeline import Keyframe, Timeline, make_timeline
 from toonmotion.rig.pose import Pose, descendants, rotate_about
+from toonmotion.rig.skeleton import Skeleton
 
 _LEGS = ("right_knee", "right_foot", "left_knee", "left_foot")
 
 
-def sample_keyframes(skeleton, *, fps=12.0, ease="in-out"):
+def sample_keyframes(skeleton: Skeleton, *, fps: float = 12.0, ease: str = "in-out") -> Timeline:
     """Key-frames for the sample character's skeleton (see ``samples.sample_character``).
 
     Returns

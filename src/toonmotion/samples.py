@@ -16,9 +16,12 @@ Coordinates are (x, y) pixels, x right, y down. ``right_*`` joints are the chara
 which is on the image's left.
 """
 
+from __future__ import annotations
+
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 from PIL import Image, ImageDraw
 from scipy import ndimage as ndi
 from shapely import affinity
@@ -86,7 +89,7 @@ _TONGUE = (246, 116, 128)
 _PAPER = (243, 238, 226)
 
 
-def sample_character(*, scale=1.0):
+def sample_character(*, scale: float = 1.0) -> tuple[NDArray[np.uint8], Skeleton]:
     """The bundled sample character, on a transparent background, with its skeleton.
 
     Parameters
@@ -119,7 +122,9 @@ def sample_character(*, scale=1.0):
     return _render(scale), _skeleton(scale)
 
 
-def sample_character_on(background, *, scale=1.0, seed=0):
+def sample_character_on(
+    background: str, *, scale: float = 1.0, seed: int = 0
+) -> tuple[NDArray[np.uint8], Skeleton]:
     """The sample character flattened onto an opaque background, like a scan or a photo.
 
     Parameters

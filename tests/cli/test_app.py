@@ -1,4 +1,4 @@
-"""Tests for toonmotion.cli.app: the option parser's complaints are one line and exit 2, like every user error."""
+"""Tests for toonmotion.cli.app: parser complaints are one line and exit 2, like every user error."""
 
 import re
 import subprocess

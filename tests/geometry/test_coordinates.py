@@ -109,6 +109,18 @@ def test_mean_value_weights_of_a_regular_one_ring():
             assert w[mine][cols[mine] == nearest] == w[mine].max()
 
 
+
+def test_mean_value_weights_of_a_vertex_with_only_flat_triangles_are_equal_and_finite():
+    """Collapsed triangles (a folded pose) have no angles: the vertex weighs its neighbours equally."""
+    V = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    with np.errstate(all="raise"):
+        rows, cols, w = mean_value_weights(V, F)
+    assert np.isfinite(w).all()
+    np.testing.assert_allclose(np.bincount(rows, weights=w), 1.0)
+    np.testing.assert_allclose(w[rows == 0], 1 / 3)
+
+
 # --- the RSI curve Laplacian ------------------------------------------------------------
 
 

@@ -17,18 +17,27 @@ them in and out with the rest of stage two's displacement. When the frames' pose
 displacement interpolated from the keys, turned with the new pose's bones.
 """
 
-import numpy as np
+from __future__ import annotations
 
-from toonmotion.animate.timeline import interpolate_pose, segment_at
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from toonmotion.animate.timeline import Timeline, interpolate_pose, segment_at
 from toonmotion.deform.tuning import apply_tuning
 from toonmotion.errors import SettingsError
-from toonmotion.geometry.coordinates import as_complex, as_points
-from toonmotion.rig.pose import Pose, bone_angles
+from toonmotion.rig.kinematics import bone_angles, rotate
+from toonmotion.rig.pose import Pose
+
+if TYPE_CHECKING:
+    from toonmotion.deform.deformer import Deformation, Deformer
 
 METHODS = ("interpolate", "solve")
 
 
-def solve_keys(deformer, timeline):
+def solve_keys(deformer: Deformer, timeline: Timeline) -> list[Deformation]:
     """Deform every key pose (stage one and two, then its edits), each warm-started from the
     one before."""
     results, previous = [], None
@@ -38,7 +47,9 @@ def solve_keys(deformer, timeline):
     return results
 
 
-def motion_frames(deformer, positions):
+def motion_frames(
+    deformer: Deformer, positions: NDArray[np.float64]
+) -> Iterator[tuple[int, NDArray[np.float64]]]:
     """Yield ``(frame, U)`` for a pose per frame (``(T, k, 2)``, a motion), each frame solved
     warm-started from the one before."""
     previous = None
@@ -47,7 +58,14 @@ def motion_frames(deformer, positions):
         yield frame, previous.U
 
 
-def animate_frames(deformer, timeline, *, method="interpolate", keys=None, poses=None):
+def animate_frames(
+    deformer: Deformer,
+    timeline: Timeline,
+    *,
+    method: str = "interpolate",
+    keys: list[Deformation] | None = None,
+    poses: ArrayLike | None = None,
+) -> Iterator[tuple[int, NDArray[np.float64]]]:
     """Yield ``(frame, U)`` for every frame from 0 to the last key.
 
     Parameters
@@ -102,8 +120,7 @@ def _frames(deformer, timeline, method, keys, poses):
             continue
         U1 = deformer.stage_one(pose)
         displacement = local[i] if t == 0 else (1 - t) * local[i] + t * local[i + 1]
-        turn = np.exp(1j * _bone_turn(skeleton, pose, rest_angle))
-        yield frame, U1 + as_points(turn[bone] * displacement)
+        yield frame, U1 + rotate(displacement, _bone_turn(skeleton, pose, rest_angle)[bone])
 
 
 def _bone_turn(skeleton, pose, rest_angle):
@@ -113,5 +130,5 @@ def _bone_turn(skeleton, pose, rest_angle):
 
 
 def _turn(U, U1, bone, angle):
-    """Stage two's displacement ``U - U1`` turned by each vertex's bone angle, complex ``(n,)``."""
-    return np.exp(1j * angle)[bone] * (as_complex(U) - as_complex(U1))
+    """Stage two's displacement ``U - U1`` turned by each vertex's bone angle, ``(n, 2)``."""
+    return rotate(U - U1, angle[bone])

@@ -5,13 +5,18 @@ joint names and parents say what the columns are. It is what the cartoon filter 
 writes, what motion capture produces, and what ``toonmotion animate`` plays frame by frame.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
-from toonmotion.animate.timeline import pose_at
+from toonmotion.animate.timeline import Timeline, pose_at
 from toonmotion.errors import MotionError
+from toonmotion.geometry.arrays import frozen_array
 from toonmotion.rig.pose import Pose
+from toonmotion.rig.skeleton import Skeleton
 
 
 @dataclass(frozen=True, eq=False)
@@ -28,15 +33,24 @@ class Motion:
         Frames per second.
     confidence : (T, k) float in [0, 1], optional
         How sure motion capture was of each joint at each frame (None when not captured).
+
+    Construction copies the arrays (read-only) and raises :class:`MotionError` unless the
+    positions are finite ``(T, k, 2)`` with ``T >= 1``, the fps a finite number > 0 and the
+    confidence ``(T, k)`` in [0, 1].
     """
 
-    skeleton: object
-    positions: np.ndarray
+    skeleton: Skeleton
+    positions: NDArray[np.float64]
     fps: float
-    confidence: np.ndarray | None = None
+    confidence: NDArray[np.float64] | None = None
 
-    def __post_init__(self):
-        positions = np.array(self.positions, dtype=float)
+    def __post_init__(self) -> None:
+        if not isinstance(self.skeleton, Skeleton):
+            raise TypeError(f"a motion's skeleton must be a Skeleton, got {type(self.skeleton).__name__}")
+        try:
+            positions = np.asarray(self.positions, dtype=float)
+        except (TypeError, ValueError):
+            raise MotionError("a motion's positions must be an array of numbers") from None
         k = len(self.skeleton)
         if positions.ndim != 3 or positions.shape[1:] != (k, 2) or len(positions) == 0:
             raise MotionError(
@@ -50,34 +64,34 @@ class Motion:
                 or not (np.isfinite(self.fps) and self.fps > 0):
             raise MotionError(f"the motion's fps must be a finite number > 0, got {self.fps!r}")
         if self.confidence is not None:
-            confidence = np.array(self.confidence, dtype=float)
+            confidence = frozen_array(self.confidence, dtype=np.float64, name="the motion's confidence",
+                                      error=MotionError)
             if confidence.shape != positions.shape[:2]:
                 raise MotionError(f"the motion's confidence must have shape {positions.shape[:2]}, "
                                   f"got {confidence.shape}")
             if not np.all((confidence >= 0) & (confidence <= 1)):
                 raise MotionError("the motion's confidence values must lie between 0 and 1")
-            confidence.setflags(write=False)
             object.__setattr__(self, "confidence", confidence)
-        positions.setflags(write=False)
-        object.__setattr__(self, "positions", positions)
+        object.__setattr__(self, "positions", frozen_array(positions, dtype=np.float64))
         object.__setattr__(self, "fps", float(self.fps))
 
     @property
-    def frame_count(self):
+    def frame_count(self) -> int:
+        """Number of frames, ``T``."""
         return len(self.positions)
 
-    def pose(self, frame):
+    def pose(self, frame: int) -> Pose:
         """The pose at ``frame`` (an index)."""
         return Pose(self.positions[frame])
 
 
-def motion_from_timeline(skeleton, timeline):
+def motion_from_timeline(skeleton: Skeleton, timeline: Timeline) -> Motion:
     """Sample key-frames and their in-betweens into a :class:`Motion`, one pose per frame."""
     frames = [pose_at(skeleton, timeline, f).positions for f in range(timeline.frame_count)]
     return Motion(skeleton=skeleton, positions=np.stack(frames), fps=timeline.fps)
 
 
-def motion_for(skeleton, motion, *, where="the motion"):
+def motion_for(skeleton: Skeleton, motion: Motion, *, where: str = "the motion") -> NDArray[np.float64]:
     """``motion``'s positions in ``skeleton``'s joint order, ``(T, k, 2)``.
 
     The motion must name every joint of ``skeleton`` (it may have more); retargeting a motion

@@ -37,11 +37,18 @@ Choices where the paper leaves them open:
   acceleration that shrinks ``|OB'|`` below :data:`MIN_CHAIN_FRACTION` of ``|OB|`` is refused.
 """
 
+from __future__ import annotations
+
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from toonmotion.animate.cartoon_filter import joint_indices
 from toonmotion.errors import FilterError, PoseError
+from toonmotion.rig.kinematics import rotation
 from toonmotion.rig.pose import Pose, check_pose
+from toonmotion.rig.skeleton import Skeleton
 
 # A chain root -> fixed joint shorter than this (pixels) has no direction.
 MIN_CHAIN_LENGTH = 1e-6
@@ -54,7 +61,9 @@ MIN_CHAIN_FRACTION = 0.05
 CONNECTOR_ANGLE = np.radians(40.0)
 
 
-def exaggerate_pose(skeleton, pose, accel, fixed, *, root=None):
+def exaggerate_pose(
+    skeleton: Skeleton, pose: Pose, accel: ArrayLike, fixed: Sequence[str], *, root: str | None = None
+) -> Pose:
     """Squash or stretch a pose along a drawn acceleration, keeping the fixed joints in place.
 
     Parameters
@@ -142,11 +151,9 @@ def _chain_transform(OB, a, root_name, fixed_name):
             f"(it would shrink to {s:.1%} of its length); shorten the acceleration"
         )
     angle = np.arctan2(OB[0] * target[1] - OB[1] * target[0], OB @ target)
-    c, n = np.cos(angle), np.sin(angle)
-    R = np.array([[c, -n], [n, c]])
     u = target / np.hypot(*target)
     S = np.eye(2) + (s - 1) * np.outer(u, u)
-    return S @ R
+    return S @ rotation(angle)
 
 
 def _chain(skeleton, o, b):

@@ -21,13 +21,17 @@ foreground's area are filled; bigger holes, such as the gap between an arm on th
 body, stay.
 """
 
+from __future__ import annotations
+
+from collections.abc import Sequence
 from numbers import Real
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
 
 from toonmotion.errors import TrackingError
-from toonmotion.shape.curve_skeleton import curve_skeleton
+from toonmotion.shape.curve_skeleton import CurveSkeleton, curve_skeleton
 from toonmotion.shape.segment import clean_mask
 
 THRESHOLD_RANGE = (20.0, 100.0)
@@ -38,7 +42,7 @@ CLEAN_FRACTION = 0.01
 _CROSS = ndi.generate_binary_structure(2, 1)
 
 
-def estimate_background(frames, *, samples=25):
+def estimate_background(frames: NDArray[np.uint8], *, samples: int = 25) -> NDArray[np.uint8]:
     """The static background: each pixel's median over evenly spaced frames.
 
     Parameters
@@ -64,14 +68,16 @@ def estimate_background(frames, *, samples=25):
         raise ValueError(f"samples must be a positive whole number, got {samples!r}")
     T = len(frames)
     picked = np.unique(np.rint(np.linspace(0, T - 1, min(samples, T))).astype(int))
-    out = np.empty(frames.shape[1:], np.uint8)
+    out: NDArray[np.uint8] = np.empty(frames.shape[1:], np.uint8)
     for r in range(0, out.shape[0], 64):  # row bands keep the float copy median makes small
         band = np.median(frames[picked, r : r + 64], axis=0)
         out[r : r + 64] = np.rint(band).astype(np.uint8)
     return out
 
 
-def foreground_masks(frames, *, background=None, colour=None, threshold=None):
+def foreground_masks(frames: NDArray[np.uint8], *, background: ArrayLike | None = None,
+                     colour: Sequence[int] | None = None,
+                     threshold: float | None = None) -> NDArray[np.bool_]:
     """Where the figure is in each frame: pixels whose colour differs from the background's.
 
     Parameters
@@ -117,7 +123,7 @@ def foreground_masks(frames, *, background=None, colour=None, threshold=None):
     return masks
 
 
-def guide_skeleton(mask, *, prune=0.5):
+def guide_skeleton(mask: NDArray[np.bool_], *, prune: float = 0.5) -> CurveSkeleton:
     """The curve skeleton of frame 1's foreground, the guide for placing joints (thesis 4.3).
 
     Parameters
@@ -201,7 +207,7 @@ def _cleaned(mask):
     return mask | small[labels]
 
 
-def border_colour(frame, *, spread=12.0):
+def border_colour(frame: ArrayLike, *, spread: float = 12.0) -> tuple[int, int, int] | None:
     """The colour of a flat background, read off the frame's border, or None if it is not flat.
 
     A cartoon on a plain background has the same colour all round its edge; when the per-channel
@@ -212,4 +218,5 @@ def border_colour(frame, *, spread=12.0):
     border = np.concatenate([frame[0], frame[-1], frame[:, 0], frame[:, -1]]).astype(float)
     if border.std(axis=0).max() >= spread:
         return None
-    return tuple(int(v) for v in np.median(border, axis=0))
+    r, g, b = (int(v) for v in np.median(border, axis=0))  # an (h, w, 3) RGB frame
+    return r, g, b

@@ -17,12 +17,18 @@ coordinates are pixel centres, so a ``w`` x ``h`` frame spans ``[-0.5, w - 0.5]`
 joint, until they do.
 """
 
+from __future__ import annotations
+
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
 
 from toonmotion.capture.foreground import guide_skeleton
 from toonmotion.errors import TrackingError
 from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
+from toonmotion.rig.skeleton import Skeleton
 
 SIZE_RANGE = (8.0, 48.0)
 # How far from a joint (pixels) the figure's thickness is looked for.
@@ -31,7 +37,8 @@ THICKNESS_REACH = 3
 _EPS = 1e-9
 
 
-def suggest_setup(mask, *, max_bone=None, prune=0.5):
+def suggest_setup(mask: NDArray[np.bool_], *, max_bone: float | None = None,
+                  prune: float = 0.5) -> tuple[Skeleton, NDArray[np.float64]]:
     """Joints to track on frame 1, from its curve skeleton, and a rectangle for each.
 
     Parameters
@@ -77,7 +84,7 @@ def suggest_setup(mask, *, max_bone=None, prune=0.5):
     return skeleton, np.minimum(sizes, np.maximum(room, 0.0))
 
 
-def check_setup(skeleton, sizes, frame_size):
+def check_setup(skeleton: Skeleton, sizes: ArrayLike, frame_size: Sequence[int]) -> None:
     """Raise :class:`TrackingError` unless every joint's rectangle is usable in the frame.
 
     Parameters

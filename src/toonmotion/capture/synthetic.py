@@ -10,13 +10,25 @@ any sub-pixel resampling, which no drawing or footage does (a tracker lost the t
 a test arm on its first frame with it, and kept it to 0.1 px without).
 """
 
+from __future__ import annotations
+
 import cv2
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import TrackingError
+from toonmotion.rig.kinematics import rotation
 
 
-def limb_figure_frames(points, parents, *, depth=None, size=(640, 480), width=None, seed=0):
+def limb_figure_frames(
+    points: ArrayLike,
+    parents: ArrayLike,
+    *,
+    depth: ArrayLike | None = None,
+    size: tuple[int, int] = (640, 480),
+    width: float | None = None,
+    seed: int = 0,
+) -> tuple[NDArray[np.uint8], float]:
     """Render a textured limb figure at ``points`` for every frame.
 
     Parameters
@@ -129,8 +141,7 @@ def _paste_limb(frame, texture, a, b, width):
 
 def _paste_disc(frame, texture, centre, angle, radius):
     side = texture.shape[0]
-    c, s = np.cos(angle), np.sin(angle)
-    R = np.array([[c, -s], [s, c]])
+    R = rotation(angle)
     middle = side // 2
     M = np.column_stack([R, centre - R @ np.array([middle, middle], dtype=float)])
     mask = np.zeros((side, side), dtype=np.uint8)

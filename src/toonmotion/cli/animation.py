@@ -62,21 +62,12 @@ def pose(
     character = api.load_project(project)
     edits = load_pose_edits(pose_file)
     frame = api.pose_character(
-        character,
-        load_pose(pose_file, character.skeleton),
-        edits=edits,
+        character, load_pose(pose_file, character.skeleton), edits=edits,
         accel=None if accel is None else options.point(accel, "--accel"),
-        fixed=options.names(fixed) if fixed is not None else (),
-        root=root,
-        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width),
-    )
-    picture = api.render_pose(
-        character,
-        frame,
-        size=options.size(size),
-        background=options.colour(background),
-        overlays=options.overlays(overlay),
-    )
+        fixed=options.names(fixed) if fixed is not None else (), root=root,
+        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width))
+    picture = api.render_pose(character, frame, size=options.size(size),
+                              background=options.colour(background), overlays=options.overlays(overlay))
     save_png(output, picture)
     result = frame.deformation
     typer.echo(
@@ -146,14 +137,8 @@ def animate(
         if ease is not None:
             timeline = make_timeline(character.skeleton, timeline.keys, fps=timeline.fps, ease=ease)
         source, what = timeline, f"{len(timeline.keys)} key-frames"
-    animation = api.animate_character(
-        character,
-        source,
-        settings=settings,
-        exaggeration=exaggeration,
-        fps=fps,
-        method="solve" if solve_inbetweens else "interpolate",
-    )
+    animation = api.animate_character(character, source, settings=settings, exaggeration=exaggeration,
+                                      fps=fps, method="solve" if solve_inbetweens else "interpolate")
     count, out_size = write(
         output, character, animation, kind=kind, size=size, background=background, overlay=overlay
     )
@@ -165,11 +150,8 @@ def animate(
         + f": {count} frames at {animation.motion.fps:g} fps, {out_size[0]}x{out_size[1]} -> {output}"
         + (f" (motion -> {save_motion_to})" if save_motion_to is not None else "")
     )
-    report_overlaps(
-        character,
-        [(key.frame, result.U) for key, result in zip(animation.keys, animation.solved, strict=True)],
-        keys=True,
-    )
+    solved = zip(animation.keys, animation.solved, strict=True)
+    report_overlaps(character, [(key.frame, result.U) for key, result in solved], keys=True)
 
 
 @app.command("filter")
@@ -202,28 +184,13 @@ def filter_motion(
     )
 
 
-def write(
-    output: Path,
-    character: Character,
-    animation: api.Animation,
-    *,
-    kind: str,
-    size: str | None,
-    background: str | None,
-    overlay: str,
-) -> tuple[int, tuple[int, int]]:
+def write(output: Path, character: Character, animation: api.Animation, *, kind: str,
+          size: str | None, background: str | None, overlay: str) -> tuple[int, tuple[int, int]]:
     """Render and save an animation with the shared output options; ``(frames, (w, h))``."""
     colour = options.colour(background or ("transparent" if kind == "png" else "white"))
     with options.progress("rendering") as report:
-        return api.write_animation(
-            output,
-            character,
-            animation,
-            size=options.size(size),
-            background=colour,
-            overlays=options.overlays(overlay),
-            progress=report,
-        )
+        return api.write_animation(output, character, animation, size=options.size(size),
+                                   background=colour, overlays=options.overlays(overlay), progress=report)
 
 
 def report_overlaps(

@@ -61,14 +61,9 @@ def rig(
     """Rig a drawing: silhouette, mesh, curve skeleton, skeleton and decomposition."""
     if spacing is not None and vertices is not None:
         raise SettingsError("give either --spacing or --vertices, not both")
-    settings = RigSettings(
-        spacing=spacing,
-        vertices=vertices,
-        tolerance=tolerance,
-        refine_joints=refine_joints,
-        largest_only=largest_only,
-        segmentation=background,
-    )
+    settings = RigSettings(spacing=spacing, vertices=vertices, tolerance=tolerance,
+                           refine_joints=refine_joints, largest_only=largest_only,
+                           segmentation=background)
     with options.progress("rigging") as report:
         character = api.rig_image(
             image, mask=mask, skeleton=skeleton, settings=settings, max_pixels=max_pixels, progress=report

@@ -4,14 +4,19 @@ A :class:`Deformer` is built once per character and settings (it holds the needl
 stage two's factorisation); :meth:`Deformer.deform` then runs per pose or frame.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
-from toonmotion.deform.joint_solve import JointSolver, joint_area
+from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver, joint_area, solve_figures
 from toonmotion.deform.needles import needle_model, stage_one
 from toonmotion.errors import SettingsError
-from toonmotion.rig.pose import check_pose
+from toonmotion.geometry.arrays import frozen_array
+from toonmotion.rig.character import Character
+from toonmotion.rig.pose import Pose, check_pose
 
 
 @dataclass(frozen=True)
@@ -37,17 +42,38 @@ class DeformSettings:
         ``"rigid"``: each joint triangle's edges keep their lengths *and* their orientation
         (the edges of a triangle turn together), so triangles do not flip; ``"length"``: the
         thesis' edge-length term (eq. 3.7), which cannot tell a triangle from its mirror image.
+
+    Construction raises :class:`SettingsError` for a value out of range.
     """
 
     preserve_area: bool = True
-    weights: tuple = (1.0, 1.0, 1.0)
+    weights: tuple[float, ...] = (1.0, 1.0, 1.0)
     joint_width: float = 1.5
     max_iterations: int = 100
     tolerance: float = 1e-4
     stage_two: bool = True
     edge_term: str = "rigid"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
+        for name in ("preserve_area", "stage_two"):
+            if not isinstance(getattr(self, name), bool | np.bool_):
+                raise SettingsError(f"{name} must be true or false, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, bool(getattr(self, name)))
+        # The same checks and messages as JointSolver and joint_area, which the settings feed.
+        w = np.asarray(self.weights, dtype=float)
+        if w.shape != (3,) or not np.all(np.isfinite(w)) or (w < 0).any() or w.sum() <= 0:
+            raise SettingsError(
+                f"stage-two weights must be three finite numbers >= 0, not all zero; got {w.tolist()}"
+            )
+        object.__setattr__(self, "weights", (float(w[0]), float(w[1]), float(w[2])))
+        width = self.joint_width
+        if not (np.isfinite(width) and width >= 0):
+            raise SettingsError(f"the joint area width must be a finite number >= 0, got {width}")
+        object.__setattr__(self, "joint_width", float(width))
+        if self.edge_term not in EDGE_TERMS:
+            raise SettingsError(
+                f"the edge term must be one of {', '.join(EDGE_TERMS)}, got {self.edge_term!r}"
+            )
         if isinstance(self.max_iterations, bool) or not (
             isinstance(self.max_iterations, int) and self.max_iterations >= 1
         ):
@@ -72,14 +98,25 @@ class Deformation:
     energy_start, energy : float
         Stage two's energy (eq. 3.8) where it started and where it ended.
     converged : bool
+
+    Construction copies ``U`` and ``stage_one`` (read-only) and raises ``ValueError`` unless
+    they are ``(n, 2)`` alike and the figures are numbers (an iteration count >= 0).
     """
 
-    U: np.ndarray
-    stage_one: np.ndarray
+    U: NDArray[np.float64]
+    stage_one: NDArray[np.float64]
     iterations: int
     energy_start: float
     energy: float
     converged: bool
+
+    def __post_init__(self) -> None:
+        what = "a deformation"
+        for name, value in solve_figures(what, self.U, self.iterations, self.energy_start, self.energy,
+                                         self.converged).items():
+            object.__setattr__(self, name, value)
+        stage = frozen_array(self.stage_one, dtype=np.float64, shape=self.U.shape, name=f"{what}'s stage_one")
+        object.__setattr__(self, "stage_one", stage)
 
 
 class Deformer:
@@ -95,7 +132,7 @@ class Deformer:
     solver : JointSolver
     """
 
-    def __init__(self, character, settings=None):
+    def __init__(self, character: Character, settings: DeformSettings | None = None) -> None:
         self.character = character
         self.settings = settings = settings or DeformSettings()
         mesh = character.mesh
@@ -105,12 +142,12 @@ class Deformer:
         self.solver = JointSolver(mesh, self.free, weights=settings.weights,
                                   edge_term=settings.edge_term)
 
-    def stage_one(self, pose):
+    def stage_one(self, pose: Pose) -> NDArray[np.float64]:
         """The needle model alone for ``pose``: ``(n, 2)``."""
         check_pose(self.character.skeleton, pose)
         return stage_one(self.needles, pose.positions, preserve_area=self.settings.preserve_area)
 
-    def deform(self, pose, *, previous=None):
+    def deform(self, pose: Pose, *, previous: Deformation | None = None) -> Deformation:
         """Deform the character into ``pose``.
 
         Parameters

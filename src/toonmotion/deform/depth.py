@@ -8,30 +8,53 @@ the arm. Within one layer triangles keep the mesh's order.
 In a pose, regions that overlap are found and reported so the animator can order them.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import SettingsError
+from toonmotion.geometry.arrays import finite_float
+from toonmotion.rig.binding import Binding
+from toonmotion.rig.skeleton import Skeleton
+from toonmotion.shape.mesh import Mesh
 
 
 @dataclass(frozen=True)
 class Overlap:
-    """Two bone regions that overlap in a pose."""
+    """Two bone regions that overlap in a pose.
+
+    Attributes
+    ----------
+    bone_a, bone_b : str
+        The two bones' names.
+    area : float
+        How much they overlap, square pixels (>= 0).
+    same_depth : bool
+        Both regions are at the same depth layer, so their drawing order is the mesh's.
+    """
 
     bone_a: str
     bone_b: str
     area: float
     same_depth: bool
 
+    def __post_init__(self) -> None:
+        if not (isinstance(self.bone_a, str) and isinstance(self.bone_b, str)):
+            raise TypeError(f"an overlap names two bones, got {self.bone_a!r} and {self.bone_b!r}")
+        object.__setattr__(self, "area", finite_float(self.area, name="an overlap's area", minimum=0))
+        object.__setattr__(self, "same_depth", bool(self.same_depth))
 
-def default_depth(skeleton):
+
+def default_depth(skeleton: Skeleton) -> NDArray[np.int64]:
     """Depth 0 for every bone, ``(b,)`` int."""
     return np.zeros(len(skeleton.bones), dtype=np.int64)
 
 
-def set_region_depth(depth, binding, vertex, value):
+def set_region_depth(depth: ArrayLike, binding: Binding, vertex: int, value: int) -> NDArray[np.int64]:
     """New depths with the region of ``vertex`` (its bone) at ``value`` (clicking a vertex)."""
     if not (0 <= vertex < len(binding.bone)):
         raise SettingsError(f"there is no vertex {vertex}; the mesh has {len(binding.bone)} vertices")
@@ -40,17 +63,25 @@ def set_region_depth(depth, binding, vertex, value):
     return out
 
 
-def triangle_layers(mesh, binding, depth):
+def triangle_layers(mesh: Mesh, binding: Binding, depth: ArrayLike) -> NDArray[np.int64]:
     """Each triangle's depth: the highest depth among its vertices' bones, ``(m,)`` int."""
     return np.asarray(depth)[binding.bone[mesh.F]].max(axis=1)
 
 
-def draw_order(mesh, binding, depth):
+def draw_order(mesh: Mesh, binding: Binding, depth: ArrayLike) -> NDArray[np.intp]:
     """Triangle indices back to front, ``(m,)``: by layer, then in mesh order."""
     return np.argsort(triangle_layers(mesh, binding, depth), kind="stable")
 
 
-def find_overlaps(mesh, binding, skeleton, U, depth, *, min_area=None):
+def find_overlaps(
+    mesh: Mesh,
+    binding: Binding,
+    skeleton: Skeleton,
+    U: NDArray[np.float64],
+    depth: NDArray[np.integer],
+    *,
+    min_area: float | None = None,
+) -> list[Overlap]:
     """Pairs of bone regions whose deformed triangles overlap by more than ``min_area`` px².
 
     A triangle counts for the region most of its vertices belong to. ``min_area`` defaults to

@@ -44,7 +44,7 @@ from scipy.spatial import cKDTree
 
 from toonmotion.deform.joint_solve import JointSolver
 from toonmotion.errors import EditError
-from toonmotion.geometry.segments import closest_points_on_segments
+from toonmotion.geometry.segments import arc_lengths, closest_points_on_segments, resample_by_arc_length
 from toonmotion.rig.pose import check_pose
 from toonmotion.shape.mesh import Mesh, unique_edges
 
@@ -368,7 +368,7 @@ def _onto_curve(P, feet, C):
     mu_j = np.clip(mu[np.arange(len(P)), j], 0.0, 1.0)
     out = A[j] + mu_j[:, None] * E[j]
     if not found.all():
-        out[~found] = _at_fraction(C, _fractions(P))[~found]
+        out[~found] = resample_by_arc_length(C, _fractions(P), fraction=True)[~found]
     return out
 
 
@@ -378,15 +378,8 @@ def _cross(a, b):
 
 def _fractions(P):
     """Arc-length fraction of each point of the polyline ``P`` (``(s, 2)``), 0 to 1."""
-    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+    s = arc_lengths(P)
     return s / s[-1] if s[-1] > 0 else np.linspace(0.0, 1.0, len(P))
-
-
-def _at_fraction(C, fraction):
-    """Points at arc-length fractions ``fraction`` (``(s,)``) along the polyline ``C``."""
-    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(C, axis=0).T))]
-    at = fraction * s[-1]
-    return np.stack([np.interp(at, s, C[:, 0]), np.interp(at, s, C[:, 1])], axis=1)
 
 
 # --- neighbourhoods ------------------------------------------------------------------------------

@@ -18,22 +18,28 @@ Points are complex numbers ``x + iy`` here: the RSI Laplacian's rotation-and-sca
 then one complex coefficient and the whole system is one ``m x m`` complex solve.
 """
 
+from __future__ import annotations
+
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
 from scipy.sparse.linalg import splu
 
 from toonmotion.errors import SettingsError
+from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.coordinates import (
     as_complex,
     as_points,
     mean_value_weights,
     rsi_laplacian_coefficients,
 )
-from toonmotion.rig.skeleton import MIN_BONE_LENGTH
-from toonmotion.shape.mesh import unique_edges
+from toonmotion.rig.binding import Binding
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
+from toonmotion.shape.mesh import Mesh, unique_edges
 
 # Added to the normal matrix's diagonal, relative to its mean, pulling free vertices that no
 # fixed vertex anchors (a joint area that is a whole part) towards their starting positions.
@@ -56,16 +62,49 @@ class SolveResult:
         Eq. 3.8 at the starting positions and at the result (pixels squared).
     converged : bool
         The last iteration lowered the energy by less than the tolerance (a fraction).
+
+    Construction copies ``U`` (read-only) and raises ``ValueError`` unless it is ``(n, 2)``,
+    the iteration count a whole number >= 0 and the energies numbers.
     """
 
-    U: np.ndarray
+    U: NDArray[np.float64]
     iterations: int
     energy_start: float
     energy: float
     converged: bool
 
+    def __post_init__(self) -> None:
+        for name, value in solve_figures("a stage-two result", self.U, self.iterations, self.energy_start,
+                                         self.energy, self.converged).items():
+            object.__setattr__(self, name, value)
 
-def joint_area(mesh, skeleton, binding, mask, *, width=1.5):
+
+def solve_figures(
+    what: str, U: NDArray[np.float64], iterations: int, energy_start: float, energy: float, converged: bool
+) -> dict[str, object]:
+    """The fields of a solve's outcome (:class:`SolveResult`, ``Deformation``), checked and typed.
+
+    ``U`` becomes a read-only ``(n, 2)`` float copy, ``iterations`` an int >= 0, the energies
+    floats (NaN allowed: a diverged solve says so) and ``converged`` a bool; ``ValueError``
+    names ``what`` otherwise.
+    """
+    if isinstance(iterations, bool) or not isinstance(iterations, int | np.integer) or iterations < 0:
+        raise ValueError(f"{what}'s iterations must be a whole number >= 0, got {iterations!r}")
+    for name, value in (("energy_start", energy_start), ("energy", energy)):
+        if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+            raise ValueError(f"{what}'s {name} must be a number, got {value!r}")
+    return {
+        "U": frozen_array(U, dtype=np.float64, shape=(None, 2), name=f"{what}'s U"),
+        "iterations": int(iterations),
+        "energy_start": float(energy_start),
+        "energy": float(energy),
+        "converged": bool(converged),
+    }
+
+
+def joint_area(
+    mesh: Mesh, skeleton: Skeleton, binding: Binding, mask: NDArray[np.bool_], *, width: float = 1.5
+) -> NDArray[np.bool_]:
     """Vertices that stage two moves: the joint areas, ``(n,) bool``.
 
     The thesis' joint area is the vertices of joint triangles (those spanning two bones), a
@@ -74,6 +113,8 @@ def joint_area(mesh, skeleton, binding, mask, *, width=1.5):
     unfold that. So around every joint where two or more bones meet we also free the vertices
     of those bones within ``width`` times the thinner bone's half-thickness (the figure's
     distance to its outline along the bone's middle). ``width=0`` gives the thesis' band alone.
+    The default, 1.5, is also :class:`~toonmotion.deform.deformer.DeformSettings`'s
+    ``joint_width``, which :class:`~toonmotion.deform.deformer.Deformer` passes.
     """
     if not (np.isfinite(width) and width >= 0):
         raise SettingsError(f"the joint area width must be a finite number >= 0, got {width}")
@@ -120,6 +161,10 @@ class JointSolver:
     weights : (3,) float
         ``w1, w2, w3`` for the RSI Laplacian, mean value and edge-length terms; normalised to
         sum to 1 (eq. 3.8). Equal by default.
+    edge_term : {"rigid", "length"}
+        The form of E3 (see :class:`~toonmotion.deform.deformer.DeformSettings`); "rigid" by
+        default. :class:`~toonmotion.deform.deformer.Deformer` passes its settings' weights and
+        edge term, whose defaults are these.
 
     Attributes
     ----------
@@ -129,17 +174,17 @@ class JointSolver:
         The normalised weights.
     """
 
-    def __init__(self, mesh, free, *, weights=(1.0, 1.0, 1.0), edge_term="rigid"):
+    def __init__(self, mesh: Mesh, free: NDArray[np.bool_], *, weights: Sequence[float] = (1.0, 1.0, 1.0),
+                 edge_term: str = "rigid") -> None:
         if edge_term not in EDGE_TERMS:
             raise SettingsError(f"the edge term must be one of {', '.join(EDGE_TERMS)}, got {edge_term!r}")
         self.edge_term = edge_term
-        weights = np.asarray(weights, dtype=float)
-        if weights.shape != (3,) or not np.all(np.isfinite(weights)) or (weights < 0).any() \
-                or weights.sum() <= 0:
+        w = np.asarray(weights, dtype=float)
+        if w.shape != (3,) or not np.all(np.isfinite(w)) or (w < 0).any() or w.sum() <= 0:
             raise SettingsError(
-                f"stage-two weights must be three finite numbers >= 0, not all zero; got {weights.tolist()}"
+                f"stage-two weights must be three finite numbers >= 0, not all zero; got {w.tolist()}"
             )
-        self.weights = weights / weights.sum()
+        self.weights = w / w.sum()
         free = np.asarray(free, dtype=bool)
         self.free = np.flatnonzero(free)
         self.fixed = np.flatnonzero(~free)
@@ -172,11 +217,12 @@ class JointSolver:
         self._from_fixed = (-(Ff.conj().T @ Fx)).tocsr()
         self._from_edges = (w3 * A3[:, self.free].conj().T).tocsr()
 
-    def energy(self, U):
+    def energy(self, U: NDArray[np.float64]) -> float:
         """Eq. 3.8 at vertices ``U`` (``(n, 2)``)."""
         return self._energy(as_complex(U))
 
-    def solve(self, U, *, initial=None, max_iterations=50, tolerance=1e-3):
+    def solve(self, U: NDArray[np.float64], *, initial: NDArray[np.float64] | None = None,
+              max_iterations: int = 50, tolerance: float = 1e-3) -> SolveResult:
         """Solve for the free vertices, the others fixed at ``U`` (the stage-one result).
 
         Parameters
@@ -187,8 +233,13 @@ class JointSolver:
             Where the free vertices start (a warm start, e.g. the previous frame's result moved
             by this frame's stage one). Used only when its energy is below ``U``'s.
         max_iterations : int
+            Gauss-Newton iterations at most; 50 when not given. No caller in toonmotion relies on
+            that: :meth:`Deformer.deform <toonmotion.deform.deformer.Deformer.deform>` passes
+            ``DeformSettings.max_iterations`` (100 by default) and fine tuning passes 100.
         tolerance : float
-            Stop when an iteration lowers the energy by less than this fraction of it.
+            Stop when an iteration lowers the energy by less than this fraction of it; 1e-3 when
+            not given. ``Deformer.deform`` passes ``DeformSettings.tolerance`` (1e-4 by default)
+            and fine tuning passes 1e-6.
         """
         z = as_complex(U).copy()
         start = self._energy(z)

@@ -15,11 +15,15 @@ region keeps its area, and the map is continuous across the bone's end. Vertices
 zero rest length (a correction may put them there) only follow its start joint's translation.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
-from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+from toonmotion.geometry.arrays import frozen_array
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,18 +45,35 @@ class NeedleModel:
         Bones of zero rest length: their vertices translate only.
     offset : (n, 2) float
         For vertices of rigid bones, their offset from the bone's start joint.
+
+    Construction copies the arrays (read-only) and raises ``ValueError`` unless their shapes
+    agree and every vertex's bone exists.
     """
 
-    bones: np.ndarray
-    bone: np.ndarray
-    t: np.ndarray
-    s: np.ndarray
-    rest_length: np.ndarray
-    rigid: np.ndarray
-    offset: np.ndarray
+    bones: NDArray[np.int64]
+    bone: NDArray[np.int64]
+    t: NDArray[np.float64]
+    s: NDArray[np.float64]
+    rest_length: NDArray[np.float64]
+    rigid: NDArray[np.bool_]
+    offset: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        bones = frozen_array(self.bones, dtype=np.int64, shape=(None, 2), name="a needle model's bones")
+        bone = frozen_array(self.bone, dtype=np.int64, shape=(None,), name="a needle model's bone")
+        b, n = len(bones), len(bone)
+        if n and (bone.min() < 0 or bone.max() >= b):
+            raise ValueError(f"a needle model's vertices name bones outside 0..{b - 1}")
+        object.__setattr__(self, "bones", bones)
+        object.__setattr__(self, "bone", bone)
+        for name, dtype, shape in (("t", np.float64, (n,)), ("s", np.float64, (n,)),
+                                   ("rest_length", np.float64, (b,)), ("rigid", np.bool_, (b,)),
+                                   ("offset", np.float64, (n, 2))):
+            object.__setattr__(self, name, frozen_array(getattr(self, name), dtype=dtype, shape=shape,
+                                                        name=f"a needle model's {name}"))
 
 
-def needle_model(V, skeleton, bone):
+def needle_model(V: NDArray[np.float64], skeleton: Skeleton, bone: NDArray[np.integer]) -> NeedleModel:
     """Needles of vertices ``V`` (``(n, 2)``) attached to bones ``bone`` (``(n,)``) of ``skeleton``."""
     bones = skeleton.bones
     A = skeleton.positions[bones[:, 0]]
@@ -78,7 +99,8 @@ def needle_model(V, skeleton, bone):
     )
 
 
-def stage_one(model, positions, *, preserve_area=True):
+def stage_one(model: NeedleModel, positions: NDArray[np.float64], *, preserve_area: bool = True
+              ) -> NDArray[np.float64]:
     """Deformed vertices for joint positions ``positions`` (``(k, 2)``, a pose).
 
     Returns

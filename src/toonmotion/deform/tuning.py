@@ -8,13 +8,21 @@ order on a :class:`~toonmotion.deform.deformer.Deformation`; the geometry is in
 :mod:`toonmotion.deform.fine_tune`.
 """
 
+from __future__ import annotations
+
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TypeAlias
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.deform.deformer import Deformation, Deformer
 from toonmotion.deform.fine_tune import drag_points, tune_with_curve
 from toonmotion.errors import EditError
+from toonmotion.geometry.arrays import frozen_array
+from toonmotion.rig.pose import Pose
 
 
 @dataclass(frozen=True, eq=False)
@@ -25,11 +33,14 @@ class CurveEdit:
     ----------
     points : (k, 2) float
         The sketched polyline, k >= 2, drawing pixels.
+
+    Construction copies the points (read-only) and raises :class:`EditError` unless they are
+    at least two finite ``[x, y]`` points.
     """
 
-    points: np.ndarray
+    points: NDArray[np.float64]
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "points", _points(self.points, "a sketch curve", minimum=2))
 
 
@@ -41,12 +52,15 @@ class DragEdit:
     ----------
     start, end : (k, 2) float
         Where each drag began and ended, drawing pixels.
+
+    Construction copies the points (read-only) and raises :class:`EditError` unless they are
+    finite ``[x, y]`` points, at least one, as many ends as starts.
     """
 
-    start: np.ndarray
-    end: np.ndarray
+    start: NDArray[np.float64]
+    end: NDArray[np.float64]
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         start = _points(self.start, "a drag's start points", minimum=1)
         end = _points(self.end, "a drag's end points", minimum=1)
         if start.shape != end.shape:
@@ -58,8 +72,13 @@ class DragEdit:
 
 EDIT_TYPES = {"curve": CurveEdit, "drag": DragEdit}
 
+TuningEdit: TypeAlias = CurveEdit | DragEdit
+"""A fine-tuning edit."""
 
-def apply_tuning(deformer, pose, deformation, edits):
+
+def apply_tuning(
+    deformer: Deformer, pose: Pose, deformation: Deformation, edits: Sequence[TuningEdit]
+) -> Deformation:
     """``deformation`` with ``edits`` applied in order to its mesh.
 
     Returns the same :class:`Deformation` when there are no edits, else a copy whose ``U`` is
@@ -81,7 +100,7 @@ def apply_tuning(deformer, pose, deformation, edits):
     return dataclasses.replace(deformation, U=U)
 
 
-def describe(edit):
+def describe(edit: TuningEdit) -> str:
     """One line for listings: ``curve of 12 points from (10, 20) to (40, 22)``."""
     if isinstance(edit, CurveEdit):
         (x0, y0), (x1, y1) = edit.points[0], edit.points[-1]
@@ -95,9 +114,9 @@ def _kind(edit):
     return "curve" if isinstance(edit, CurveEdit) else "drag"
 
 
-def _points(value, what, *, minimum):
+def _points(value: ArrayLike, what: str, *, minimum: int) -> NDArray[np.float64]:
     try:
-        P = np.array(value, dtype=float)
+        P = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise EditError(f"{what} must be a list of [x, y] points") from None
     if P.ndim == 1 and P.size == 0:
@@ -108,5 +127,4 @@ def _points(value, what, *, minimum):
         raise EditError(f"{what} needs at least {minimum} point{'s' if minimum > 1 else ''}, got {len(P)}")
     if not np.all(np.isfinite(P)):
         raise EditError(f"{what} has a non-finite coordinate")
-    P.setflags(write=False)
-    return P
+    return frozen_array(P, dtype=np.float64, name=what, error=EditError)

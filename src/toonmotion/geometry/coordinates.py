@@ -65,6 +65,12 @@ def mean_value_weights(V, F):
     summed = np.bincount(inverse, weights=weights)
     rows, cols = unique // len(V), unique % len(V)
     total = np.bincount(rows, weights=summed, minlength=len(V))
+    # A vertex whose triangles all have no area has no angles to weigh by: weigh its
+    # neighbours equally instead of dividing by zero.
+    flat = total[rows] <= 0
+    if flat.any():
+        summed = np.where(flat, 1.0, summed)
+        total = np.bincount(rows, weights=summed, minlength=len(V))
     return rows, cols, summed / total[rows]
 
 

@@ -27,10 +27,14 @@ pixels of all frames together (500 million by default: 1.5 GB, 240 frames of 192
 2000 frames of 640x360), and ``max_frames`` the frame count.
 """
 
+from __future__ import annotations
+
+import os
 import re
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 from PIL import Image, ImageSequence, UnidentifiedImageError
 
 from toonmotion.errors import ImageReadError, ImageTooLargeError, VideoReadError
@@ -49,7 +53,8 @@ _SCALE_HINT = "scale it down (e.g. ffmpeg -i IN -vf scale=iw/2:-2 OUT)"
 _PATTERN_FIELD = re.compile(r"%0?\d*d|\{[^{}]*\}")
 
 
-def load_frames(path, *, max_frames=DEFAULT_MAX_FRAMES, max_pixels=DEFAULT_MAX_PIXELS_TOTAL):
+def load_frames(path: str | os.PathLike[str], *, max_frames: int = DEFAULT_MAX_FRAMES,
+                max_pixels: int = DEFAULT_MAX_PIXELS_TOTAL) -> tuple[NDArray[np.uint8], float | None]:
     """Read a video, an animated image, a folder of numbered images or a file pattern.
 
     Parameters

@@ -5,17 +5,27 @@ drawing pixels (edges, so the drawing's own canvas is ``(-0.5, -0.5, w - 0.5, h 
 fitted into the output size keeping its aspect ratio.
 """
 
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
 import numpy as np
+from numpy.typing import NDArray
 
 from toonmotion.deform.depth import draw_order
 from toonmotion.errors import SettingsError
 from toonmotion.render.overlay import draw_mesh, draw_reference, draw_skeleton
-from toonmotion.render.raster import render_mesh
+from toonmotion.render.raster import check_size, render_mesh
+from toonmotion.rig.character import Character
+from toonmotion.rig.pose import Pose
+from toonmotion.rig.skeleton import Skeleton
+
+View = tuple[float, float, float, float]
 
 OVERLAYS = ("mesh", "skeleton", "rest")
 
 
-def check_overlays(overlays):
+def check_overlays(overlays: Iterable[str]) -> tuple[str, ...]:
     """``overlays`` as a tuple, each one of :data:`OVERLAYS`."""
     overlays = tuple(overlays)
     unknown = [o for o in overlays if o not in OVERLAYS]
@@ -24,13 +34,13 @@ def check_overlays(overlays):
     return overlays
 
 
-def canvas_view(character):
+def canvas_view(character: Character) -> View:
     """The drawing's own canvas as a view."""
     w, h = character.size
     return (-0.5, -0.5, w - 0.5, h - 0.5)
 
 
-def fit_view(character, meshes, *, margin=8.0):
+def fit_view(character: Character, meshes: Iterable[NDArray[np.float64]], *, margin: float = 8.0) -> View:
     """A view holding the drawing's canvas and every deformed mesh in ``meshes``, plus a margin."""
     x0, y0, x1, y1 = canvas_view(character)
     for U in meshes:
@@ -40,15 +50,16 @@ def fit_view(character, meshes, *, margin=8.0):
     return (float(x0), float(y0), float(x1), float(y1))
 
 
-def natural_size(view, *, size=None):
-    """The output size: ``size`` if given, else one output pixel per drawing pixel."""
+def natural_size(view: Sequence[float], *, size: Sequence[int] | None = None) -> tuple[int, int]:
+    """The output size: ``size`` if given (checked), else one output pixel per drawing pixel."""
     if size is not None:
-        return size
+        return check_size(size)
     x0, y0, x1, y1 = view
     return max(1, int(np.ceil(x1 - x0))), max(1, int(np.ceil(y1 - y0)))
 
 
-def reference_bones(skeleton, positions):
+def reference_bones(skeleton: Skeleton,
+                    positions: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.int_]]:
     """Each rest bone drawn from its posed start joint (thesis fig. 6.2a's red lines).
 
     Returns ``(points (2b, 2), pairs (b, 2))``: the rest direction and length of every bone,
@@ -63,8 +74,10 @@ def reference_bones(skeleton, positions):
     return points, pairs
 
 
-def render_frame(character, U, *, pose=None, size=None, view=None, background=None, overlays=(),
-                 order=None):
+def render_frame(character: Character, U: NDArray[np.float64], *, pose: Pose | None = None,
+                 size: Sequence[int] | None = None, view: Sequence[float] | None = None,
+                 background: Sequence[int] | None = None, overlays: Iterable[str] = (),
+                 order: NDArray[np.int_] | None = None) -> NDArray[np.uint8]:
     """Render the character deformed to vertices ``U``.
 
     Parameters
@@ -104,8 +117,10 @@ def render_frame(character, U, *, pose=None, size=None, view=None, background=No
         frame = draw_mesh(frame, U, mesh.F, view=view)
     skeleton = character.skeleton
     if "rest" in overlays:
+        assert pose is not None  # checked above
         points, pairs = reference_bones(skeleton, pose.positions)
         frame = draw_reference(frame, points, pairs, view=view)
     if "skeleton" in overlays:
+        assert pose is not None  # checked above
         frame = draw_skeleton(frame, pose.positions, skeleton.bones, view=view)
     return frame

@@ -7,10 +7,14 @@ over the frame ("over", straight alpha). Widths and radii are in output pixels. 
 is not modified; a new one is returned.
 """
 
+from __future__ import annotations
+
+from collections.abc import Sequence
 from numbers import Integral
 
 import cv2
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import SettingsError
 from toonmotion.render.raster import check_colour, view_transform
@@ -22,7 +26,8 @@ _SHIFT = 4
 _FAR = 2.0**20
 
 
-def draw_mesh(frame, U, F, *, view, colour=(40, 40, 40, 160), width=1):
+def draw_mesh(frame: NDArray[np.uint8], U: ArrayLike, F: ArrayLike, *, view: Sequence[float],
+              colour: Sequence[int] = (40, 40, 40, 160), width: int = 1) -> NDArray[np.uint8]:
     """Draw the edges of a deformed mesh.
 
     Parameters
@@ -45,18 +50,20 @@ def draw_mesh(frame, U, F, *, view, colour=(40, 40, 40, 160), width=1):
         A new frame.
     """
     frame, to_frame = _setup(frame, view)
-    U = _points(U, "U")
-    F = np.asarray(F)
-    if F.size == 0:
-        F = F.reshape(0, 3)
-    if F.ndim != 2 or F.shape[1] != 3 or not np.issubdtype(F.dtype, np.integer):
-        raise SettingsError(f"triangles F must be an (m, 3) integer array, got shape {F.shape}")
-    _check_indices(F, len(U), "F")
-    segments = to_frame(U)[unique_edges(F)] if len(F) else np.zeros((0, 2, 2))
+    P = _points(U, "U")
+    T = np.asarray(F)
+    if T.size == 0:
+        T = T.reshape(0, 3)
+    if T.ndim != 2 or T.shape[1] != 3 or not np.issubdtype(T.dtype, np.integer):
+        raise SettingsError(f"triangles F must be an (m, 3) integer array, got shape {T.shape}")
+    _check_indices(T, len(P), "F")
+    segments = to_frame(P)[unique_edges(T)] if len(T) else np.zeros((0, 2, 2))
     return _paint(frame, colour, _check_width(width, "width"), segments)
 
 
-def draw_skeleton(frame, positions, bones, *, view, colour=(20, 90, 230, 255), width=3, joint_radius=4):
+def draw_skeleton(frame: NDArray[np.uint8], positions: ArrayLike, bones: ArrayLike, *, view: Sequence[float],
+                  colour: Sequence[int] = (20, 90, 230, 255), width: int = 3,
+                  joint_radius: int = 4) -> NDArray[np.uint8]:
     """Draw a posed skeleton: bones as lines, joints as discs.
 
     Parameters
@@ -97,7 +104,8 @@ def draw_skeleton(frame, positions, bones, *, view, colour=(20, 90, 230, 255), w
     return _paint(frame, colour, _check_width(width, "width"), Po[bones], discs, int(joint_radius))
 
 
-def draw_reference(frame, positions, bones, *, view, colour=(220, 30, 30, 255), width=2):
+def draw_reference(frame: NDArray[np.uint8], positions: ArrayLike, bones: ArrayLike, *, view: Sequence[float],
+                   colour: Sequence[int] = (220, 30, 30, 255), width: int = 2) -> NDArray[np.uint8]:
     """Draw a reference skeleton's bones as thin lines (red by default, thesis fig. 6.2a).
 
     Typically the rest skeleton, showing each bone's original direction and length next to

@@ -7,12 +7,16 @@ joint vertices as dots, vertices that could reach no bone without crossing the o
 red) under the animation skeleton.
 """
 
+from __future__ import annotations
+
 import colorsys
 
 import numpy as np
+from numpy.typing import NDArray
 from PIL import Image, ImageDraw, ImageFont
 
 from toonmotion.rig.binding import JOINT
+from toonmotion.rig.character import Character
 from toonmotion.shape.curve_skeleton import joint_suggestions
 
 _SUPERSAMPLE = 2
@@ -25,7 +29,7 @@ _SUGGESTION_COLOURS = {
 }
 
 
-def bone_colours(count):
+def bone_colours(count: int) -> NDArray[np.uint8]:
     """``count`` distinct, saturated RGB colours (golden-ratio hues), ``(count, 3)`` uint8."""
     hues = (np.arange(count) * 0.618033988749895) % 1.0
     return np.array(
@@ -34,7 +38,7 @@ def bone_colours(count):
     ).reshape(-1, 3)
 
 
-def render_overview(character, *, height=720):
+def render_overview(character: Character, *, height: int = 720) -> Image.Image:
     """Draw the two-panel overview of a rigged character.
 
     Parameters

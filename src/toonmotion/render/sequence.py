@@ -47,16 +47,8 @@ def render_animation(
     order = draw_order(character.mesh, character.binding, character.depth)
     for frame, U in animation.meshes:
         posed = animation.motion.pose(frame) if overlays else None
-        yield render_frame(
-            character,
-            U,
-            pose=posed,
-            size=out_size,
-            view=view,
-            background=background,
-            overlays=overlays,
-            order=order,
-        )
+        yield render_frame(character, U, pose=posed, size=out_size, view=view,
+                           background=background, overlays=overlays, order=order)
 
 
 def write_animation(

@@ -1,10 +1,15 @@
 """Tracked joints drawn over footage: rotated rectangles, bones, and confidence as colour."""
 
+from __future__ import annotations
+
 import cv2
 import numpy as np
+from numpy.typing import NDArray
 
 
-def draw_tracking(frame, positions, sizes, parents, *, angles=None, confidence=None):
+def draw_tracking(frame: NDArray[np.uint8], positions: NDArray[np.float64], sizes: NDArray[np.float64],
+                  parents: NDArray[np.int_], *, angles: NDArray[np.float64] | None = None,
+                  confidence: NDArray[np.float64] | None = None) -> NDArray[np.uint8]:
     """A copy of ``frame`` with the tracked skeleton drawn on it.
 
     Parameters

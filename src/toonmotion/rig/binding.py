@@ -15,14 +15,20 @@ Corrections (6.3a) attach every vertex inside a closed curve to a chosen bone. A
 its corrections, not only their result, so they can be replayed on a new mesh.
 """
 
+from __future__ import annotations
+
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import SkeletonError, ToonmotionError
+from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.polygon import points_in_polygon
 from toonmotion.geometry.segments import closest_points_on_segments
-from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
+from toonmotion.shape.mesh import Mesh
 
 SILHOUETTE, INTERIOR, JOINT = 0, 1, 2
 VERTEX_KINDS = ("silhouette", "interior", "joint")
@@ -41,10 +47,32 @@ class CorrectionError(ToonmotionError):
 
 @dataclass(frozen=True, eq=False)
 class Correction:
-    """Attach every vertex inside ``curve`` (a closed ``(k, 2)`` polyline) to bone ``bone``."""
+    """Attach every vertex inside ``curve`` (a closed ``(k, 2)`` polyline) to bone ``bone``.
 
-    curve: np.ndarray
+    Construction copies the curve (read-only) and raises :class:`CorrectionError` unless it is
+    at least 3 finite points and ``bone`` is a string.
+    """
+
+    curve: NDArray[np.float64]
     bone: str
+
+    def __post_init__(self) -> None:
+        curve = _correction_curve(self.curve)
+        if not isinstance(self.bone, str):
+            raise CorrectionError(f"a correction names its bone by a string, got {self.bone!r}")
+        object.__setattr__(self, "curve", curve)
+
+
+def _correction_curve(curve: ArrayLike) -> NDArray[np.float64]:
+    try:
+        P = np.asarray(curve, dtype=float)
+    except (TypeError, ValueError):
+        raise CorrectionError("a correction curve needs at least 3 (x, y) points") from None
+    if P.ndim != 2 or P.shape[1] != 2 or len(P) < 3:
+        raise CorrectionError("a correction curve needs at least 3 (x, y) points")
+    if not np.all(np.isfinite(P)):
+        raise CorrectionError("a correction curve has non-finite coordinates")
+    return frozen_array(P, dtype=np.float64, name="a correction curve", error=CorrectionError)
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,22 +94,41 @@ class Binding:
     joint_area : (n,) bool
         Vertices of joint triangles (joint vertices and the silhouette vertices among them):
         the joint areas that stage two of the deformation works on.
+
+    Construction copies the arrays (read-only) and raises ``ValueError`` unless every
+    per-vertex array has ``n`` entries, bones are >= 0 and kinds are one of the three.
+    :func:`binding_from_bones` is how the library builds one.
     """
 
-    bone: np.ndarray
-    fallback: np.ndarray
-    corrections: tuple
-    joint_triangle: np.ndarray
-    vertex_kind: np.ndarray
-    joint_area: np.ndarray
+    bone: NDArray[np.int64]
+    fallback: NDArray[np.bool_]
+    corrections: tuple[Correction, ...]
+    joint_triangle: NDArray[np.bool_]
+    vertex_kind: NDArray[np.int8]
+    joint_area: NDArray[np.bool_]
 
-    def __post_init__(self):
-        for array in (self.bone, self.fallback, self.joint_triangle, self.vertex_kind,
-                      self.joint_area):
-            array.setflags(write=False)
+    def __post_init__(self) -> None:
+        bone = frozen_array(self.bone, dtype=np.int64, shape=(None,), name="a binding's bone")
+        n = len(bone)
+        if n and bone.min() < 0:
+            raise ValueError("a binding's bone indices must be >= 0")
+        kind = frozen_array(self.vertex_kind, dtype=np.int8, shape=(n,), name="a binding's vertex_kind")
+        if n and (kind.min() < SILHOUETTE or kind.max() > JOINT):
+            raise ValueError(f"a binding's vertex kinds must be {SILHOUETTE}, {INTERIOR} or {JOINT}")
+        corrections = tuple(self.corrections)
+        if not all(isinstance(c, Correction) for c in corrections):
+            raise TypeError("a binding's corrections must be Correction objects")
+        object.__setattr__(self, "bone", bone)
+        object.__setattr__(self, "vertex_kind", kind)
+        object.__setattr__(self, "corrections", corrections)
+        for name, shape in (("fallback", (n,)), ("joint_triangle", (None,)), ("joint_area", (n,))):
+            flags = frozen_array(getattr(self, name), dtype=np.bool_, shape=shape, name=f"a binding's {name}")
+            object.__setattr__(self, name, flags)
 
 
-def decompose(mesh, skeleton, mask, *, corrections=()):
+def decompose(
+    mesh: Mesh, skeleton: Skeleton, mask: NDArray[np.bool_], *, corrections: Iterable[Correction] = ()
+) -> Binding:
     """Attach every vertex of ``mesh`` to a bone of ``skeleton`` (eq. 3.1).
 
     Parameters
@@ -123,7 +170,7 @@ def decompose(mesh, skeleton, mask, *, corrections=()):
     return binding
 
 
-def attach_inside(binding, mesh, skeleton, curve, bone):
+def attach_inside(binding: Binding, mesh: Mesh, skeleton: Skeleton, curve: ArrayLike, bone: str) -> Binding:
     """Attach every vertex inside a closed curve to one bone (decomposition correction, 6.3a).
 
     Parameters
@@ -141,11 +188,7 @@ def attach_inside(binding, mesh, skeleton, curve, bone):
     Binding
         A new binding with the correction appended to ``corrections``.
     """
-    curve = np.asarray(curve, dtype=float)
-    if curve.ndim != 2 or curve.shape[1] != 2 or len(curve) < 3:
-        raise CorrectionError("a correction curve needs at least 3 (x, y) points")
-    if not np.all(np.isfinite(curve)):
-        raise CorrectionError("a correction curve has non-finite coordinates")
+    curve = _correction_curve(curve)
     names = skeleton.bone_names
     if bone not in names:
         raise SkeletonError(f"no bone is called {bone!r}; the bones are: {', '.join(names)}")
@@ -155,7 +198,7 @@ def attach_inside(binding, mesh, skeleton, curve, bone):
     return binding_from_bones(mesh, new_bone, binding.fallback, corrections)
 
 
-def classify(mesh, bone):
+def classify(mesh: Mesh, bone: NDArray[np.integer]) -> tuple[NDArray[np.bool_], NDArray[np.int8]]:
     """Joint triangles and vertex kinds for a vertex-to-bone map (fig. 3.6).
 
     Returns
@@ -171,14 +214,17 @@ def classify(mesh, bone):
     return joint_triangle, kind
 
 
-def binding_from_bones(mesh, bone, fallback, corrections=()):
+def binding_from_bones(
+    mesh: Mesh, bone: ArrayLike, fallback: ArrayLike, corrections: Iterable[Correction] = ()
+) -> Binding:
     """A :class:`Binding` from a vertex-to-bone map, classified (used when loading)."""
-    joint_triangle, kind = classify(mesh, bone)
-    joint_area = np.zeros(len(bone), dtype=bool)
+    bones = np.asarray(bone)
+    joint_triangle, kind = classify(mesh, bones)
+    joint_area = np.zeros(len(bones), dtype=bool)
     joint_area[mesh.F[joint_triangle].ravel()] = True
     return Binding(
-        bone=np.array(bone, dtype=np.int64),
-        fallback=np.array(fallback, dtype=bool),
+        bone=bones,
+        fallback=np.asarray(fallback, dtype=bool),
         corrections=tuple(corrections),
         joint_triangle=joint_triangle,
         vertex_kind=kind,

@@ -13,13 +13,19 @@ decomposition and every edit but the last; the undone edits are kept for :func:`
 new edit is made.
 """
 
+from __future__ import annotations
+
 import dataclasses
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import TypeAlias
 
 import numpy as np
+from numpy.typing import NDArray
 
 from toonmotion.errors import EditError, SettingsError, ToonmotionError
 from toonmotion.rig.binding import Correction, attach_inside, decompose
+from toonmotion.rig.character import Character
 
 
 @dataclass(frozen=True)
@@ -32,22 +38,31 @@ class DepthEdit:
 
     value: int
     bone: str | None = None
-    at: tuple | None = None
+    at: tuple[float, float] | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if isinstance(self.value, bool) or not isinstance(self.value, (int, np.integer)):
             raise EditError(f"a depth must be a whole number, got {self.value!r}")
         if (self.bone is None) == (self.at is None):
             raise EditError("a depth edit names a bone or gives a point (at), exactly one of them")
+        if self.bone is not None and not isinstance(self.bone, str):
+            raise EditError(f"a depth edit names its bone by a string, got {self.bone!r}")
         if self.at is not None:
-            at = tuple(float(v) for v in self.at)
+            try:
+                at = tuple(float(v) for v in self.at)
+            except (TypeError, ValueError):
+                raise EditError(f"a depth edit's point must be two finite numbers, got {self.at!r}") from None
             if len(at) != 2 or not np.all(np.isfinite(at)):
                 raise EditError(f"a depth edit's point must be two finite numbers, got {self.at!r}")
             object.__setattr__(self, "at", at)
         object.__setattr__(self, "value", int(self.value))
 
 
-def apply_edit(character, edit):
+Edit: TypeAlias = Correction | DepthEdit
+"""An edit of a character's binding or depths."""
+
+
+def apply_edit(character: Character, edit: Edit) -> Character:
     """``character`` with ``edit`` made: its result applied and the edit appended to the history.
 
     A new edit clears what :func:`redo` could bring back.
@@ -55,7 +70,7 @@ def apply_edit(character, edit):
     return dataclasses.replace(_applied(character, edit), undone=())
 
 
-def replay(character, edits):
+def replay(character: Character, edits: Iterable[Edit]) -> tuple[Character, list[tuple[Edit, str]]]:
     """Apply ``edits`` in order to ``character`` (e.g. one just re-meshed).
 
     Returns
@@ -73,7 +88,7 @@ def replay(character, edits):
     return character, skipped
 
 
-def undo(character, steps=1):
+def undo(character: Character, steps: int = 1) -> tuple[Character, tuple[Edit, ...]]:
     """Take back the last ``steps`` edits; returns ``(character, undone edits)``."""
     edits = character.edits
     if not (isinstance(steps, int) and steps >= 1):
@@ -90,7 +105,7 @@ def undo(character, steps=1):
     return dataclasses.replace(rebuilt, undone=(*taken, *character.undone)), taken
 
 
-def redo(character, steps=1):
+def redo(character: Character, steps: int = 1) -> tuple[Character, tuple[Edit, ...]]:
     """Make again the last ``steps`` undone edits; returns ``(character, redone edits)``."""
     undone = character.undone
     if not (isinstance(steps, int) and steps >= 1):
@@ -105,21 +120,24 @@ def redo(character, steps=1):
     return dataclasses.replace(character, undone=undone[steps:]), again
 
 
-def without_edits(character):
+def without_edits(character: Character) -> Character:
     """The character as rigging left it: the automatic decomposition, every region at depth 0."""
     binding = decompose(character.mesh, character.skeleton, character.mask)
-    return dataclasses.replace(character, binding=binding, depth=None, edits=(), undone=())
+    depth = np.zeros(len(character.skeleton.bones), dtype=np.int64)
+    return dataclasses.replace(character, binding=binding, depth=depth, edits=(), undone=())
 
 
-def describe(edit):
+def describe(edit: Edit) -> str:
     """One line for listings."""
     if isinstance(edit, Correction):
         return f"attach {len(edit.curve)}-point region to bone {edit.bone}"
-    where = edit.bone if edit.bone is not None else f"the region at ({edit.at[0]:.0f}, {edit.at[1]:.0f})"
+    where = edit.bone  # a depth edit has a bone or a point, exactly one
+    if edit.at is not None:
+        where = f"the region at ({edit.at[0]:.0f}, {edit.at[1]:.0f})"
     return f"depth {edit.value} for {where}"
 
 
-def region_at(character, point):
+def region_at(character: Character, point: tuple[float, float] | NDArray[np.float64]) -> int:
     """The bone (index) whose region holds the rest-mesh vertex nearest ``point``."""
     V = character.mesh.V
     vertex = int(np.argmin(np.hypot(V[:, 0] - point[0], V[:, 1] - point[1])))

@@ -5,11 +5,17 @@ A skeleton is a forest: every joint has at most one parent, and a joint with non
 named after the child joint. Joints are stored parents first.
 """
 
+from __future__ import annotations
+
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from toonmotion.errors import SkeletonError
+from toonmotion.geometry.arrays import finite_point, frozen_array
 
 # Bones shorter than this (pixels) have no direction: nothing attaches to them.
 MIN_BONE_LENGTH = 1e-6
@@ -27,18 +33,37 @@ class Skeleton:
         Index of each joint's parent, -1 for a root; parents come before their children.
     positions : (k, 2) float
         Rest positions, (x, y) pixels, y down.
+
+    Construction copies the arrays (read-only) and raises :class:`SkeletonError` unless the
+    names are distinct non-empty strings, each parent is -1 or an earlier joint, and the
+    positions are finite, one row per joint. :meth:`from_joints` builds one from joints in any
+    order.
     """
 
-    names: tuple
-    parents: np.ndarray
-    positions: np.ndarray
+    names: tuple[str, ...]
+    parents: NDArray[np.int64]
+    positions: NDArray[np.float64]
 
-    def __post_init__(self):
-        for array in (self.parents, self.positions):
-            array.setflags(write=False)
+    def __post_init__(self) -> None:
+        names = tuple(self.names)
+        if not all(isinstance(n, str) and n.strip() for n in names):
+            raise SkeletonError("every joint needs a name: a non-empty string")
+        if len(set(names)) != len(names):
+            twice = next(n for n in names if names.count(n) > 1)
+            raise SkeletonError(f"joint name {twice!r} is used twice; names must be unique")
+        k = len(names)
+        parents = frozen_array(self.parents, dtype=np.int64, shape=(k,), name="a skeleton's parents",
+                               error=SkeletonError)
+        if np.any((parents < -1) | (parents >= np.arange(k))):
+            raise SkeletonError("a skeleton's parents must be -1 (a root) or an earlier joint: parents first")
+        positions = frozen_array(self.positions, dtype=np.float64, shape=(k, 2),
+                                 name="a skeleton's positions", error=SkeletonError, finite=True)
+        object.__setattr__(self, "names", names)
+        object.__setattr__(self, "parents", parents)
+        object.__setattr__(self, "positions", positions)
 
     @classmethod
-    def from_joints(cls, joints):
+    def from_joints(cls, joints: Iterable[tuple[str, str | None, Any]]) -> Skeleton:
         """Build from ``(name, parent_name_or_None, (x, y))`` triples in any order.
 
         Raises :class:`SkeletonError` on duplicate or empty names, unknown parents, cycles and
@@ -72,14 +97,15 @@ class Skeleton:
         order = _parents_first(names, parent_of)
         index = {name: i for i, name in enumerate(order)}
         position_of = {str(j[0]): j[2] for j in joints}
-        positions = np.array([_point(position_of[n], n) for n in order], dtype=float)
+        positions = np.array([finite_point(position_of[n], name=f"joint {n!r}", error=SkeletonError)
+                              for n in order], dtype=float)
         parents = np.array([index[parent_of[n]] if parent_of[n] else -1 for n in order])
         return cls(names=tuple(order), parents=parents.astype(np.int64), positions=positions)
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self.names)
 
-    def index(self, name):
+    def index(self, name: str) -> int:
         """Index of the joint called ``name``."""
         try:
             return self.names.index(name)
@@ -89,22 +115,23 @@ class Skeleton:
             ) from None
 
     @property
-    def bones(self):
+    def bones(self) -> NDArray[np.int64]:
         """Bones as ``(parent, child)`` joint indices, ``(b, 2)``, one per non-root joint."""
         child = np.flatnonzero(self.parents >= 0)
         return np.stack([self.parents[child], child], axis=1)
 
     @property
-    def bone_names(self):
+    def bone_names(self) -> tuple[str, ...]:
         """Each bone's name: its child joint's name."""
         return tuple(self.names[c] for c in self.bones[:, 1])
 
     @property
-    def bone_lengths(self):
+    def bone_lengths(self) -> NDArray[np.float64]:
+        """Rest length of each bone in pixels, ``(b,)``."""
         b = self.bones
         return np.linalg.norm(self.positions[b[:, 1]] - self.positions[b[:, 0]], axis=1)
 
-    def joints(self):
+    def joints(self) -> list[tuple[str, str | None, tuple[float, float]]]:
         """The skeleton as ``(name, parent_name_or_None, (x, y))`` triples, parents first."""
         return [
             (n, self.names[p] if p >= 0 else None, (float(x), float(y)))
@@ -112,14 +139,6 @@ class Skeleton:
         ]
 
 
-def _point(value, name):
-    try:
-        x, y = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise SkeletonError(f"joint {name!r} has position {value!r}; give two numbers x, y") from None
-    if not (np.isfinite(x) and np.isfinite(y)):
-        raise SkeletonError(f"joint {name!r} has a non-finite position ({x}, {y})")
-    return x, y
 
 
 def _parents_first(names, parent_of):

@@ -13,14 +13,19 @@ non-commercial ``triangle`` package.
 Vertices are ordered outline first, loop after loop, then the interior.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import Delaunay, cKDTree
 
 from toonmotion.errors import MeshError, SettingsError
+from toonmotion.geometry.arrays import finite_float, frozen_array, frozen_arrays
 from toonmotion.geometry.polygon import subdivide_loop, triangle_areas
+from toonmotion.shape.silhouette import Silhouette
 
 # Interior samples keep at least this fraction of the local spacing from the outline.
 _CLEARANCE = 0.5
@@ -42,32 +47,52 @@ class Mesh:
         holes clockwise, in the silhouette's loop order.
     spacing : float
         The sampling spacing ``h`` in pixels.
+
+    Construction copies the arrays (read-only) and raises :class:`MeshError` unless ``V`` is
+    finite ``(n, 2)``, ``F`` is ``(m, 3)`` and ``boundary`` loops are ``(k,)``, all with vertex
+    indices below ``n``, and ``spacing`` is a finite number > 0. Whether the triangles are
+    sound is :func:`check_mesh`'s business.
     """
 
-    V: np.ndarray
-    F: np.ndarray
-    boundary: tuple
+    V: NDArray[np.float64]
+    F: NDArray[np.int64]
+    boundary: tuple[NDArray[np.int64], ...]
     spacing: float
 
+    def __post_init__(self) -> None:
+        V = frozen_array(self.V, dtype=np.float64, shape=(None, 2), name="a mesh's V", error=MeshError,
+                         finite=True)
+        F = frozen_array(self.F, dtype=np.int64, shape=(None, 3), name="a mesh's F", error=MeshError)
+        boundary = frozen_arrays(self.boundary, dtype=np.int64, shape=(None,), name="a mesh's boundary",
+                                 error=MeshError)
+        for what, index in (("F", F), *(("boundary", loop) for loop in boundary)):
+            if index.size and (index.min() < 0 or index.max() >= len(V)):
+                raise MeshError(f"a mesh's {what} names a vertex that does not exist (it has {len(V)})")
+        spacing = finite_float(self.spacing, name="a mesh's spacing", error=MeshError, minimum=0, strict=True)
+        object.__setattr__(self, "V", V)
+        object.__setattr__(self, "F", F)
+        object.__setattr__(self, "boundary", boundary)
+        object.__setattr__(self, "spacing", spacing)
+
     @property
-    def n_outline(self):
+    def n_outline(self) -> int:
         """Number of outline vertices; they are ``V[:n_outline]``."""
         return sum(len(loop) for loop in self.boundary)
 
     @property
-    def edges(self):
+    def edges(self) -> NDArray[np.int64]:
         """Unique undirected edges ``(e, 2)``, smaller index first."""
         return unique_edges(self.F)
 
 
 def triangulate(
-    silhouette,
+    silhouette: Silhouette,
     *,
-    spacing=None,
-    vertices=None,
-    refine_points=None,
-    refine_factor=0.5,
-):
+    spacing: float | None = None,
+    vertices: int | None = None,
+    refine_points: ArrayLike | None = None,
+    refine_factor: float = 0.5,
+) -> Mesh:
     """Mesh a silhouette.
 
     Parameters
@@ -101,20 +126,26 @@ def triangulate(
     return _mesh(sampler, float(spacing))
 
 
-def choose_spacing(silhouette, vertices, *, refine_points=None, refine_factor=0.5):
+def choose_spacing(
+    silhouette: Silhouette,
+    vertices: int,
+    *,
+    refine_points: ArrayLike | None = None,
+    refine_factor: float = 0.5,
+) -> float:
     """The spacing at which :func:`triangulate` gives about ``vertices`` vertices."""
     if not silhouette.parts:
         raise MeshError("the silhouette is empty: there is nothing to mesh")
     return _Sampler(silhouette, refine_points, refine_factor).spacing_for(vertices)
 
 
-def unique_edges(F):
+def unique_edges(F: NDArray[np.integer]) -> NDArray[np.int64]:
     """Unique undirected edges of triangles, ``(e, 2)`` int, smaller index first."""
     E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     return np.unique(np.sort(E, axis=1), axis=0)
 
 
-def check_mesh(mesh, *, min_area=1e-9):
+def check_mesh(mesh: Mesh, *, min_area: float = 1e-9) -> list[str]:
     """Return a list of broken mesh invariants (empty when the mesh is sound).
 
     Checks that triangles are counter-clockwise with area above ``min_area``, that every

@@ -5,14 +5,19 @@ foreground 8-connected) and simplified with Douglas-Peucker to a tolerance in pi
 the topology (no loop crosses itself or another).
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
 from skimage.draw import polygon2mask
 from skimage.measure import find_contours
 
+from toonmotion.errors import MeshError
+from toonmotion.geometry.arrays import finite_float, frozen_array, frozen_arrays
 from toonmotion.geometry.polygon import signed_area
 
 _SQUARE = np.ones((3, 3), dtype=bool)
@@ -28,38 +33,70 @@ class Part:
         Outline, counter-clockwise on screen, (x, y) pixels, y down, not closed.
     holes : tuple of (k, 2) float
         Hole outlines, clockwise on screen.
+
+    Construction copies the loops (read-only) and raises :class:`MeshError` unless each is a
+    finite ``(k, 2)`` array of at least 3 points.
     """
 
-    outer: np.ndarray
-    holes: tuple = ()
+    outer: NDArray[np.float64]
+    holes: tuple[NDArray[np.float64], ...] = ()
+
+    def __post_init__(self) -> None:
+        what = "a silhouette part's"
+        outer = frozen_array(self.outer, dtype=np.float64, shape=(None, 2), name=f"{what} outer loop",
+                             error=MeshError, finite=True)
+        holes = frozen_arrays(self.holes, dtype=np.float64, shape=(None, 2), name=f"{what} holes",
+                              error=MeshError, finite=True)
+        for loop in (outer, *holes):
+            if len(loop) < 3:
+                raise MeshError(f"a silhouette loop needs at least 3 points, got {len(loop)}")
+        object.__setattr__(self, "outer", outer)
+        object.__setattr__(self, "holes", holes)
 
     @property
-    def loops(self):
+    def loops(self) -> tuple[NDArray[np.float64], ...]:
         """The outer loop followed by the holes."""
         return (self.outer, *self.holes)
 
     @property
-    def area(self):
+    def area(self) -> float:
+        """Area in square pixels: the outer loop's less the holes'."""
         return sum(signed_area(loop) for loop in self.loops)
 
 
 @dataclass(frozen=True, eq=False)
 class Silhouette:
-    """The figure's outline: parts, largest first, and the simplification tolerance used."""
+    """The figure's outline: parts, largest first, and the simplification tolerance used.
 
-    parts: tuple
+    Attributes
+    ----------
+    parts : tuple of Part
+    tolerance : float
+        The Douglas-Peucker tolerance in pixels, >= 0.
+    """
+
+    parts: tuple[Part, ...]
     tolerance: float = 1.0
 
+    def __post_init__(self) -> None:
+        parts = tuple(self.parts)
+        if not all(isinstance(p, Part) for p in parts):
+            raise TypeError("a silhouette's parts must be Part objects")
+        tolerance = finite_float(self.tolerance, name="a silhouette's tolerance", error=MeshError, minimum=0)
+        object.__setattr__(self, "parts", parts)
+        object.__setattr__(self, "tolerance", tolerance)
+
     @property
-    def loops(self):
+    def loops(self) -> tuple[NDArray[np.float64], ...]:
         """Every closed loop: each part's outer loop then its holes."""
         return tuple(loop for part in self.parts for loop in part.loops)
 
     @property
-    def area(self):
+    def area(self) -> float:
+        """Area in square pixels."""
         return sum(part.area for part in self.parts)
 
-    def to_mask(self, shape):
+    def to_mask(self, shape: tuple[int, int]) -> NDArray[np.bool_]:
         """Rasterise: True at pixels whose centre lies inside, ``(h, w)`` bool for ``shape``."""
         mask = np.zeros(shape, dtype=bool)
         for part in self.parts:
@@ -69,13 +106,13 @@ class Silhouette:
             mask |= inside
         return mask
 
-    def to_shapely(self):
+    def to_shapely(self) -> shapely.Polygon | shapely.MultiPolygon:
         """The silhouette as a shapely (Multi)Polygon."""
         polygons = [shapely.Polygon(p.outer, p.holes) for p in self.parts]
         return polygons[0] if len(polygons) == 1 else shapely.MultiPolygon(polygons)
 
 
-def trace_silhouette(mask, *, tolerance=1.0, min_hole_area=16.0):
+def trace_silhouette(mask: ArrayLike, *, tolerance: float = 1.0, min_hole_area: float = 16.0) -> Silhouette:
     """Outline a mask.
 
     Parameters

@@ -28,7 +28,10 @@ The work is vectorised with lookup tables over the 256 neighbourhood codes and o
 current border pixels, so its cost grows with the shape's area, not the image's.
 """
 
+from __future__ import annotations
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 # (row, col) offsets of P2, P3, P4, P5, P6, P7, P8, P0: the thesis's cyclic order.
 _RING = np.array([(-1, 0), (-1, -1), (0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 1)])
@@ -51,7 +54,7 @@ def _tables():
 _A, _REMOVABLE, _SIMPLE_NOT_END = _tables()
 
 
-def hilditch_thin(mask):
+def hilditch_thin(mask: ArrayLike) -> NDArray[np.bool_]:
     """Thin a binary image to its curve skeleton.
 
     Parameters
