@@ -22,7 +22,7 @@ LAYERS = (
     {"rig"},
     {"shape"},
     {"geometry"},
-    {"errors"},
+    {"errors", "progress"},
 )
 
 

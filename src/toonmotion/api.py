@@ -19,7 +19,7 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -42,10 +42,11 @@ from toonmotion.capture.footage import Capture, capture_motion, correct_motion, 
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
 from toonmotion.deform.deformer import Deformation, Deformer, DeformSettings
-from toonmotion.deform.tuning import CurveEdit, DragEdit, apply_tuning
+from toonmotion.deform.tuning import TuningEdit, apply_tuning
 from toonmotion.io.image import load_image, load_mask
 from toonmotion.io.project import load_project, save_project
 from toonmotion.io.skeleton_json import load_skeleton_file
+from toonmotion.progress import Progress
 from toonmotion.render.frame import fit_view, render_frame
 from toonmotion.render.sequence import write_animation
 from toonmotion.rig.character import Character, RigSettings
@@ -81,9 +82,6 @@ __all__ = [
     "write_animation",
 ]
 
-Progress = Callable[[str, int, int], None]
-Edit = CurveEdit | DragEdit
-
 
 @dataclass(frozen=True)
 class PosedFrame:
@@ -101,15 +99,9 @@ class PosedFrame:
     deformation: Deformation
 
 
-def rig_image(
-    image: str | Path | NDArray[np.uint8],
-    *,
-    mask: str | Path | NDArray[np.bool_] | None = None,
-    skeleton: str | Path | Skeleton | None = None,
-    settings: RigSettings | None = None,
-    max_pixels: int | None = None,
-    progress: Progress | None = None,
-) -> Character:
+def rig_image(image: str | Path | NDArray[np.uint8], *, mask: str | Path | NDArray[np.bool_] | None = None,
+              skeleton: str | Path | Skeleton | None = None, settings: RigSettings | None = None,
+              max_pixels: int | None = None, progress: Progress | None = None) -> Character:
     """Rig a drawing: silhouette, mesh, curve skeleton, animation skeleton and decomposition.
 
     Parameters
@@ -146,7 +138,7 @@ def pose_character(
     character: Character | Deformer,
     pose: Pose,
     *,
-    edits: Sequence[Edit] = (),
+    edits: Sequence[TuningEdit] = (),
     accel: tuple[float, float] | None = None,
     fixed: Sequence[str] = (),
     root: str | None = None,

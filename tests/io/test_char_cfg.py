@@ -87,7 +87,7 @@ def _write(tmp_path, text, name="char_cfg.yaml"):
         ),
         (
             "skeleton:\n- {name: root, parent: null, loc: [1, two]}\n",
-            r"joint 'root' has position \[1, 'two'\]; give two numbers x, y",
+            r"joint 'root' has position \[1, 'two'\]; give two numbers \[x, y\]",
         ),
         (
             "width: wide\nheight: 4\nskeleton:\n- {name: root, parent: null, loc: [1, 2]}\n",

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from toonmotion.deform.tuning import CurveEdit, DragEdit
+from toonmotion.deform.tuning import CurveEdit, DragEdit, TuningEdit
 from toonmotion.errors import KeyframeError
 from toonmotion.geometry.angles import lerp_angle
 from toonmotion.geometry.arrays import finite_float
@@ -37,7 +37,7 @@ class Keyframe:
 
     frame: int
     pose: Pose
-    edits: tuple[CurveEdit | DragEdit, ...] = ()
+    edits: tuple[TuningEdit, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.pose, Pose):

@@ -14,7 +14,7 @@ read (``(T, H, W, 3)`` uint8 RGB, see :func:`toonmotion.io.frames.load_frames`):
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,9 +25,8 @@ from toonmotion.capture.foreground import border_colour, estimate_background, fo
 from toonmotion.capture.setup import check_setup, suggest_setup
 from toonmotion.capture.tracker import Tracking, TrackSettings, TrackSetup, retrack, track
 from toonmotion.errors import SettingsError
+from toonmotion.progress import Progress
 from toonmotion.rig.skeleton import Skeleton
-
-Progress = Callable[[str, int, int], None]
 
 
 @dataclass(frozen=True)

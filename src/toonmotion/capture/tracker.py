@@ -22,7 +22,7 @@ departs from the thesis.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,6 +49,7 @@ from toonmotion.capture.track_checks import (
 )
 from toonmotion.capture.track_prediction import hidden_at, predict, turns
 from toonmotion.errors import TrackingError
+from toonmotion.progress import Progress
 from toonmotion.rig.skeleton import Skeleton
 
 # Default search radius: this fraction of a rectangle's larger side, at least MIN_SEARCH px.
@@ -56,7 +57,6 @@ SEARCH_FRACTION = 0.5
 MIN_SEARCH = 8.0
 
 # progress(stage, index, count), as everywhere in the library; the stage is "tracking".
-Progress = Callable[[str, int, int], None]
 
 
 @dataclass(frozen=True, eq=False)

@@ -25,28 +25,23 @@ from toonmotion.rig.character import Character
 @app.command()
 def pose(
     project: options.Project,
-    pose_file: Annotated[
-        Path, typer.Argument(metavar="POSE.json", help="Joint positions by name (a pose or skeleton file).")
-    ],
+    pose_file: Annotated[Path, typer.Argument(
+        metavar="POSE.json", help="Joint positions by name (a pose or skeleton file).")],
     output: Annotated[Path, typer.Option("-o", "--output", help="PNG file to write.")],
     size: options.Size = None,
-    background: Annotated[
-        str, typer.Option("--background", help="transparent, white, black or #rrggbb.")
-    ] = "transparent",
+    background: Annotated[str, typer.Option(
+        "--background", help="transparent, white, black or #rrggbb.")] = "transparent",
     overlay: options.Overlay = "",
-    accel: Annotated[
-        str | None, typer.Option("--accel", help="Cartoon filter: acceleration DX,DY at the root, pixels.")
-    ] = None,
-    fixed: Annotated[
-        str | None, typer.Option("--fixed", help="Joints that stay put under --accel: J[,J...].")
-    ] = None,
-    root: Annotated[
-        str | None, typer.Option("--root", help="Joint --accel acts on \\[default: the skeleton's root].")
-    ] = None,
     no_area: options.NoArea = False,
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",
     joint_width: options.JointWidth = 1.5,
+    accel: Annotated[str | None, typer.Option(
+        "--accel", help="Cartoon filter: acceleration DX,DY at the root, pixels.")] = None,
+    fixed: Annotated[str | None, typer.Option(
+        "--fixed", help="Joints that stay put under --accel: J[,J...].")] = None,
+    root: Annotated[str | None, typer.Option(
+        "--root", help="Joint --accel acts on \\[default: the skeleton's root].")] = None,
 ) -> None:
     """Pose a rigged drawing: deform it to a sketched skeleton and render one frame.
 
@@ -82,35 +77,24 @@ def pose(
 @app.command()
 def animate(
     project: options.Project,
-    keys_file: Annotated[
-        Path,
-        typer.Argument(
-            metavar="KEYS.json", help="Key-frames (poses at frame numbers) or a motion (a pose per frame)."
-        ),
-    ],
+    keys_file: Annotated[Path, typer.Argument(
+        metavar="KEYS.json", help="Key-frames (poses at frame numbers) or a motion (a pose per frame).")],
     output: options.AnimationOutput,
-    fps: Annotated[
-        float | None, typer.Option("--fps", help="Frames per second \\[default: the file's, else 24].")
-    ] = None,
+    fps: Annotated[float | None, typer.Option(
+        "--fps", help="Frames per second \\[default: the file's, else 24].")] = None,
     size: options.Size = None,
     background: options.AnimationBackground = None,
     overlay: options.Overlay = "",
-    ease: Annotated[
-        str | None, typer.Option("--ease", help="linear, in-out, in or out \\[default: the key file's].")
-    ] = None,
-    exaggerate: Annotated[
-        float | None,
-        typer.Option("--exaggerate", help="Cartoon filter strength A: anticipation and follow-through."),
-    ] = None,
+    ease: Annotated[str | None, typer.Option(
+        "--ease", help="linear, in-out, in or out \\[default: the key file's].")] = None,
+    exaggerate: Annotated[float | None, typer.Option(
+        "--exaggerate", help="Cartoon filter strength A: anticipation and follow-through.")] = None,
     sigma: options.Sigma = 3.0,
     shift: options.Shift = 0.0,
-    save_motion_to: Annotated[
-        Path | None,
-        typer.Option("--save-motion", help="Also write the joint positions of every frame (.json)."),
-    ] = None,
-    solve_inbetweens: Annotated[
-        bool, typer.Option("--solve-inbetweens", help="Run stage two on every frame, not only the keys.")
-    ] = False,
+    save_motion_to: Annotated[Path | None, typer.Option(
+        "--save-motion", help="Also write the joint positions of every frame (.json).")] = None,
+    solve_inbetweens: Annotated[bool, typer.Option(
+        "--solve-inbetweens", help="Run stage two on every frame, not only the keys.")] = False,
     no_area: options.NoArea = False,
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",
@@ -161,14 +145,9 @@ def filter_motion(
     strength: options.Strength,
     sigma: options.Sigma = 3.0,
     shift: options.Shift = 0.0,
-    joints: Annotated[
-        str | None,
-        typer.Option(
-            "--joints",
-            help="Filter only these joints' paths (J[,J...]), carrying what hangs below "
-            "them \\[default: the root's path and every bone's angle and length].",
-        ),
-    ] = None,
+    joints: Annotated[str | None, typer.Option(
+        "--joints", help="Filter only these joints' paths (J[,J...]), carrying what hangs below them "
+        "\\[default: the root's path and every bone's angle and length].")] = None,
 ) -> None:
     """Exaggerate a motion with the cartoon animation filter: anticipation, follow-through."""
     options.suffix(output, ".json", "a motion file")

@@ -24,49 +24,27 @@ from toonmotion.render.track_overlay import draw_tracking
 
 @app.command()
 def track(
-    source: Annotated[
-        Path,
-        typer.Argument(metavar="INPUT", help="A video, an animated GIF, or a folder (or pattern) of frames."),
-    ],
+    source: Annotated[Path, typer.Argument(
+        metavar="INPUT", help="A video, an animated GIF, or a folder (or pattern) of frames.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="Motion file to write (.json).")],
-    joints: Annotated[
-        Path | None,
-        typer.Option(
-            "--joints", help="Joint rectangles to track (.json) \\[default: suggested from frame 1]."
-        ),
-    ] = None,
-    overlay: Annotated[
-        Path | None,
-        typer.Option(
-            "--overlay", help="Also draw the tracked joints on the footage: OUT.mp4, OUT.gif or a folder."
-        ),
-    ] = None,
+    joints: Annotated[Path | None, typer.Option(
+        "--joints", help="Joint rectangles to track (.json) \\[default: suggested from frame 1].")] = None,
+    overlay: Annotated[Path | None, typer.Option(
+        "--overlay", help="Also draw the tracked joints on the footage: OUT.mp4, OUT.gif or a folder."
+    )] = None,
     csv: Annotated[Path | None, typer.Option("--csv", help="Also write the motion as CSV.")] = None,
-    search: Annotated[
-        float | None,
-        typer.Option("--search", help="Search radius in pixels \\[default: from each rectangle]."),
-    ] = None,
-    background: Annotated[
-        str | None,
-        typer.Option(
-            "--background",
-            help="Flat background colour #rrggbb for suggesting joints \\[default: "
-            "the border's colour if flat, else estimated from the sequence].",
-        ),
-    ] = None,
-    fps: Annotated[
-        float | None, typer.Option("--fps", help="Frame rate \\[default: the video's, else 24].")
-    ] = None,
-    resume: Annotated[
-        Path | None, typer.Option("--resume", help="Correct this earlier tracking (with --at and --set).")
-    ] = None,
+    search: Annotated[float | None, typer.Option(
+        "--search", help="Search radius in pixels \\[default: from each rectangle].")] = None,
+    background: Annotated[str | None, typer.Option(
+        "--background", help="Flat background colour #rrggbb for suggesting joints \\[default: the "
+        "border's colour if flat, else estimated from the sequence].")] = None,
+    fps: Annotated[float | None, typer.Option(
+        "--fps", help="Frame rate \\[default: the video's, else 24].")] = None,
+    resume: Annotated[Path | None, typer.Option(
+        "--resume", help="Correct this earlier tracking (with --at and --set).")] = None,
     at: Annotated[int | None, typer.Option("--at", help="Frame where --set places joints.")] = None,
-    corrections: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--set", help="NAME=X,Y: a joint's true position at --at (repeat); tracking resumes there."
-        ),
-    ] = None,
+    corrections: Annotated[list[str] | None, typer.Option(
+        "--set", help="NAME=X,Y: a joint's true position at --at (repeat); tracking resumes there.")] = None,
 ) -> None:
     """Track a character's joints through footage (thesis ch. 4) into a motion file."""
     options.suffix(output, ".json", "a motion file")
@@ -124,16 +102,13 @@ def retarget_command(
     motion_file: Annotated[Path, typer.Argument(metavar="MOTION.json", help="A captured motion.")],
     project: options.Project,
     output: options.AnimationOutput,
-    joint_map: Annotated[
-        str | None,
-        typer.Option("--map", help="Target joints named differently: TARGET=SOURCE[,TARGET=SOURCE...]."),
-    ] = None,
     size: options.Size = None,
     background: options.AnimationBackground = None,
     overlay: options.Overlay = "",
-    exaggerate: Annotated[
-        float | None, typer.Option("--exaggerate", help="Cartoon filter strength A on the retargeted motion.")
-    ] = None,
+    joint_map: Annotated[str | None, typer.Option(
+        "--map", help="Target joints named differently: TARGET=SOURCE[,TARGET=SOURCE...].")] = None,
+    exaggerate: Annotated[float | None, typer.Option(
+        "--exaggerate", help="Cartoon filter strength A on the retargeted motion.")] = None,
     sigma: options.Sigma = 3.0,
     shift: options.Shift = 0.0,
     no_area: options.NoArea = False,

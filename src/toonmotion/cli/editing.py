@@ -25,14 +25,10 @@ from toonmotion.rig.edits import describe as describe_edit
 @app.command()
 def depth(
     project: options.Project,
-    settings: Annotated[
-        list[str] | None,
-        typer.Argument(
-            metavar="[BONE=N | @X,Y=N]...",
-            help="Set a bone region's depth (higher is in front); @X,Y picks the region of "
-            "the vertex nearest that point.",
-        ),
-    ] = None,
+    settings: Annotated[list[str] | None, typer.Argument(
+        metavar="[BONE=N | @X,Y=N]...",
+        help="Set a bone region's depth (higher is in front); @X,Y picks the region of the vertex "
+        "nearest that point.")] = None,
 ) -> None:
     """Show or set the depth layers of a project's bone regions (saved as edits; see 'undo')."""
     character = api.load_project(project)
@@ -52,10 +48,8 @@ def depth(
 def correct(
     project: options.Project,
     bone: Annotated[str, typer.Argument(help="The bone (named after its child joint) to attach to.")],
-    curve: Annotated[
-        list[str],
-        typer.Argument(metavar="X,Y X,Y X,Y...", help="A closed curve round the vertices, drawing pixels."),
-    ],
+    curve: Annotated[list[str], typer.Argument(
+        metavar="X,Y X,Y X,Y...", help="A closed curve round the vertices, drawing pixels.")],
 ) -> None:
     """Correct the decomposition: attach every vertex inside a closed curve to one bone."""
     character = api.load_project(project)
@@ -105,24 +99,16 @@ def edits(project: options.Project) -> None:
 @app.command()
 def tune(
     project: options.Project,
-    pose_file: Annotated[
-        Path, typer.Argument(metavar="POSE.json|KEYS.json", help="A pose file, or key-frames with --key.")
-    ],
+    pose_file: Annotated[Path, typer.Argument(
+        metavar="POSE.json|KEYS.json", help="A pose file, or key-frames with --key.")],
     key: Annotated[int | None, typer.Option("--key", help="Frame number of the key to tune.")] = None,
-    curve: Annotated[
-        str | None,
-        typer.Option(
-            "--curve", help="Pull the outline onto a sketched curve: 'X,Y X,Y ...', drawing pixels."
-        ),
-    ] = None,
-    drag: Annotated[
-        list[str] | None,
-        typer.Option("--drag", help="Drag the vertex at X,Y to X2,Y2: 'X,Y:X2,Y2' (repeat for several)."),
-    ] = None,
+    curve: Annotated[str | None, typer.Option(
+        "--curve", help="Pull the outline onto a sketched curve: 'X,Y X,Y ...', drawing pixels.")] = None,
+    drag: Annotated[list[str] | None, typer.Option(
+        "--drag", help="Drag the vertex at X,Y to X2,Y2: 'X,Y:X2,Y2' (repeat for several).")] = None,
     undo_last: Annotated[bool, typer.Option("--undo", help="Take back the last edit.")] = False,
-    preview: Annotated[
-        Path | None, typer.Option("-o", "--output", help="Also render the tuned pose to this PNG.")
-    ] = None,
+    preview: Annotated[Path | None, typer.Option(
+        "-o", "--output", help="Also render the tuned pose to this PNG.")] = None,
     joint_width: options.JointWidth = 1.5,
 ) -> None:
     """Fine-tune a deformed pose: sketch curves and point drags, saved in the pose or key file.

@@ -28,35 +28,24 @@ from toonmotion.samples import sample_character
 def rig(
     image: Annotated[Path, typer.Argument(help="The drawing: PNG, JPEG, BMP or any image Pillow reads.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="Project folder to write.")],
-    mask: Annotated[
-        Path | None, typer.Option("--mask", help="Mask image (white or opaque = figure).")
-    ] = None,
-    skeleton: Annotated[
-        Path | None,
-        typer.Option("--skeleton", help="Skeleton: an Animated Drawings char_cfg.yaml or a .json."),
-    ] = None,
-    spacing: Annotated[
-        float | None, typer.Option("--spacing", help="Mesh spacing in pixels.", min=1.0)
-    ] = None,
-    vertices: Annotated[
-        int | None, typer.Option("--vertices", help="Target mesh vertex count \\[default: 1500].", min=3)
-    ] = None,
-    refine_joints: Annotated[
-        bool, typer.Option("--refine-joints", help="Denser mesh around joints.")
-    ] = False,
-    tolerance: Annotated[
-        float | None,
-        typer.Option("--tolerance", help="Outline simplification in pixels \\[default: auto].", min=0),
-    ] = None,
-    largest_only: Annotated[
-        bool, typer.Option("--largest-only", help="Keep only the largest part of the figure.")
-    ] = False,
-    background: Annotated[
-        str, typer.Option("--background", help="Background model without alpha or mask: auto, flat, paper.")
-    ] = "auto",
-    max_pixels: Annotated[
-        int, typer.Option("--max-pixels", help="Refuse larger images.", min=1)
-    ] = DEFAULT_MAX_PIXELS,
+    mask: Annotated[Path | None, typer.Option(
+        "--mask", help="Mask image (white or opaque = figure).")] = None,
+    skeleton: Annotated[Path | None, typer.Option(
+        "--skeleton", help="Skeleton: an Animated Drawings char_cfg.yaml or a .json.")] = None,
+    spacing: Annotated[float | None, typer.Option(
+        "--spacing", help="Mesh spacing in pixels.", min=1.0)] = None,
+    vertices: Annotated[int | None, typer.Option(
+        "--vertices", help="Target mesh vertex count \\[default: 1500].", min=3)] = None,
+    refine_joints: Annotated[bool, typer.Option(
+        "--refine-joints", help="Denser mesh around joints.")] = False,
+    tolerance: Annotated[float | None, typer.Option(
+        "--tolerance", help="Outline simplification in pixels \\[default: auto].", min=0)] = None,
+    largest_only: Annotated[bool, typer.Option(
+        "--largest-only", help="Keep only the largest part of the figure.")] = False,
+    background: Annotated[str, typer.Option(
+        "--background", help="Background model without alpha or mask: auto, flat, paper.")] = "auto",
+    max_pixels: Annotated[int, typer.Option(
+        "--max-pixels", help="Refuse larger images.", min=1)] = DEFAULT_MAX_PIXELS,
 ) -> None:
     """Rig a drawing: silhouette, mesh, curve skeleton, skeleton and decomposition."""
     if spacing is not None and vertices is not None:
@@ -92,12 +81,10 @@ def show(
 @app.command()
 def sample(
     output: Annotated[Path, typer.Option("-o", "--output", help="PNG file for the drawing.")],
-    skeleton: Annotated[
-        Path | None, typer.Option("--skeleton", help="Also write its skeleton (.json or .yaml).")
-    ] = None,
-    keys: Annotated[
-        Path | None, typer.Option("--keys", help="Also write built-in key-frames for it (.json).")
-    ] = None,
+    skeleton: Annotated[Path | None, typer.Option(
+        "--skeleton", help="Also write its skeleton (.json or .yaml).")] = None,
+    keys: Annotated[Path | None, typer.Option(
+        "--keys", help="Also write built-in key-frames for it (.json).")] = None,
 ) -> None:
     """Write toonmotion's bundled sample character (and its skeleton, key-frames) to try things on."""
     if skeleton is not None and skeleton.suffix.lower() not in (".json", ".yaml", ".yml"):
@@ -127,9 +114,8 @@ def remesh_project(
     project: options.Project,
     spacing: Annotated[float | None, typer.Option("--spacing", help="Mesh spacing in pixels.")] = None,
     vertices: Annotated[int | None, typer.Option("--vertices", help="Target mesh vertex count.")] = None,
-    refine_joints: Annotated[
-        bool | None, typer.Option("--refine-joints/--no-refine-joints", help="Denser mesh around joints.")
-    ] = None,
+    refine_joints: Annotated[bool | None, typer.Option(
+        "--refine-joints/--no-refine-joints", help="Denser mesh around joints.")] = None,
 ) -> None:
     """Mesh a project again (finer or coarser), keeping its skeleton and replaying its edits."""
     if spacing is None and vertices is None and refine_joints is None:

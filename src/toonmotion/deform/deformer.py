@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver, joint_area, solve_figures
+from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver, SolveResult, joint_area
 from toonmotion.deform.needles import needle_model, stage_one
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.arrays import frozen_array
@@ -84,38 +84,27 @@ class DeformSettings:
 
 
 @dataclass(frozen=True, eq=False)
-class Deformation:
-    """A deformed mesh and how it was reached.
+class Deformation(SolveResult):
+    """A deformed mesh and how it was reached: stage two's :class:`SolveResult` plus stage one.
 
     Attributes
     ----------
-    U : (n, 2) float
-        Deformed vertices.
+    U, iterations, energy_start, energy, converged
+        As for :class:`SolveResult`; ``iterations`` is 0 when stage two is off.
     stage_one : (n, 2) float
         The needle model's result, before stage two.
-    iterations : int
-        Stage-two iterations (0 when stage two is off).
-    energy_start, energy : float
-        Stage two's energy (eq. 3.8) where it started and where it ended.
-    converged : bool
 
     Construction copies ``U`` and ``stage_one`` (read-only) and raises ``ValueError`` unless
     they are ``(n, 2)`` alike and the figures are numbers (an iteration count >= 0).
     """
 
-    U: NDArray[np.float64]
     stage_one: NDArray[np.float64]
-    iterations: int
-    energy_start: float
-    energy: float
-    converged: bool
+    _what = "a deformation"
 
     def __post_init__(self) -> None:
-        what = "a deformation"
-        for name, value in solve_figures(what, self.U, self.iterations, self.energy_start, self.energy,
-                                         self.converged).items():
-            object.__setattr__(self, name, value)
-        stage = frozen_array(self.stage_one, dtype=np.float64, shape=self.U.shape, name=f"{what}'s stage_one")
+        super().__post_init__()
+        stage = frozen_array(self.stage_one, dtype=np.float64, shape=self.U.shape,
+                             name=f"{self._what}'s stage_one")
         object.__setattr__(self, "stage_one", stage)
 
 

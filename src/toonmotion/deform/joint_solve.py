@@ -73,33 +73,21 @@ class SolveResult:
     energy: float
     converged: bool
 
+    _what = "a stage-two result"  # how errors name it
+
     def __post_init__(self) -> None:
-        for name, value in solve_figures("a stage-two result", self.U, self.iterations, self.energy_start,
-                                         self.energy, self.converged).items():
-            object.__setattr__(self, name, value)
-
-
-def solve_figures(
-    what: str, U: NDArray[np.float64], iterations: int, energy_start: float, energy: float, converged: bool
-) -> dict[str, object]:
-    """The fields of a solve's outcome (:class:`SolveResult`, ``Deformation``), checked and typed.
-
-    ``U`` becomes a read-only ``(n, 2)`` float copy, ``iterations`` an int >= 0, the energies
-    floats (NaN allowed: a diverged solve says so) and ``converged`` a bool; ``ValueError``
-    names ``what`` otherwise.
-    """
-    if isinstance(iterations, bool) or not isinstance(iterations, int | np.integer) or iterations < 0:
-        raise ValueError(f"{what}'s iterations must be a whole number >= 0, got {iterations!r}")
-    for name, value in (("energy_start", energy_start), ("energy", energy)):
-        if isinstance(value, bool) or not isinstance(value, int | float | np.number):
-            raise ValueError(f"{what}'s {name} must be a number, got {value!r}")
-    return {
-        "U": frozen_array(U, dtype=np.float64, shape=(None, 2), name=f"{what}'s U"),
-        "iterations": int(iterations),
-        "energy_start": float(energy_start),
-        "energy": float(energy),
-        "converged": bool(converged),
-    }
+        what, iterations = self._what, self.iterations
+        if isinstance(iterations, bool) or not isinstance(iterations, int | np.integer) or iterations < 0:
+            raise ValueError(f"{what}'s iterations must be a whole number >= 0, got {iterations!r}")
+        for name in ("energy_start", "energy"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+                raise ValueError(f"{what}'s {name} must be a number, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        U = frozen_array(self.U, dtype=np.float64, shape=(None, 2), name=f"{what}'s U")
+        object.__setattr__(self, "U", U)
+        object.__setattr__(self, "iterations", int(iterations))
+        object.__setattr__(self, "converged", bool(self.converged))
 
 
 def joint_area(

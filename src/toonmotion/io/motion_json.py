@@ -29,7 +29,7 @@ from typing import Literal
 import numpy as np
 
 from toonmotion.animate.motion import Motion
-from toonmotion.errors import MotionError, ToonmotionError
+from toonmotion.errors import MotionError
 from toonmotion.io.atomic import write_text
 from toonmotion.io.schema import Float, Joints, JsonFormat, Model, Point, read_json, read_versioned
 from toonmotion.io.skeleton_json import skeleton_from_joints, skeleton_to_dict
@@ -66,10 +66,7 @@ def load_motion(path: str | Path) -> Motion:
     """Read a motion file; returns a :class:`Motion`."""
     path = Path(path)
     model = read_versioned(path, MOTION)
-    try:
-        skeleton = skeleton_from_joints(model.joints)
-    except ToonmotionError as error:
-        raise MotionError(f"{path}: {error}") from None
+    skeleton = skeleton_from_joints(model.joints, where=path, error=MotionError)
     try:
         positions = np.array(model.frames, dtype=float)
     except ValueError:

@@ -34,7 +34,7 @@ from pydantic import Field, StrictBool, StrictStr, model_validator
 from pydantic_core import ErrorDetails
 
 from toonmotion.animate.timeline import Keyframe, Timeline, make_timeline
-from toonmotion.deform.tuning import CurveEdit, DragEdit
+from toonmotion.deform.tuning import CurveEdit, DragEdit, TuningEdit
 from toonmotion.errors import EditError, KeyframeError, PoseError
 from toonmotion.io.atomic import write_text
 from toonmotion.io.schema import (
@@ -161,7 +161,6 @@ POSE = JsonFormat[PoseFile | SkeletonFile](
 KEYFRAMES = JsonFormat(models={KEYS_FORMAT: KeyframesFile}, version=VERSION, error=KeyframeError,
                        title="key-frames file", label="format")
 
-Edit = CurveEdit | DragEdit
 
 
 def load_pose(path: str | Path, skeleton: Skeleton) -> Pose:
@@ -175,7 +174,7 @@ def load_pose(path: str | Path, skeleton: Skeleton) -> Pose:
     return pose_from_joints(skeleton, joints, where=str(path))
 
 
-def load_pose_edits(path: str | Path) -> tuple[Edit, ...]:
+def load_pose_edits(path: str | Path) -> tuple[TuningEdit, ...]:
     """The fine-tuning edits of a pose file, a tuple (empty for a skeleton file or none)."""
     path = Path(path)
     data = read_json(path, PoseError)
@@ -185,7 +184,7 @@ def load_pose_edits(path: str | Path) -> tuple[Edit, ...]:
     return _edits(model.edits if isinstance(model, PoseFile) else [], where=str(path))
 
 
-def save_pose(path: str | Path, skeleton: Skeleton, pose: Pose, edits: Sequence[Edit] = ()) -> None:
+def save_pose(path: str | Path, skeleton: Skeleton, pose: Pose, edits: Sequence[TuningEdit] = ()) -> None:
     """Write ``pose`` (and its fine-tuning ``edits``) as a pose file."""
     data: dict[str, Any] = {"format": POSE_FORMAT, "version": VERSION,
                             "joints": pose_to_joints(skeleton, pose)}
@@ -194,7 +193,7 @@ def save_pose(path: str | Path, skeleton: Skeleton, pose: Pose, edits: Sequence[
     write_text(path, json.dumps(data, indent=1) + "\n")
 
 
-def edits_to_json(edits: Sequence[Edit]) -> list[dict[str, Any]]:
+def edits_to_json(edits: Sequence[TuningEdit]) -> list[dict[str, Any]]:
     """Fine-tuning edits as JSON-ready dicts."""
     out = []
     for edit in edits:
@@ -205,13 +204,13 @@ def edits_to_json(edits: Sequence[Edit]) -> list[dict[str, Any]]:
     return out
 
 
-def edits_from_json(items: Any, *, where: str) -> tuple[Edit, ...]:
+def edits_from_json(items: Any, *, where: str) -> tuple[TuningEdit, ...]:
     """Fine-tuning edits from their JSON dicts; :class:`EditError` naming ``where`` if malformed."""
     return _edits(validate(Edits, items, where=where, error=EditError), where=where)
 
 
-def _edits(models: Sequence[CurveEditModel | DragEditModel], *, where: str) -> tuple[Edit, ...]:
-    out: list[Edit] = []
+def _edits(models: Sequence[CurveEditModel | DragEditModel], *, where: str) -> tuple[TuningEdit, ...]:
+    out: list[TuningEdit] = []
     for n, m in enumerate(models, start=1):
         try:
             if isinstance(m, CurveEditModel):

@@ -15,7 +15,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, model_validator
 from pydantic_core import PydanticCustomError
 
-from toonmotion.errors import SkeletonError
+from toonmotion.errors import SkeletonError, ToonmotionError
 from toonmotion.io.atomic import write_text
 from toonmotion.io.schema import Int, Joint, Joints, JsonFormat, Model, explained, read_versioned, validate
 from toonmotion.rig.skeleton import Skeleton
@@ -54,10 +54,17 @@ def skeleton_to_dict(skeleton: Skeleton) -> list[dict[str, Any]]:
     ]
 
 
-def skeleton_from_joints(joints: Sequence[Joint]) -> Skeleton:
-    """Build a Skeleton from validated joints (raises :class:`SkeletonError` for cycles,
-    unknown parents, repeated names)."""
-    return Skeleton.from_joints((joint.name, joint.parent, joint.position) for joint in joints)
+def skeleton_from_joints(joints: Sequence[Joint], *, where: str | Path | None = None,
+                         error: type[ToonmotionError] = SkeletonError) -> Skeleton:
+    """Build a Skeleton from validated joints.
+
+    Cycles, unknown parents and repeated names raise ``error`` (a :class:`SkeletonError` by
+    default), its message starting ``"{where}: "`` when ``where`` (the file) is given.
+    """
+    try:
+        return Skeleton.from_joints((joint.name, joint.parent, joint.position) for joint in joints)
+    except SkeletonError as problem:
+        raise error(problem.args[0] if where is None else f"{where}: {problem}") from None
 
 
 def skeleton_from_dict(joints: Any, *, where: str = "skeleton") -> Skeleton:
@@ -73,10 +80,7 @@ def load_skeleton_json(path: str | Path) -> tuple[Skeleton, tuple[int, int] | No
     path = Path(path)
     model = read_versioned(path, SKELETON)
     size = None if model.width is None or model.height is None else (model.width, model.height)
-    try:
-        return skeleton_from_joints(model.joints), size
-    except SkeletonError as error:
-        raise SkeletonError(f"{path}: {error}") from None
+    return skeleton_from_joints(model.joints, where=path), size
 
 
 def save_skeleton_json(path: str | Path, skeleton: Skeleton, size: tuple[int, int] | None = None) -> None:

@@ -109,10 +109,7 @@ def load_joints(path: str | Path) -> tuple[Skeleton, NDArray[np.float64], int]:
     """
     path = Path(path)
     model = read_versioned(path, JOINTS)
-    try:
-        skeleton = skeleton_from_joints(model.joints)
-    except SkeletonError as error:
-        raise SkeletonError(f"{path}: {error}") from None
+    skeleton = skeleton_from_joints(model.joints, where=path)
     default = DEFAULT_SIZE if model.size is None else model.size
     size_of = {joint.name: default if joint.size is None else joint.size for joint in model.joints}
     sizes = np.array([size_of[name] for name in skeleton.names], dtype=float).reshape(-1, 2)

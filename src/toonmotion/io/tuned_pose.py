@@ -11,13 +11,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from toonmotion.animate.timeline import Keyframe, Timeline
-from toonmotion.deform.tuning import CurveEdit, DragEdit
+from toonmotion.deform.tuning import TuningEdit
 from toonmotion.errors import EditError, SettingsError
 from toonmotion.io.pose_json import load_keyframes, load_pose, load_pose_edits, save_keyframes, save_pose
 from toonmotion.rig.pose import Pose
 from toonmotion.rig.skeleton import Skeleton
-
-Edit = CurveEdit | DragEdit
 
 
 @dataclass(frozen=True)
@@ -39,7 +37,7 @@ class TunedPose:
 
     path: Path
     pose: Pose
-    edits: tuple[Edit, ...]
+    edits: tuple[TuningEdit, ...]
     key: int | None = None
     timeline: Timeline | None = None
 
@@ -57,12 +55,12 @@ def load_tuned_pose(path: str | Path, skeleton: Skeleton, *, key: int | None = N
     return TunedPose(path=path, pose=found.pose, edits=tuple(found.edits), key=key, timeline=timeline)
 
 
-def with_edits(tuned: TunedPose, edits: tuple[Edit, ...]) -> TunedPose:
+def with_edits(tuned: TunedPose, edits: tuple[TuningEdit, ...]) -> TunedPose:
     """``tuned`` with its edits replaced."""
     return dataclasses.replace(tuned, edits=tuple(edits))
 
 
-def without_last_edit(tuned: TunedPose) -> tuple[TunedPose, Edit]:
+def without_last_edit(tuned: TunedPose) -> tuple[TunedPose, TuningEdit]:
     """``tuned`` with its last edit taken back, and that edit."""
     if not tuned.edits:
         raise EditError(f"{tuned.path} has no edits to undo")

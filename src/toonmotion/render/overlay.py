@@ -3,7 +3,7 @@
 Each function takes an RGBA frame rendered with some ``view`` (see
 :func:`toonmotion.render.raster.view_transform`), maps drawing points into it the same way,
 draws anti-aliased lines and discs on a coverage layer and composites one colour through it
-over the frame ("over", straight alpha). Widths and radii are in output pixels. The frame
+over the frame (``render.composite.over``). Widths and radii are in output pixels. The frame
 is not modified; a new one is returned.
 """
 
@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import SettingsError
+from toonmotion.render.composite import over
 from toonmotion.render.raster import check_colour, view_transform
 from toonmotion.shape.mesh import unique_edges
 
@@ -68,15 +69,11 @@ def draw_skeleton(frame: NDArray[np.uint8], positions: ArrayLike, bones: ArrayLi
 
     Parameters
     ----------
-    frame : (H, W, 4) uint8
-        RGBA frame rendered with ``view``.
+    frame, view, colour : as for :func:`draw_mesh`
     positions : (k, 2) float
         Joint positions, (x, y) drawing pixels, y down.
     bones : (b, 2) int
         Joint index pairs (parent, child).
-    view : (x0, y0, x1, y1) float
-        The view ``frame`` was rendered with.
-    colour : (r, g, b) or (r, g, b, a) int 0-255
     width : int
         Bone line width in output pixels.
     joint_radius : int
@@ -113,26 +110,15 @@ def draw_reference(frame: NDArray[np.uint8], positions: ArrayLike, bones: ArrayL
 
     Parameters
     ----------
-    frame : (H, W, 4) uint8
-        RGBA frame rendered with ``view``.
-    positions : (k, 2) float
-        Joint positions, (x, y) drawing pixels, y down.
-    bones : (b, 2) int
-        Joint index pairs (parent, child).
-    view : (x0, y0, x1, y1) float
-        The view ``frame`` was rendered with.
-    colour : (r, g, b) or (r, g, b, a) int 0-255
-    width : int
-        Line width in output pixels.
+    frame, positions, bones, view, colour, width : as for :func:`draw_skeleton`, which this
+        is without the joints' discs, and thinner and red by default.
 
     Returns
     -------
     (H, W, 4) uint8
         A new frame.
     """
-    frame, to_frame = _setup(frame, view)
-    P = _points(positions, "positions")
-    return _paint(frame, colour, _check_width(width, "width"), to_frame(P)[_bones(bones, len(P))])
+    return draw_skeleton(frame, positions, bones, view=view, colour=colour, width=width, joint_radius=0)
 
 
 def _paint(frame, colour, width, segments, discs=None, radius=0):
@@ -152,17 +138,12 @@ def _paint(frame, colour, width, segments, discs=None, radius=0):
         return out
     region = out[y:y + h, x:x + w]
     hit = cover[y:y + h, x:x + w] > 0
-    dst = region[hit].astype(np.float32)
-    a_src = cover[y:y + h, x:x + w][hit].astype(np.float32) * (colour[3] / 255 / 255)
-    a_dst = dst[:, 3] / 255
-    a_out = a_src + a_dst * (1 - a_src)
-    keep = a_dst * (1 - a_src)
-    rgb = np.float32(colour[:3]) * a_src[:, None] + dst[:, :3] * keep[:, None]
-    rgb /= np.maximum(a_out, 1e-6)[:, None]
-    px = np.empty_like(dst, dtype=np.uint8)
-    px[:, :3] = np.clip(np.rint(rgb), 0, 255)
-    px[:, 3] = np.clip(np.rint(a_out * 255), 0, 255)
-    region[hit] = px
+    # The colour at alpha colour[3] * coverage, premultiplied in composite's units, over the frame.
+    alpha = cover[y:y + h, x:x + w][hit].astype(np.float32) * np.float32(colour[3] / 255)
+    src = np.empty((len(alpha), 4), np.float32)
+    src[:, :3] = alpha[:, None] * np.float32(colour[:3])
+    src[:, 3] = alpha * 255
+    region[hit] = over(src, region[hit])
     return out
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -11,12 +11,12 @@ from numpy.typing import NDArray
 from toonmotion.animate.animation import Animation
 from toonmotion.deform.depth import draw_order
 from toonmotion.io.video import save_animation
+from toonmotion.progress import Progress
 from toonmotion.render.frame import check_overlays, fit_view, natural_size, render_frame
 from toonmotion.rig.character import Character
 
 Colour = tuple[int, int, int]
 View = tuple[float, float, float, float]
-Progress = Callable[[str, int, int], None]
 
 WHITE = (255, 255, 255)
 
@@ -51,16 +51,10 @@ def render_animation(
                            background=background, overlays=overlays, order=order)
 
 
-def write_animation(
-    path: str | Path,
-    character: Character,
-    animation: Animation,
-    *,
-    size: tuple[int, int] | None = None,
-    background: Colour | None = None,
-    overlays: Sequence[str] = (),
-    progress: Progress | None = None,
-) -> tuple[int, tuple[int, int]]:
+def write_animation(path: str | Path, character: Character, animation: Animation, *,
+                    size: tuple[int, int] | None = None, background: Colour | None = None,
+                    overlays: Sequence[str] = (), progress: Progress | None = None
+                    ) -> tuple[int, tuple[int, int]]:
     """Render ``animation`` and save it to ``path`` (``.gif``, ``.mp4``, a folder or a PNG pattern).
 
     GIF and MP4 have no partial transparency: their frames are composited over ``background``,

@@ -97,19 +97,17 @@ def rotate(points: ArrayLike, angle: ArrayLike, *, about: ArrayLike | None = Non
 
     Parameters
     ----------
-    points : (..., n, 2) float
-        (x, y) pixels, y down; ``(2,)`` for a single point.
+    points, about
+        As for :func:`transform` (``about`` ``(T, 1, 2)`` for one centre per frame).
     angle : float or array
         Radians, positive turning +x towards +y (clockwise on screen). Broadcast against
         ``points.shape[:-1]``: a scalar turns every point, ``(n,)`` each point by its own angle,
         and ``(T, 1)`` each frame of ``(T, n, 2)`` points by its own.
-    about : (..., 2) float, optional
-        The centre, broadcast against ``points`` (``(T, 1, 2)`` for one centre per frame).
 
     Returns
     -------
     (..., n, 2) float
-        A new array.
+        The turned points, a new array.
 
     Examples
     --------

@@ -5,12 +5,11 @@ This is the one place the steps are put in order; each step lives in its own mod
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import MaskError, SkeletonError
+from toonmotion.progress import Progress
 from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
 from toonmotion.rig.binding import decompose
 from toonmotion.rig.character import Character, RigSettings
@@ -33,10 +32,6 @@ STAGES = ("mask", "silhouette", "curve skeleton", "skeleton", "mesh", "binding")
 _FAR_FRACTION = 0.1
 _FAR_MIN_PX = 8.0
 _BASE_TOLERANCE = 1.0
-
-
-Progress = Callable[[str, int, int], None]
-"""A progress callback: ``progress(stage, index, count)``."""
 
 
 def rig_drawing(

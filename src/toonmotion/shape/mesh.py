@@ -27,10 +27,6 @@ from toonmotion.geometry.arrays import finite_float, frozen_array, frozen_arrays
 from toonmotion.geometry.polygon import subdivide_loop, triangle_areas
 from toonmotion.shape.silhouette import Silhouette
 
-# Interior samples keep at least this fraction of the local spacing from the outline.
-_CLEARANCE = 0.5
-_MAX_CONFORM_ROUNDS = 40
-
 
 @dataclass(frozen=True, eq=False)
 class Mesh:
@@ -169,6 +165,12 @@ def check_mesh(mesh: Mesh, *, min_area: float = 1e-9) -> list[str]:
     if not outline <= set(map(tuple, edges)):
         problems.append("some outline edges are not mesh edges")
     return problems
+
+
+# Interior samples keep at least this fraction of the local spacing from the outline.
+_CLEARANCE = 0.5
+# Rounds of splitting outline edges the triangulation missed before giving up.
+_MAX_CONFORM_ROUNDS = 40
 
 
 class _Sampler:
