@@ -10,6 +10,7 @@ import toonmotion
 from toonmotion import api
 from toonmotion.animate.pose_filter import exaggerate_pose
 from toonmotion.deform.deformer import Deformer
+from toonmotion.errors import SettingsError
 from toonmotion.io.char_cfg import save_char_cfg
 from toonmotion.io.image import save_png
 from toonmotion.rig.pipeline import rig_drawing
@@ -92,7 +93,17 @@ def test_filter_motion_with_zero_strength_changes_nothing(hero):
 def test_capture_needs_both_corrections_and_their_frame_to_correct(hero):
     frames = np.zeros((3, 40, 40, 3), dtype=np.uint8)
     motion = api.animate_character(hero, sample_keyframes(hero.skeleton)).motion
-    with pytest.raises(ValueError, match="needs the corrections and the frame"):
+    with pytest.raises(SettingsError, match="needs the corrections and the frame"):
         api.track_footage(
             frames, joints=(hero.skeleton, np.full((len(hero.skeleton), 2), 9.0)), earlier=motion
         )
+
+
+@pytest.mark.parametrize("name", [n for n in api.__all__ if n[0].islower()])
+def test_every_api_function_documents_its_parameters_and_shows_an_example(name):
+    doc = getattr(api, name).__doc__
+    sections = {line.strip() for line in doc.splitlines()}
+    assert {"Parameters", "Examples"} <= sections, f"{name} lacks Parameters or Examples"
+    if getattr(api, name).__annotations__.get("return") not in ("None", None):
+        assert "Returns" in sections, f"{name} does not say what it returns"
+    assert ">>> " in doc or "See :func:" in doc

@@ -43,6 +43,7 @@ from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
 from toonmotion.deform.deformer import Deformation, Deformer, DeformSettings
 from toonmotion.deform.tuning import TuningEdit, apply_tuning
+from toonmotion.errors import SettingsError
 from toonmotion.io.image import load_image, load_mask
 from toonmotion.io.project import load_project, save_project
 from toonmotion.io.skeleton_json import load_skeleton_file
@@ -115,10 +116,31 @@ def rig_image(image: str | Path | NDArray[np.uint8], *, mask: str | Path | NDArr
         An Animated Drawings ``char_cfg.yaml`` or a toonmotion skeleton ``.json``; without one, a
         skeleton is built along the curve skeleton.
     settings : RigSettings, optional
+        Mesh density, segmentation and skeleton options; the defaults suit most drawings.
     max_pixels : int, optional
         Refuse larger images (default :data:`toonmotion.io.image.DEFAULT_MAX_PIXELS`).
     progress : callable, optional
         ``progress(stage, index, count)`` before each rigging stage.
+
+    Returns
+    -------
+    Character
+        The rigged drawing, for :func:`pose_character`, :func:`animate_character` and
+        :func:`save_project`.
+
+    Raises
+    ------
+    ToonmotionError
+        A subclass naming what is wrong: an unreadable or too large image, an empty mask, a
+        skeleton that does not fit the drawing.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> hero.skeleton.names == skeleton.names, hero.mesh.V.shape[1]
+    (True, 2)
     """
     limit = {} if max_pixels is None else {"max_pixels": max_pixels}
     texture = load_image(image, **limit) if isinstance(image, (str, Path)) else image
@@ -129,7 +151,31 @@ def rig_image(image: str | Path | NDArray[np.uint8], *, mask: str | Path | NDArr
 
 
 def rotate_joint(character: Character, joint: str, angle: float) -> Pose:
-    """The rest pose with the bones below ``joint`` turned by ``angle`` radians about it."""
+    """The rest pose with the bones below ``joint`` turned by ``angle`` radians about it.
+
+    Parameters
+    ----------
+    character : Character
+    joint : str
+        A joint of ``character.skeleton``; it stays put and everything below it turns.
+    angle : float
+        Radians; positive turns from +x towards +y (clockwise on screen, where y points down).
+
+    Returns
+    -------
+    Pose
+        Every joint's position, for :func:`pose_character`.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> pose = rotate_joint(hero, "right_elbow", 0.5)
+    >>> moved = np.linalg.norm(pose.positions - hero.skeleton.positions, axis=1) > 1e-9
+    >>> [name for name, m in zip(hero.skeleton.names, moved) if m]
+    ['right_hand']
+    """
     skeleton = character.skeleton
     return Pose(rotate_about(skeleton, skeleton.positions, joint, angle))
 
@@ -146,10 +192,38 @@ def pose_character(
 ) -> PosedFrame:
     """Deform a character to a pose (needle model, then the joint-area solve), then apply ``edits``.
 
-    ``character`` may be a :class:`Deformer` already built for it (do that when posing many
-    times: building one is the costly step). ``accel`` (pixels, at ``root``) with ``fixed`` joints
-    first exaggerates the pose with the single-frame cartoon filter (thesis 5.2.1). ``edits`` are
-    fine-tuning sketch curves and drags in drawing pixels.
+    Parameters
+    ----------
+    character : Character or Deformer
+        The rigged drawing, or a :class:`Deformer` already built for it: build one when posing
+        many times, since building it is the costly step.
+    pose : Pose
+        Every joint's position, in ``character.skeleton``'s order.
+    edits : sequence of TuningEdit, optional
+        Fine-tuning sketch curves and drags, in drawing pixels, applied in order.
+    accel : (float, float), optional
+        An acceleration in pixels at ``root``: the single-frame cartoon filter (thesis 5.2.1)
+        first exaggerates the pose as if it moved so.
+    fixed : sequence of str, optional
+        Joints ``accel`` must not move (feet on the ground).
+    root : str, optional
+        Where ``accel`` acts; the skeleton's root by default.
+    settings : DeformSettings, optional
+        Used only when ``character`` is a Character.
+
+    Returns
+    -------
+    PosedFrame
+        The pose used and the deformation (``deformation.U``: the deformed mesh vertices).
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> frame = pose_character(hero, rotate_joint(hero, "right_elbow", 0.8))
+    >>> frame.deformation.U.shape == hero.mesh.V.shape
+    True
     """
     deformer = character if isinstance(character, Deformer) else Deformer(character, settings)
     if accel is not None:
@@ -166,21 +240,63 @@ def render_pose(
     background: tuple[int, int, int] | None = None,
     overlays: Sequence[str] = (),
 ) -> NDArray[np.uint8]:
-    """A posed frame as an ``(H, W, 4)`` RGBA picture, its view grown to hold the whole figure."""
-    U = frame.deformation.U
-    return render_frame(
-        character,
-        U,
-        pose=frame.pose,
-        size=size,
-        view=pose_view(character, frame),
-        background=background,
-        overlays=overlays,
-    )
+    """A posed frame as a picture, its view grown to hold the whole figure (:func:`pose_view`).
+
+    Parameters
+    ----------
+    character : Character
+    frame : PosedFrame
+        From :func:`pose_character`.
+    size : (int, int), optional
+        ``(width, height)`` of the picture; by default the view at one pixel per drawing pixel.
+    background : (int, int, int), optional
+        An opaque RGB background; transparent by default.
+    overlays : sequence of str, optional
+        Drawn over the figure: any of :data:`toonmotion.render.frame.OVERLAYS` (the mesh, the
+        skeleton, ...).
+
+    Returns
+    -------
+    (H, W, 4) uint8
+        RGBA pixels.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> picture = render_pose(hero, pose_character(hero, rotate_joint(hero, "head", 0.3)),
+    ...                       size=(120, 160), background=(255, 255, 255))
+    >>> picture.shape, bool((picture[..., 3] == 255).all())
+    ((160, 120, 4), True)
+    """
+    return render_frame(character, frame.deformation.U, pose=frame.pose, size=size,
+                        view=pose_view(character, frame), background=background, overlays=overlays)
 
 
 def pose_view(character: Character, frame: PosedFrame) -> tuple[float, float, float, float]:
-    """The view :func:`render` draws: the drawing's canvas and the posed figure, in drawing pixels."""
+    """The view :func:`render_pose` draws: the drawing's canvas and the posed figure.
+
+    Parameters
+    ----------
+    character : Character
+    frame : PosedFrame
+        From :func:`pose_character`.
+
+    Returns
+    -------
+    (x0, y0, x1, y1) float
+        In drawing pixels; it holds the drawing's own canvas and every deformed vertex.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> x0, y0, x1, y1 = pose_view(hero, pose_character(hero, rotate_joint(hero, "hip", 3.0)))
+    >>> (x0, y0) <= (0, 0) and (x1, y1) >= (drawing.shape[1], drawing.shape[0])
+    True
+    """
     return fit_view(character, [frame.deformation.U])
 
 
@@ -195,9 +311,37 @@ def animate_character(
 ) -> Animation:
     """Deform every frame of key-frames (a :class:`Timeline`) or of a :class:`Motion`.
 
-    ``exaggeration`` runs the cartoon animation filter over the poses first. For key-frames,
-    ``method`` is ``"interpolate"`` (thesis eq. 3.11) or ``"solve"`` (stage two on every frame);
-    ``fps`` overrides a motion's frame rate (a timeline carries its own).
+    Parameters
+    ----------
+    character : Character or Deformer
+    source : Timeline or Motion
+        Key-frames (:func:`toonmotion.io.pose_json.load_keyframes`), or a motion captured,
+        retargeted or read from a file; its skeleton must be ``character``'s.
+    settings : DeformSettings, optional
+        Used only when ``character`` is a Character.
+    exaggeration : FilterSettings, optional
+        Runs the cartoon animation filter (thesis 5.2) over the poses first.
+    method : {"interpolate", "solve"}
+        For key-frames: blend the keys' solved meshes (thesis eq. 3.11), or run stage two on every
+        in-between too (slower, steadier on large turns).
+    fps : float, optional
+        Overrides a motion's frame rate (a timeline carries its own).
+
+    Returns
+    -------
+    Animation
+        Every frame's joints and deformed mesh, for :func:`write_animation`.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> keys = sample_keyframes(hero.skeleton)
+    >>> animation = animate_character(hero, keys)
+    >>> len(animation.meshes) == keys.keys[-1].frame - keys.keys[0].frame + 1
+    True
     """
     deformer = character if isinstance(character, Deformer) else Deformer(character, settings)
     if isinstance(source, Motion):
@@ -220,31 +364,59 @@ def track_footage(
 ) -> Capture:
     """Track a character's joints through footage (thesis ch. 4).
 
-    ``frames`` are ``(T, H, W, 3)`` uint8 RGB (:func:`toonmotion.io.frames.load_frames`).
-    ``joints`` is ``(skeleton, sizes)``: each joint's position at frame ``start`` and its rectangle's
-    (width, height); without it joints are suggested from the first frame (on ``background``, a
-    flat colour, when given). To correct an ``earlier`` tracking, give the ``corrections`` (joint
-    name to true ``(x, y)``) at frame ``at``: tracking resumes there, frames before it are kept.
+    Parameters
+    ----------
+    frames : (T, H, W, 3) uint8
+        RGB frames (:func:`toonmotion.io.frames.load_frames` reads videos, GIFs and folders).
+    joints : (Skeleton, (k, 2) float), optional
+        Each joint's position at frame ``start`` and its rectangle's (width, height). Without it,
+        joints are suggested from the first frame's figure (:func:`suggest_joints`).
+    start : int
+        The frame ``joints`` are placed on; tracking runs forwards from it.
+    fps : float
+        The footage's frame rate, carried into the motion.
+    background : (int, int, int), optional
+        A flat background colour, to find the figure by when suggesting joints.
+    settings : TrackSettings, optional
+    earlier : Motion, optional
+        A tracking to correct: give the ``corrections`` (joint name to true ``(x, y)``) at frame
+        ``at``; tracking resumes there and the frames before it are kept.
+    corrections : mapping of str to (float, float), optional
+    at : int, optional
+    progress : callable, optional
+        ``progress(stage, index, count)`` after each frame.
+
+    Returns
+    -------
+    Capture
+        The motion (with each joint's confidence per frame), its first frame and the rectangles'
+        angles.
+
+    Raises
+    ------
+    SettingsError
+        ``earlier`` without ``corrections`` or ``at``.
+    TrackingError
+        No figure to suggest joints from, or joints outside the frame.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character_on
+    >>> picture, skeleton = sample_character_on("white", scale=0.5)
+    >>> frames = np.stack([np.roll(picture, 2 * t, axis=1) for t in range(4)])  # walks right
+    >>> sizes = np.full((len(skeleton), 2), 16.0)
+    >>> capture = track_footage(frames, joints=(skeleton, sizes))
+    >>> np.round(capture.motion.positions[-1, 0] - capture.motion.positions[0, 0]).tolist()
+    [6.0, 0.0]
     """
     skeleton, sizes = joints if joints is not None else suggest_joints(frames, colour=background)
     if earlier is None:
-        return capture_motion(
-            frames, skeleton, sizes, fps=fps, start=start, settings=settings, progress=progress
-        )
+        return capture_motion(frames, skeleton, sizes, fps=fps, start=start, settings=settings,
+                              progress=progress)
     if at is None or not corrections:
-        raise ValueError("correcting an earlier tracking needs the corrections and the frame they are at")
-    return correct_motion(
-        earlier,
-        frames,
-        skeleton,
-        sizes,
-        at,
-        corrections,
-        fps=fps,
-        start=start,
-        settings=settings,
-        progress=progress,
-    )
+        raise SettingsError("correcting an earlier tracking needs the corrections and the frame they are at")
+    return correct_motion(earlier, frames, skeleton, sizes, at, corrections, fps=fps, start=start,
+                          settings=settings, progress=progress)
 
 
 def filter_motion(
@@ -257,8 +429,36 @@ def filter_motion(
 ) -> Motion:
     """The cartoon animation filter on a motion (thesis 5.2): anticipation and follow-through.
 
-    ``strength`` is the filter's ``A`` (about 1 to 2 is lively), ``sigma`` its width in frames and
-    ``shift`` a delay in frames. By default the root's path and every bone's angle and length are
-    filtered; ``joints`` filters only those joints' paths.
+    Parameters
+    ----------
+    motion : Motion
+    strength : float
+        The filter's ``A``: about 1 to 2 is lively, 0 leaves the motion as it is.
+    sigma : float
+        The filter's width in frames.
+    shift : float
+        A delay in frames (positive: the exaggeration lags the motion).
+    joints : sequence of str, optional
+        Filter only these joints' paths, carrying what hangs below them. By default the root's
+        path and every bone's angle and length are filtered.
+
+    Returns
+    -------
+    Motion
+        Same skeleton, frames and fps.
+
+    Raises
+    ------
+    FilterError
+        A width or shift the motion cannot carry, or an unknown joint.
+
+    Examples
+    --------
+    >>> from toonmotion.rig.skeleton import Skeleton
+    >>> arm = Skeleton.from_joints([("shoulder", None, (0, 0)), ("hand", "shoulder", (10, 0))])
+    >>> steps = np.zeros((20, 2, 2)); steps[:, 1, 0] = 10; steps[10:, :, 0] += 30  # a jump right
+    >>> moved = filter_motion(Motion(arm, steps, fps=12.0), 1.0).positions[:, 0, 0]
+    >>> bool(moved.min() < 0 and moved.max() > 30)  # it winds up and overshoots
+    True
     """
     return exaggerate(motion, FilterSettings(strength=strength, sigma=sigma, shift=shift), joints=joints)

@@ -73,8 +73,27 @@ def exaggerate(
 ) -> Motion:
     """``motion`` through the cartoon animation filter, or as it is when ``settings`` is None.
 
-    By default the root's path and every bone's angle and length are filtered (thesis eq. 5.6);
-    ``joints`` filters only those joints' paths instead, carrying what hangs below them.
+    Parameters
+    ----------
+    motion : Motion
+    settings : FilterSettings or None
+        The filter's strength, width and shift.
+    joints : sequence of str, optional
+        Filter only these joints' paths, carrying what hangs below them. By default the root's
+        path and every bone's angle and length are filtered (thesis eq. 5.6).
+
+    Returns
+    -------
+    Motion
+        Same skeleton, frames and fps.
+
+    Examples
+    --------
+    >>> from toonmotion.rig.skeleton import Skeleton
+    >>> arm = Skeleton.from_joints([("shoulder", None, (0, 0)), ("hand", "shoulder", (10, 0))])
+    >>> still = Motion(arm, np.tile(arm.positions, (8, 1, 1)), fps=12.0)
+    >>> exaggerate(still, FilterSettings(strength=2.0)).positions.tolist() == still.positions.tolist()
+    True
     """
     if settings is None:
         return motion
@@ -140,9 +159,28 @@ def same_depth_overlaps(
 ) -> list[SameDepthOverlap]:
     """Pairs of regions at the same depth that overlap in any of ``results``, each pair once.
 
-    ``results`` are ``(frame, U)`` pairs (the key-frames of an animation, or a single pose). A bone
-    is never reported against its own ancestor or descendant: a limb folding over its own chain
-    is covered by the depth rule for joint areas, not by depth layers.
+    A bone is never reported against its own ancestor or descendant: a limb folding over its own
+    chain is covered by the depth rule for joint areas, not by depth layers.
+
+    Parameters
+    ----------
+    character : Character
+    results : iterable of (int, (n, 2) float)
+        ``(frame, U)`` pairs: the key-frames of an animation, or a single pose.
+
+    Returns
+    -------
+    list of SameDepthOverlap
+        Each overlapping pair once, with its largest area and every frame it overlaps in; give
+        one of the two bones another depth (``toonmotion depth``) to settle which is in front.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> from toonmotion.rig.pipeline import rig_drawing
+    >>> hero = rig_drawing(*sample_character(scale=0.5)[:1], skeleton=sample_character(scale=0.5)[1])
+    >>> same_depth_overlaps(hero, [(0, hero.mesh.V)])  # the rest pose overlaps nothing
+    []
     """
     parents = character.skeleton.parents
     found: dict[tuple[str, str], SameDepthOverlap] = {}

@@ -53,9 +53,27 @@ def suggest_joints(
 ) -> tuple[Skeleton, NDArray[np.float64]]:
     """Joints and rectangle sizes suggested from the first frame's figure.
 
-    The figure is what differs from the background: ``colour`` if given (a flat background), else
-    the first frame's border colour when that is flat, else a background estimated from the whole
-    sequence. Returns ``(skeleton, sizes (k, 2))`` for :class:`TrackSetup`.
+    Parameters
+    ----------
+    frames : (T, H, W, 3) uint8
+    colour : (int, int, int), optional
+        A flat background colour. Without it the first frame's border colour is used when that is
+        flat, else a background estimated from the whole sequence; the figure is what differs.
+
+    Returns
+    -------
+    skeleton : Skeleton
+        Joints along the figure's curve skeleton, at their first-frame positions.
+    sizes : (k, 2) float
+        Each joint's tracking rectangle (width, height) in pixels.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character_on
+    >>> picture = sample_character_on("white", scale=0.5)[0]
+    >>> skeleton, sizes = suggest_joints(picture[None])
+    >>> len(skeleton) == len(sizes) > 1
+    True
     """
     if colour is None:
         colour = border_colour(frames[0])

@@ -55,7 +55,21 @@ def retarget(motion: Motion, skeleton: Skeleton, *, joint_map: Mapping[str, str]
     Returns
     -------
     Motion
-        For ``skeleton``, at the captured frame rate.
+        For ``skeleton``, at the captured frame rate: each target bone turns as its captured
+        bone does and keeps its own length; the root follows the captured root's path.
+
+    Raises
+    ------
+    MotionError
+        No bone of the target matches a bone of the motion.
+
+    Examples
+    --------
+    >>> arm = Skeleton.from_joints([("shoulder", None, (0, 0)), ("hand", "shoulder", (10, 0))])
+    >>> raised = np.array([[[0, 0], [10, 0]], [[0, 0], [0, -10]]], dtype=float)
+    >>> long_arm = Skeleton.from_joints([("shoulder", None, (50, 50)), ("hand", "shoulder", (80, 50))])
+    >>> retarget(Motion(arm, raised, fps=12.0), long_arm).positions[-1].round(6).tolist()
+    [[50.0, 50.0], [50.0, 20.0]]
     """
     source = motion.skeleton
     match = _match_joints(source, skeleton, joint_map or {})

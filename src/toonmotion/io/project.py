@@ -214,8 +214,21 @@ def save_project(path: str | Path, character: Character) -> None:
     Parameters
     ----------
     path : str or Path
-        The project folder. If it exists it must be a folder; a project in it is replaced.
+        The project folder. If it exists it must be a folder; a project in it is replaced, and
+        if saving fails the folder is left as it was.
     character : Character
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from toonmotion.samples import sample_character
+    >>> from toonmotion.rig.pipeline import rig_drawing
+    >>> hero = rig_drawing(*sample_character(scale=0.5)[:1], skeleton=sample_character(scale=0.5)[1])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     save_project(Path(folder) / "hero", hero)
+    ...     again = load_project(Path(folder) / "hero")
+    >>> bool((again.mesh.V == hero.mesh.V).all() and (again.texture == hero.texture).all())
+    True
     """
     folder = Path(path)
     if folder.exists() and not folder.is_dir():
@@ -243,7 +256,27 @@ def save_project(path: str | Path, character: Character) -> None:
 
 
 def load_project(path: str | Path) -> Character:
-    """Load a project folder (or its ``project.json``) as a :class:`Character`."""
+    """Load a project folder (or its ``project.json``) as a :class:`Character`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder :func:`save_project` wrote, or the ``project.json`` in it.
+
+    Returns
+    -------
+    Character
+        Exactly the character that was saved.
+
+    Raises
+    ------
+    ProjectError
+        Not a project, a damaged one, or one from a newer toonmotion (:class:`ProjectVersionError`).
+
+    Examples
+    --------
+    See :func:`save_project`.
+    """
     path = Path(path)
     file = path / PROJECT_FILE if path.is_dir() else path
     model = read_versioned(file, PROJECT)

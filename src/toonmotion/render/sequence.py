@@ -57,9 +57,41 @@ def write_animation(path: str | Path, character: Character, animation: Animation
                     ) -> tuple[int, tuple[int, int]]:
     """Render ``animation`` and save it to ``path`` (``.gif``, ``.mp4``, a folder or a PNG pattern).
 
-    GIF and MP4 have no partial transparency: their frames are composited over ``background``,
-    or white when it is None (transparent). ``progress(stage, index, count)`` is called after each
-    frame. Returns ``(frames written, (width, height))``.
+    Parameters
+    ----------
+    path : str or Path
+        ``.gif``, ``.mp4``, ``.webp``, a folder (numbered PNGs) or a pattern like ``f_%04d.png``.
+        Nothing is left half-written if rendering fails.
+    character : Character
+    animation : Animation
+        From :func:`toonmotion.api.animate_character`; its fps is the file's.
+    size : (int, int), optional
+        ``(width, height)``; by default the view holding every frame, one pixel per drawing pixel.
+    background : (int, int, int), optional
+        An opaque RGB background. GIF and MP4 have no partial transparency: without one, their
+        frames are composited over white.
+    overlays : sequence of str, optional
+        As for :func:`toonmotion.render.frame.render_frame`.
+    progress : callable, optional
+        ``progress("rendering", index, count)`` after each frame.
+
+    Returns
+    -------
+    (int, (int, int))
+        The frames written and their ``(width, height)``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from toonmotion.samples import sample_character
+    >>> from toonmotion.api import animate_character, rig_image
+    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> hero = rig_image(*sample_character(scale=0.5)[:1], skeleton=sample_character(scale=0.5)[1])
+    >>> animation = animate_character(hero, sample_keyframes(hero.skeleton, fps=4.0))
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     count, size = write_animation(Path(folder) / "hop.gif", hero, animation, size=(80, 100))
+    >>> count == len(animation.meshes), size
+    (True, (80, 100))
     """
     view = animation_view(character, animation)
     out_size = natural_size(view, size=size)
