@@ -22,7 +22,7 @@ LAYERS = (
     {"rig"},
     {"shape"},
     {"geometry"},
-    {"errors", "progress"},
+    {"errors", "progress", "limits"},
 )
 
 

@@ -13,7 +13,11 @@ class ImageReadError(ToonmotionError):
     """An image file is missing, unreadable, truncated or not an image."""
 
 
-class ImageTooLargeError(ToonmotionError):
+class LimitError(ToonmotionError):
+    """An input or an output is bigger than a resource limit (:mod:`toonmotion.limits`) allows."""
+
+
+class ImageTooLargeError(LimitError):
     """An image has more pixels than the configured limit."""
 
 

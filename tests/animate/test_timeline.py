@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from toonmotion import limits
 from toonmotion.animate.timeline import (
     EASES,
     Keyframe,
@@ -13,7 +14,7 @@ from toonmotion.animate.timeline import (
     pose_at,
     segment_at,
 )
-from toonmotion.errors import KeyframeError, PoseError
+from toonmotion.errors import KeyframeError, LimitError, PoseError
 from toonmotion.rig.kinematics import bone_angles
 from toonmotion.rig.pose import Pose, descendants, rest_pose, rotate_about
 from toonmotion.samples import sample_character
@@ -71,18 +72,28 @@ def test_keys_are_sorted_and_frames_counted(skeleton):
         ([0, 2.0], {}, r"key-frame numbers must be whole numbers >= 0, got 2.0"),
         ([0, "3"], {}, r"key-frame numbers must be whole numbers >= 0, got '3'"),
         ([0, True], {}, r"key-frame numbers must be whole numbers >= 0, got True"),
-        ([0], {"fps": 0}, r"fps must be a finite number > 0, got 0.0"),
-        ([0], {"fps": -24}, r"fps must be a finite number > 0, got -24.0"),
+        ([0], {"fps": 0}, r"fps must be a finite number > 0, got 0"),
+        ([0], {"fps": -24}, r"fps must be a finite number > 0, got -24"),
         ([0], {"fps": float("nan")}, r"fps must be a finite number > 0, got nan"),
         ([0], {"fps": float("inf")}, r"fps must be a finite number > 0, got inf"),
-        ([0], {"fps": "fast"}, r"fps must be a number, got 'fast'"),
-        ([0], {"fps": None}, r"fps must be a number, got None"),
+        ([0], {"fps": "fast"}, r"fps must be a finite number > 0, got 'fast'"),
+        ([0], {"fps": None}, r"fps must be a finite number > 0, got None"),
+        ([0], {"fps": 0.001}, r"fps must be between 0.01 and 1000 frames per second, got 0.001"),
+        ([0], {"fps": 1e6}, r"fps must be between 0.01 and 1000 frames per second, got 1e\+06"),
         ([0], {"ease": "bounce"}, r"ease must be one of linear, in-out, in, out, got 'bounce'"),
     ],
 )
 def test_make_timeline_refuses_bad_keys_and_options(skeleton, keys, options, message):
     with pytest.raises(KeyframeError, match=message):
         make_timeline(skeleton, [_key(skeleton, f) for f in keys], **options)
+
+
+def test_a_key_beyond_the_frames_limit_is_refused_until_the_limit_is_raised(skeleton):
+    keys = [_key(skeleton, 0), _key(skeleton, 100_000)]
+    with pytest.raises(LimitError, match=r"number, 100000, plus one is over the limit frames=100,000"):
+        make_timeline(skeleton, keys)
+    with limits.using(frames=100_001):
+        assert make_timeline(skeleton, keys).frame_count == 100_001
 
 
 def test_make_timeline_checks_every_key_pose(skeleton):

@@ -214,7 +214,7 @@ def test_folder_without_project(tmp_path):
 
 def test_garbage_json(saved):
     (saved / PROJECT_FILE).write_text("{ this is : not json")
-    _expect(saved, ProjectError, r"cannot read .*project.json: Expecting")
+    _expect(saved, ProjectError, r"cannot read .*project.json as JSON: Expecting")
 
 
 @pytest.mark.parametrize(

@@ -160,7 +160,7 @@ def test_check_mask_rejects_empty_mask():
 
 def test_check_mask_rejects_all_foreground_and_names_what():
     with pytest.raises(MaskError, match="alpha mask covers the whole image"):
-        check_mask(np.ones((6, 6), bool), what="alpha mask")
+        check_mask(np.ones((12, 12), bool), what="alpha mask")
 
 
 def test_mask_error_is_a_user_error():
@@ -168,9 +168,16 @@ def test_mask_error_is_a_user_error():
 
 
 def test_check_mask_accepts_a_mask_with_both():
-    mask = np.zeros((6, 6), bool)
-    mask[2:4, 2:4] = True
+    mask = np.zeros((12, 12), bool)
+    mask[2:10, 2:10] = True
     check_mask(mask)  # does not raise
+
+
+def test_check_mask_refuses_a_figure_too_small_to_rig():
+    mask = np.zeros((12, 12), bool)
+    mask[2:9, 2:11] = True  # 63 pixels
+    with pytest.raises(MaskError, match="only 63 figure pixels, too few to rig"):
+        check_mask(mask)
 
 
 # clean_mask ------------------------------------------------------------------------------

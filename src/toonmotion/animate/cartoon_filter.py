@@ -129,7 +129,14 @@ def cartoon_filter(signal: ArrayLike, settings: FilterSettings) -> NDArray[np.fl
     x = _check_signal(signal)
     if len(x) == 1 or settings.strength == 0:
         return x.copy()
-    return x - _smoothed_second_derivative(x, settings)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = x - _smoothed_second_derivative(x, settings)
+    if not np.all(np.isfinite(out)):
+        raise FilterError(
+            f"the filter strength {settings.strength:g} throws the motion beyond any finite position; "
+            "use a strength of about 0.5 to 3"
+        )
+    return out
 
 
 def filter_trajectories(
@@ -223,8 +230,11 @@ def _smoothed_second_derivative(x, settings):
     """``x'' (*) k`` over frames, ``x''`` zero at the first and last frame and beyond (see notes)."""
     d2 = np.zeros_like(x)
     d2[1:-1] = x[2:] - 2 * x[1:-1] + x[:-2]
-    offsets = np.arange(-settings.radius, settings.radius + 1)
-    kernel = settings.strength * np.exp(-(((offsets - settings.shift) / settings.sigma) ** 2))
+    # Past the clip's length the kernel only meets zeros: a very wide filter costs no more.
+    reach = min(settings.radius, len(x))
+    offsets = np.arange(-reach, reach + 1)
+    with np.errstate(over="ignore", under="ignore"):  # far from its centre the kernel is 0
+        kernel = settings.strength * np.exp(-(((offsets - settings.shift) / settings.sigma) ** 2))
     # out[t] = sum over tau of kernel(tau) d2[t - tau], d2 zero beyond the clip.
     return convolve1d(d2, kernel, axis=0, mode="constant", cval=0.0)
 

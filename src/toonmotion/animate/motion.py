@@ -12,9 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion import limits
 from toonmotion.animate.timeline import Timeline, pose_at
 from toonmotion.errors import MotionError
-from toonmotion.geometry.arrays import frozen_array
+from toonmotion.geometry.arrays import frame_rate, frozen_array
 from toonmotion.rig.pose import Pose
 from toonmotion.rig.skeleton import Skeleton
 
@@ -60,9 +61,8 @@ class Motion:
         if not np.all(np.isfinite(positions)):
             frame = int(np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))[0])
             raise MotionError(f"frame {frame} of the motion has a non-finite joint position")
-        if isinstance(self.fps, bool) or not isinstance(self.fps, (int, float, np.number)) \
-                or not (np.isfinite(self.fps) and self.fps > 0):
-            raise MotionError(f"the motion's fps must be a finite number > 0, got {self.fps!r}")
+        limits.check("frames", len(positions), "the motion's frame count")
+        object.__setattr__(self, "fps", frame_rate(self.fps, name="the motion's fps", error=MotionError))
         if self.confidence is not None:
             confidence = frozen_array(self.confidence, dtype=np.float64, name="the motion's confidence",
                                       error=MotionError)

@@ -12,10 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from toonmotion import limits
 from toonmotion.deform.tuning import CurveEdit, DragEdit, TuningEdit
 from toonmotion.errors import KeyframeError
 from toonmotion.geometry.angles import lerp_angle
-from toonmotion.geometry.arrays import finite_float
+from toonmotion.geometry.arrays import frame_rate
 from toonmotion.rig.kinematics import bone_angles, positions_from_bones
 from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
@@ -84,8 +85,9 @@ class Timeline:
         if self.ease not in EASES:
             raise KeyframeError(f"ease must be one of {', '.join(EASES)}, got {self.ease!r}")
         object.__setattr__(self, "keys", keys)
-        object.__setattr__(self, "fps", finite_float(self.fps, name="fps", error=KeyframeError, minimum=0,
-                                                     strict=True))
+        object.__setattr__(self, "fps", frame_rate(self.fps, error=KeyframeError))
+        limits.check("frames", frames[-1] + 1, f"the last key-frame's number, {frames[-1]}, plus one",
+                     hint="number the keys from 0 at the animation's frame rate")
 
     @property
     def frame_count(self) -> int:
@@ -115,12 +117,7 @@ def make_timeline(
     """
     if ease not in EASES:
         raise KeyframeError(f"ease must be one of {', '.join(EASES)}, got {ease!r}")
-    try:
-        fps = float(fps)
-    except (TypeError, ValueError):
-        raise KeyframeError(f"fps must be a number, got {fps!r}") from None
-    if not (np.isfinite(fps) and fps > 0):
-        raise KeyframeError(f"fps must be a finite number > 0, got {fps}")
+    fps = frame_rate(fps, error=KeyframeError)
     keys = list(keys)
     if not keys:
         raise KeyframeError("there are no key-frames; give at least one key pose")

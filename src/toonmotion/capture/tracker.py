@@ -229,7 +229,7 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     out.angles[start] = 0.0
     out.confidence[start] = 1.0
     out.tracked[start] = True
-    joints = _plan(setup, settings)
+    joints = _plan(setup, settings, first.shape)
     templates = [Templates.cut(first, initial[m], 0.0, joints[m].size) for m in range(k)]
     if progress:
         progress("tracking", start, stop)
@@ -296,7 +296,7 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
         )
     current = read_frame(frames, frame, None)
     check_inside(setup.skeleton, setup.sizes, out.positions[frame], out.angles[frame], current, frame, fixed)
-    joints = _plan(setup, settings)
+    joints = _plan(setup, settings, current.shape)
     templates = []
     for m in range(k):
         cut = _anchor_frame(out.confidence[:, m], begin, frame, m in fixed)
@@ -342,15 +342,18 @@ class _Arrays:
                         tracked=self.tracked)
 
 
-def _plan(setup, settings):
-    """A :class:`JointPlan` per joint."""
+def _plan(setup, settings, frame_shape):
+    """A :class:`JointPlan` per joint, for frames of ``frame_shape`` (h, w, ...)."""
     joints = []
+    # A search wider than the frame finds nothing more; its size would only cost memory.
+    widest = math.hypot(frame_shape[0], frame_shape[1])
     for m, (w, h) in enumerate(setup.sizes):
         size = (max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5))))
         r = settings.search if settings.search is not None else max(MIN_SEARCH, SEARCH_FRACTION * max(w, h))
         w_beta = 1.0 / r**2 if settings.w_beta is None else settings.w_beta
         parent = int(setup.skeleton.parents[m]) if settings.rotate else -1
-        joints.append(plan_joint(size, r, settings.w_alpha, w_beta, parent, int(setup.skeleton.parents[m])))
+        joints.append(plan_joint(size, min(r, widest), settings.w_alpha, w_beta, parent,
+                                 int(setup.skeleton.parents[m])))
     return joints
 
 

@@ -17,6 +17,7 @@ from toonmotion.deform.tuning import describe as describe_tuning
 from toonmotion.errors import SettingsError
 from toonmotion.io.image import save_png
 from toonmotion.io.tuned_pose import load_tuned_pose, save_tuned_pose, with_edits, without_last_edit
+from toonmotion.render.frame import natural_size
 from toonmotion.rig.binding import Correction
 from toonmotion.rig.edits import DepthEdit, apply_edit, redo, undo
 from toonmotion.rig.edits import describe as describe_edit
@@ -44,7 +45,8 @@ def depth(
         typer.echo(f"set {describe_edit(edit)}")
 
 
-@app.command()
+# Curve points may be negative ("-100,-100"): they are arguments, not unknown options.
+@app.command(context_settings={"ignore_unknown_options": True})
 def correct(
     project: options.Project,
     bone: Annotated[str, typer.Argument(help="The bone (named after its child joint) to attach to.")],
@@ -135,6 +137,9 @@ def tune(
     frame = api.pose_character(
         character, tuned.pose, edits=tuned.edits, settings=DeformSettings(joint_width=joint_width)
     )
+    # Drawn before anything is saved: an edit whose frame cannot be drawn is refused.
+    picture = api.render_pose(character, frame) if preview is not None else None
+    natural_size(api.pose_view(character, frame))
     if curve is not None or drag or undo_last:
         save_tuned_pose(tuned, character.skeleton)
         typer.echo(
@@ -148,7 +153,7 @@ def tune(
         for n, edit in enumerate(tuned.edits, start=1):
             typer.echo(f"{n:>3}  {describe_tuning(edit)}")
     if preview is not None:
-        save_png(preview, api.render_pose(character, frame))
+        save_png(preview, picture)
         typer.echo(f"wrote {preview}")
         x0, y0, x1, _ = api.pose_view(character, frame)
         if (x0 + 0.5, y0 + 0.5) != (0.0, 0.0) and x1 - x0 > 0:

@@ -13,7 +13,7 @@ from toonmotion.cli import options
 from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
 from toonmotion.io.char_cfg import save_char_cfg
-from toonmotion.io.image import DEFAULT_MAX_PIXELS, save_png
+from toonmotion.io.image import save_png
 from toonmotion.io.pose_json import save_keyframes
 from toonmotion.io.skeleton_json import save_skeleton_json
 from toonmotion.render.overview import render_overview
@@ -44,8 +44,8 @@ def rig(
         "--largest-only", help="Keep only the largest part of the figure.")] = False,
     background: Annotated[str, typer.Option(
         "--background", help="Background model without alpha or mask: auto, flat, paper.")] = "auto",
-    max_pixels: Annotated[int, typer.Option(
-        "--max-pixels", help="Refuse larger images.", min=1)] = DEFAULT_MAX_PIXELS,
+    max_pixels: Annotated[int | None, typer.Option(
+        "--max-pixels", help="Refuse larger images \\[default: the image_pixels limit].", min=1)] = None,
 ) -> None:
     """Rig a drawing: silhouette, mesh, curve skeleton, skeleton and decomposition."""
     if spacing is not None and vertices is not None:

@@ -121,6 +121,24 @@ def finite_float(
     return number
 
 
+# Frame rates toonmotion reads and writes: from a frame every 100 s to a thousand a second (GIF
+# stores a frame's time in hundredths of a second, up to 655 s).
+FPS_RANGE = (0.01, 1000.0)
+
+
+def frame_rate(value: object, *, name: str = "fps", error: type[Exception] = ValueError) -> float:
+    """``value`` as frames per second within :data:`FPS_RANGE`; ``error`` otherwise.
+
+    >>> frame_rate(24)
+    24.0
+    """
+    low, high = FPS_RANGE
+    number = finite_float(value, name=name, error=error, minimum=0, strict=True)
+    if not low <= number <= high:
+        raise error(f"{name} must be between {low:g} and {high:g} frames per second, got {number:g}")
+    return number
+
+
 def finite_point(value: object, *, name: str, error: type[Exception] = ValueError) -> tuple[float, float]:
     """``value`` as an ``(x, y)`` pair of finite floats; ``error`` naming ``name`` otherwise.
 

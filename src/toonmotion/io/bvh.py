@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from toonmotion import limits
 from toonmotion.capture.bvh_kinematics import BvhClip
 from toonmotion.errors import MotionError
 
@@ -49,6 +50,7 @@ def load_bvh(path: str | os.PathLike[str]) -> BvhClip:
     """
     path = Path(path)
     try:
+        limits.check("file_bytes", path.stat().st_size, f"{path.name}'s size in bytes")
         text = path.read_bytes().decode("utf-8-sig")
     except FileNotFoundError:
         raise MotionError(f"cannot read {path}: no such file") from None
@@ -234,6 +236,7 @@ def _motion(lines, motion_at, width, where):
         raise MotionError(f"{where}, line {motion_at + 1}: MOTION has no 'Frame Time: seconds' line")
     if frames < 0:
         raise MotionError(f"{where}: Frames: {frames} is negative")
+    limits.check("frames", frames, f"{where}'s frame count")
     if not (np.isfinite(frame_time) and frame_time > 0):
         raise MotionError(f"{where}: Frame Time: {frame_time:g} must be a number of seconds > 0")
 

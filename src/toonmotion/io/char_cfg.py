@@ -11,6 +11,7 @@ from typing import Any
 
 import yaml
 
+from toonmotion import limits
 from toonmotion.errors import SkeletonError
 from toonmotion.io.atomic import write_text
 from toonmotion.rig.skeleton import Skeleton
@@ -27,9 +28,12 @@ def load_char_cfg(path: str | Path) -> tuple[Skeleton, tuple[int, int] | None]:
     """
     path = Path(path)
     try:
+        limits.check("file_bytes", path.stat().st_size, f"{path.name}'s size in bytes")
         data = yaml.safe_load(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise SkeletonError(f"cannot read {path}: no such file") from None
+    except RecursionError:
+        raise SkeletonError(f"cannot read {path}: its lists or mappings are nested too deeply") from None
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
         problem = str(error).splitlines()[0] if str(error) else type(error).__name__
         raise SkeletonError(f"cannot read {path} as YAML: {problem}") from None

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.errors import ImageReadError
-from toonmotion.io.image import DEFAULT_MAX_PIXELS, load_image, load_mask
+from toonmotion.io.image import load_image, load_mask
 from toonmotion.io.skeleton_json import load_skeleton_file
 from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.pipeline import rig_drawing
@@ -47,7 +47,7 @@ class DrawingFolder:
     skeleton: Skeleton | None
 
 
-def load_drawing_folder(folder: str | Path, *, max_pixels: int = DEFAULT_MAX_PIXELS) -> DrawingFolder:
+def load_drawing_folder(folder: str | Path, *, max_pixels: int | None = None) -> DrawingFolder:
     """Read a character folder: ``texture.png``, and ``mask.png`` and ``char_cfg.yaml`` if present.
 
     Parameters

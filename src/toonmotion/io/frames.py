@@ -23,8 +23,10 @@ pixel keeps whatever colour it stores (often black; for GIF, its palette colour)
 enough for background subtraction, which only needs the background to stay the same colour.
 
 The whole sequence is held in memory, ``T * h * w * 3`` bytes, so ``max_pixels`` caps the
-pixels of all frames together (500 million by default: 1.5 GB, 240 frames of 1920x1080,
-2000 frames of 640x360), and ``max_frames`` the frame count.
+pixels of all frames together (by default the ``footage_pixels`` limit, 500 million: 1.5 GB,
+240 frames of 1920x1080, 2000 frames of 640x360), and ``max_frames`` the frame count (the
+``footage_frames`` limit, 2000); each frame must also keep within ``image_pixels``
+(:mod:`toonmotion.limits`).
 """
 
 from __future__ import annotations
@@ -35,13 +37,11 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from PIL import Image, ImageSequence, UnidentifiedImageError
+from PIL import ImageSequence
 
+from toonmotion import limits as resource_limits
 from toonmotion.errors import ImageReadError, ImageTooLargeError, VideoReadError
-from toonmotion.io.image import DEFAULT_MAX_PIXELS, load_image
-
-DEFAULT_MAX_FRAMES = 2000
-DEFAULT_MAX_PIXELS_TOTAL = 500_000_000
+from toonmotion.io.image import load_image, open_image
 
 # Single files Pillow reads, with their animation, better than ffmpeg does.
 ANIMATED_SUFFIXES = (".gif", ".png", ".apng", ".webp")
@@ -53,8 +53,8 @@ _SCALE_HINT = "scale it down (e.g. ffmpeg -i IN -vf scale=iw/2:-2 OUT)"
 _PATTERN_FIELD = re.compile(r"%0?\d*d|\{[^{}]*\}")
 
 
-def load_frames(path: str | os.PathLike[str], *, max_frames: int = DEFAULT_MAX_FRAMES,
-                max_pixels: int = DEFAULT_MAX_PIXELS_TOTAL) -> tuple[NDArray[np.uint8], float | None]:
+def load_frames(path: str | os.PathLike[str], *, max_frames: int | None = None,
+                max_pixels: int | None = None) -> tuple[NDArray[np.uint8], float | None]:
     """Read a video, an animated image, a folder of numbered images or a file pattern.
 
     Parameters
@@ -86,6 +86,9 @@ def load_frames(path: str | os.PathLike[str], *, max_frames: int = DEFAULT_MAX_F
     >>> frames.shape, frames[:, 0, 0, 0].tolist(), fps
     ((3, 4, 6, 3), [1, 2, 10], None)
     """
+    in_force = resource_limits.current()
+    max_frames = in_force.footage_frames if max_frames is None else max_frames
+    max_pixels = in_force.footage_pixels if max_pixels is None else max_pixels
     if isinstance(max_frames, bool) or not isinstance(max_frames, int) or max_frames < 1:
         raise ValueError(f"max_frames must be a positive whole number, got {max_frames!r}")
     if isinstance(max_pixels, bool) or not isinstance(max_pixels, int) or max_pixels < 1:
@@ -117,7 +120,7 @@ class _Limits:
                 f"{name} has {amount} frames, over the limit of {self.max_frames}; {_CUT_HINT}"
             )
         # No frame may exceed one image's limit: that guards against decompression bombs.
-        per_frame = min(self.max_pixels, DEFAULT_MAX_PIXELS)
+        per_frame = min(self.max_pixels, resource_limits.current().image_pixels)
         if width * height > per_frame:
             raise VideoReadError(
                 f"{name} has frames of {width}x{height} = {width * height:,} pixels, over the limit of "
@@ -192,7 +195,7 @@ def _load_files(files, name, limits):
 
 def _read_image(file):
     try:
-        return load_image(file, max_pixels=DEFAULT_MAX_PIXELS)[..., :3]
+        return load_image(file)[..., :3]
     except (ImageReadError, ImageTooLargeError) as error:
         raise VideoReadError(str(error)) from None
 
@@ -202,8 +205,10 @@ def _read_image(file):
 
 def _load_animated(path, limits):
     try:
-        image = Image.open(path)
-    except (UnidentifiedImageError, OSError, Image.DecompressionBombError):
+        image = open_image(path, max_pixels=min(limits.max_pixels, resource_limits.current().image_pixels))
+    except ImageTooLargeError as error:
+        raise VideoReadError(str(error)) from None
+    except ImageReadError:
         raise VideoReadError(
             f"cannot read {path}: it could not be decoded as an image; check the file opens in a viewer"
         ) from None

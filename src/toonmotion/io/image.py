@@ -1,33 +1,33 @@
 """Reading drawings and masks (anything Pillow reads) and writing PNGs."""
 
 import io
+import warnings
 from pathlib import Path
 
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
+from toonmotion import limits
 from toonmotion.errors import ImageReadError, ImageTooLargeError, MaskError
 from toonmotion.io.atomic import write_bytes
 
-# Larger images are refused before decoding: rigging cost grows with the pixel count.
-DEFAULT_MAX_PIXELS = 40_000_000
 
-
-def load_image(path, *, max_pixels=DEFAULT_MAX_PIXELS):
+def load_image(path, *, max_pixels=None):
     """Read an image as RGBA.
 
     Parameters
     ----------
     path : str or Path
-    max_pixels : int
-        Refuse images with more pixels than this (:class:`ImageTooLargeError`).
+    max_pixels : int, optional
+        Refuse images with more pixels than this (:class:`ImageTooLargeError`), checked from the
+        header before anything is decoded; by default the ``image_pixels`` limit.
 
     Returns
     -------
     (h, w, 4) uint8
         RGBA; images without alpha get alpha 255 everywhere.
     """
-    with _open(path, max_pixels) as image:
+    with open_image(path, max_pixels) as image:
         if image.mode in ("I;16", "I;16B", "I;16L", "I"):
             grey = np.asarray(image, dtype=np.float64)
             scale = 255.0 / max(float(grey.max()), 1.0)
@@ -35,7 +35,7 @@ def load_image(path, *, max_pixels=DEFAULT_MAX_PIXELS):
         return np.asarray(image.convert("RGBA")).copy()
 
 
-def load_mask(path, *, size=None, max_pixels=DEFAULT_MAX_PIXELS):
+def load_mask(path, *, size=None, max_pixels=None):
     """Read a mask image: its alpha when it has transparency, else its brightness >= 128.
 
     Parameters
@@ -79,28 +79,55 @@ def save_png(path, image):
         write_bytes(path, png_bytes(image))
 
 
-def _open(path, max_pixels):
+def open_image(path, max_pixels=None):
+    """Open ``path`` with Pillow, its size checked against ``max_pixels`` before decoding.
+
+    Pillow's own decompression-bomb check is set aside (toonmotion's limit replaces it, and its
+    warning would print before toonmotion's message); the returned image is loaded and open.
+    """
     path = Path(path)
+    limit = limits.current().image_pixels if max_pixels is None else max_pixels
     if not path.is_file():
         raise ImageReadError(f"cannot read {path}: no such file")
     try:
-        image = Image.open(path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            image = _open_unchecked(path)
     except UnidentifiedImageError:
         raise ImageReadError(
             f"cannot read {path}: not an image format Pillow knows (try PNG, JPEG or BMP)"
         ) from None
-    except OSError as error:
-        raise ImageReadError(f"cannot read {path}: {error}") from None
+    except (OSError, SyntaxError, ValueError) as error:
+        raise ImageReadError(f"cannot read {path}: {_first_line(error)}") from None
     width, height = image.size
-    if width * height > max_pixels:
+    if width * height > limit:
         image.close()
         raise ImageTooLargeError(
             f"{path.name} is {width}x{height} = {width * height:,} pixels, over the limit of "
-            f"{max_pixels:,}; scale it down or raise the limit with --max-pixels"
+            f"{limit:,}; scale it down or raise the limit (--max-pixels, or --limit image_pixels=N)"
         )
     try:
-        image.load()
-    except (OSError, SyntaxError, ValueError, Image.DecompressionBombError) as error:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # Pillow warns about odd but readable files
+            image.load()
+    except (OSError, SyntaxError, ValueError, EOFError, MemoryError, Image.DecompressionBombError) as error:
         image.close()
-        raise ImageReadError(f"cannot read {path}: the file is damaged or truncated ({error})") from None
+        raise ImageReadError(
+            f"cannot read {path}: the file is damaged or truncated ({_first_line(error)})"
+        ) from None
     return image
+
+
+def _open_unchecked(path):
+    """``Image.open`` without Pillow's pixel limit, which :func:`open_image` replaces."""
+    saved = Image.MAX_IMAGE_PIXELS
+    Image.MAX_IMAGE_PIXELS = None
+    try:
+        return Image.open(path)
+    finally:
+        Image.MAX_IMAGE_PIXELS = saved
+
+
+def _first_line(error):
+    text = str(error).strip()
+    return text.splitlines()[0] if text else type(error).__name__

@@ -26,13 +26,23 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import ConfigDict, Field, StrictInt, StrictStr, create_model, model_validator
+from pydantic import ConfigDict, Field, StrictStr, create_model, model_validator
 
 from toonmotion import __version__
 from toonmotion.errors import ProjectError, ProjectVersionError, ToonmotionError
 from toonmotion.io.atomic import write_bytes, write_text
 from toonmotion.io.image import load_image, png_bytes
-from toonmotion.io.schema import Float, Joints, JsonFormat, Model, Point, problem, read_versioned
+from toonmotion.io.schema import (
+    Float,
+    Int,
+    Joints,
+    JsonFormat,
+    Model,
+    Point,
+    problem,
+    read_json,
+    read_versioned,
+)
 from toonmotion.io.skeleton_json import skeleton_from_joints, skeleton_to_dict
 from toonmotion.rig.binding import Binding, Correction, binding_from_bones
 from toonmotion.rig.character import Character, RigSettings
@@ -64,7 +74,7 @@ class _Node(Model):
 
 
 class _Branch(Model):
-    nodes: tuple[StrictInt, StrictInt]
+    nodes: tuple[Int, Int]
     path: list[Point] = Field(min_length=2)
 
 
@@ -80,14 +90,14 @@ class _Skeleton(Model):
 class _Mesh(Model):
     spacing: Annotated[Float, Field(gt=0)]
     vertices: list[Point] = Field(min_length=3)
-    triangles: list[tuple[StrictInt, StrictInt, StrictInt]] = Field(min_length=1)
-    boundary: list[list[StrictInt]] = Field(min_length=1)
+    triangles: list[tuple[Int, Int, Int]] = Field(min_length=1)
+    boundary: list[list[Int]] = Field(min_length=1)
 
 
 class _Binding(Model):
     bones: list[StrictStr]
-    vertex_bone: list[StrictInt]
-    fallback: list[StrictInt] = []
+    vertex_bone: list[Int]
+    fallback: list[Int] = []
 
     @model_validator(mode="before")
     @classmethod
@@ -105,7 +115,7 @@ class _CorrectionEdit(Model):
 
 class _DepthEdit(Model):
     kind: Literal["depth"]
-    value: StrictInt
+    value: Int
     bone: StrictStr | None = None
     at: Point | None = None
 
@@ -132,8 +142,8 @@ class ProjectFile(Model):
     format: Literal["toonmotion.project"]
     version: Literal[3]
     toonmotion: StrictStr
-    width: Annotated[StrictInt, Field(gt=0)]
-    height: Annotated[StrictInt, Field(gt=0)]
+    width: Annotated[Int, Field(gt=0)]
+    height: Annotated[Int, Field(gt=0)]
     texture: StrictStr
     mask: StrictStr
     settings: _Settings
@@ -142,7 +152,7 @@ class ProjectFile(Model):
     skeleton: _Skeleton
     mesh: _Mesh
     binding: _Binding
-    depth: dict[str, StrictInt] = {}
+    depth: dict[str, Int] = {}
     edits: list[_Edit] = []
     undone: list[_Edit] = []
 
@@ -179,10 +189,7 @@ class _ProjectFormat(JsonFormat[ProjectFile]):
     def read(self, path: Path) -> Any:
         if not path.is_file():
             raise ProjectError(f"no project at {path}: give a project folder made by 'toonmotion rig'")
-        try:
-            return json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-            raise ProjectError(f"cannot read {path}: {error}") from None
+        return read_json(path, ProjectError)
 
     def not_this_format(self, path: Path) -> ToonmotionError:
         return ProjectError(f"{path} is not a toonmotion project (no 'format': {FORMAT!r})")
@@ -251,8 +258,16 @@ def save_project(path: str | Path, character: Character) -> None:
         if not saved:  # leave the folder as it was: no assets nothing refers to
             for file in written:
                 file.unlink(missing_ok=True)
-    for name in old - set(assets.values()):
+    for name in (old | _asset_files(folder)) - set(assets.values()):
         (folder / name).unlink(missing_ok=True)
+
+
+def _asset_files(folder: Path) -> set[str]:
+    """Texture and mask files in a project folder, those of a save that was killed included."""
+    return {p.name for p in folder.glob("*.png") if _ASSET_NAME.fullmatch(p.name)}
+
+
+_ASSET_NAME = re.compile(r"(texture|mask)-[0-9a-f]{16}\.png")
 
 
 def load_project(path: str | Path) -> Character:
@@ -302,7 +317,7 @@ def _referenced_assets(folder: Path) -> set[str]:
     try:
         data = json.loads(file.read_text(encoding="utf-8"))
         return {data["texture"], data["mask"]} & {p.name for p in folder.glob("*.png")}
-    except (OSError, ValueError, KeyError, TypeError):
+    except (OSError, ValueError, KeyError, TypeError, RecursionError):
         return set()
 
 

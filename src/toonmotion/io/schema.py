@@ -34,6 +34,7 @@ from pydantic import (
 )
 from pydantic_core import ErrorDetails, PydanticCustomError
 
+from toonmotion import limits
 from toonmotion.errors import ToonmotionError
 
 M = TypeVar("M", bound="Model")
@@ -51,8 +52,9 @@ class Model(BaseModel):
 
 # A number: a JSON int or float (read as float), never a bool or a string; finite in a Model.
 Float = Annotated[float, Strict()]
-# A whole number, never a bool or a float.
-Int = StrictInt
+# A whole number, never a bool or a float; one beyond 32 bits is no count, index or frame a file
+# can mean, and would overflow the arrays it goes into.
+Int = Annotated[StrictInt, Field(ge=-(2**31), le=2**31 - 1)]
 # A joint or bone name: a non-empty string.
 Name = Annotated[StrictStr, Field(min_length=1)]
 # ``[x, y]`` in drawing pixels.
@@ -180,10 +182,13 @@ def read_json(path: str | Path, error: type[ToonmotionError], *, what: str = "")
     """
     path = Path(path)
     try:
+        limits.check("file_bytes", path.stat().st_size, f"{what}{path.name}'s size in bytes")
         return json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise error(f"cannot read {what}{path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as problem:
+    except RecursionError:
+        raise error(f"cannot read {what}{path}: its lists or objects are nested too deeply") from None
+    except (OSError, UnicodeDecodeError, ValueError) as problem:  # ValueError: JSON, or a 5000-digit int
         raise error(f"cannot read {what}{path} as JSON: {problem}") from None
 
 

@@ -17,7 +17,7 @@ import shutil
 import tempfile
 from collections.abc import Iterable, Sequence
 from itertools import chain
-from numbers import Integral, Real
+from numbers import Integral
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +25,8 @@ from numpy.typing import NDArray
 from PIL import Image
 
 from toonmotion.errors import ExportError
-from toonmotion.io.atomic import atomic_path
+from toonmotion.geometry.arrays import frame_rate
+from toonmotion.io.atomic import atomic_path, sweep_leftovers, temporary_prefix
 from toonmotion.render.composite import over, premultiply
 
 FORMATS = ("gif", "mp4", "png")
@@ -92,8 +93,7 @@ def save_animation(path: str | os.PathLike[str], frames: Iterable[NDArray[np.uin
     int
         Number of frames written.
     """
-    if isinstance(fps, bool) or not isinstance(fps, Real) or not np.isfinite(float(fps)) or fps <= 0:
-        raise ExportError(f"fps must be a positive number of frames per second, got {fps!r}")
+    fps = frame_rate(fps, error=ExportError)
     background = _check_background(background)
     kind = animation_format(path)
     frames = _checked(frames)
@@ -169,7 +169,7 @@ def _save_png(path, frames):
         raise ExportError(f"cannot write PNG frames into {folder}: it is a file; give a folder")
     created = not folder.exists()
     folder.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".frames-", suffix=".tmp", dir=folder))
+    staging = Path(tempfile.mkdtemp(prefix=temporary_prefix(_STAGING), suffix=".tmp", dir=folder))
     count, done = 0, False
     try:
         for rgba in frames:
@@ -189,7 +189,12 @@ def _save_png(path, frames):
         shutil.rmtree(staging, ignore_errors=True)
         if not done and created and not any(folder.iterdir()):
             folder.rmdir()
+    sweep_leftovers(folder, _STAGING)
     return count
+
+
+# The name PNG frames are staged under (in a hidden folder beside them) until all are written.
+_STAGING = "frames"
 
 
 def _png_names(path):

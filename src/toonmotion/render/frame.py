@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from toonmotion.deform.depth import draw_order
 from toonmotion.errors import SettingsError
 from toonmotion.render.overlay import draw_mesh, draw_reference, draw_skeleton
-from toonmotion.render.raster import check_size, render_mesh
+from toonmotion.render.raster import check_canvas, check_size, render_mesh
 from toonmotion.rig.character import Character
 from toonmotion.rig.pose import Pose
 from toonmotion.rig.skeleton import Skeleton
@@ -55,7 +55,9 @@ def natural_size(view: Sequence[float], *, size: Sequence[int] | None = None) ->
     if size is not None:
         return check_size(size)
     x0, y0, x1, y1 = view
-    return max(1, int(np.ceil(x1 - x0))), max(1, int(np.ceil(y1 - y0)))
+    w, h = max(1.0, float(np.ceil(x1 - x0))), max(1.0, float(np.ceil(y1 - y0)))
+    check_canvas(w, h, why="a joint or a vertex is far outside the drawing (check the pose) or give a size")
+    return int(w), int(h)
 
 
 def reference_bones(skeleton: Skeleton,

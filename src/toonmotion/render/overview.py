@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 from PIL import Image, ImageDraw, ImageFont
 
+from toonmotion.render.raster import check_canvas
 from toonmotion.rig.binding import JOINT
 from toonmotion.rig.character import Character
 from toonmotion.shape.curve_skeleton import joint_suggestions
@@ -54,6 +55,8 @@ def render_overview(character: Character, *, height: int = 720) -> Image.Image:
     """
     w, h = character.size
     scale = height / h
+    check_canvas(2 * w * scale + 30, height * 1.1, why="choose a smaller height")
+    check_canvas(w * scale * _SUPERSAMPLE, height * _SUPERSAMPLE, why="choose a smaller height")
     left = _panel_curve_skeleton(character, scale)
     right = _panel_rig(character, scale)
     title_h = max(28, height // 22)

@@ -29,6 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion import limits
 from toonmotion.errors import SettingsError
 from toonmotion.render.composite import over
 
@@ -355,7 +356,18 @@ def check_size(size: Any) -> tuple[int, int]:
         raise SettingsError(f"size must be (width, height) in pixels, got {size!r}") from None
     if not all(isinstance(v, Integral) and not isinstance(v, bool) and int(v) > 0 for v in (W, H)):
         raise SettingsError(f"size must be two positive integers (width, height), got {size!r}")
+    check_canvas(W, H)
     return int(W), int(H)
+
+
+def check_canvas(width: float, height: float, *, why: str = "") -> None:
+    """Refuse a picture over the ``canvas_side`` or ``canvas_pixels`` limit (:class:`LimitError`).
+
+    ``why`` says what made the picture that big, as a hint for staying under the limit.
+    """
+    what = f"the picture to draw, {width:.0f}x{height:.0f} pixels,"
+    limits.check("canvas_side", max(width, height), what + " has a side that", hint=why)
+    limits.check("canvas_pixels", width * height, what, hint=why)
 
 
 def _check_view(view):

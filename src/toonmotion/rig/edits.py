@@ -27,6 +27,9 @@ from toonmotion.errors import EditError, SettingsError, ToonmotionError
 from toonmotion.rig.binding import Correction, attach_inside, decompose
 from toonmotion.rig.character import Character
 
+# Depths only order regions; a million layers is more than any drawing has parts.
+MAX_DEPTH = 1_000_000
+
 
 @dataclass(frozen=True)
 class DepthEdit:
@@ -43,6 +46,8 @@ class DepthEdit:
     def __post_init__(self) -> None:
         if isinstance(self.value, bool) or not isinstance(self.value, (int, np.integer)):
             raise EditError(f"a depth must be a whole number, got {self.value!r}")
+        if abs(int(self.value)) > MAX_DEPTH:
+            raise EditError(f"a depth must be between -{MAX_DEPTH:,} and {MAX_DEPTH:,}, got {self.value}")
         if (self.bone is None) == (self.at is None):
             raise EditError("a depth edit names a bone or gives a point (at), exactly one of them")
         if self.bone is not None and not isinstance(self.bone, str):

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion import limits
 from toonmotion.errors import SkeletonError
 from toonmotion.geometry.arrays import finite_point, frozen_array
 
@@ -46,6 +47,7 @@ class Skeleton:
 
     def __post_init__(self) -> None:
         names = tuple(self.names)
+        limits.check("joints", len(names), "the skeleton's joint count")
         if not all(isinstance(n, str) and n.strip() for n in names):
             raise SkeletonError("every joint needs a name: a non-empty string")
         if len(set(names)) != len(names):
@@ -78,6 +80,7 @@ class Skeleton:
         joints = list(joints)
         if not joints:
             raise SkeletonError("the skeleton has no joints; give at least one")
+        limits.check("joints", len(joints), "the skeleton's joint count")
         names = [str(j[0]) for j in joints]
         seen = set()
         for name in names:

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
 
+from toonmotion import limits
 from toonmotion.errors import MaskError
 
 METHODS = ("auto", "flat", "paper")
@@ -76,13 +77,22 @@ def segment_foreground(rgb: ArrayLike, *, method: str = "auto", block: int = 115
     return ndi.binary_fill_holes(ink)
 
 
+# Fewer figure pixels than this (an 8x8 square) cannot be meshed into a figure worth posing.
+MIN_FIGURE_PIXELS = 64
+
+
 def check_mask(mask: NDArray[np.bool_], *, what: str = "mask") -> None:
-    """Raise :class:`MaskError` unless ``mask`` has both foreground and background."""
+    """Raise :class:`MaskError` unless ``mask`` has a figure of some size and some background."""
     count = int(np.count_nonzero(mask))
     if count == 0:
         raise MaskError(
             f"the {what} is empty: no foreground pixels were found; "
             "give a mask image with --mask, or a PNG whose alpha marks the figure"
+        )
+    if count < MIN_FIGURE_PIXELS:
+        raise MaskError(
+            f"the {what} marks only {count} figure pixels, too few to rig (at least "
+            f"{MIN_FIGURE_PIXELS}); give a larger drawing or a mask that covers the figure"
         )
     if count == mask.size:
         raise MaskError(
@@ -106,6 +116,8 @@ def clean_mask(mask: NDArray[np.bool_], *, min_fraction: float = 0.01,
         keep[1 + int(np.argmax(sizes))] = True
     else:
         keep[1:] = sizes >= min_fraction * sizes.max()
+    limits.check("figure_parts", int(np.count_nonzero(keep)), "the number of separate parts in the figure",
+                 hint="the mask is speckled (a dithered alpha?): clean it, or keep one with --largest-only")
     return keep[labels]
 
 
