@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint bench fuzz clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -28,6 +28,14 @@ test: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
 	$(BIN)/python -m pytest
+
+# The long profile of the generated-bad-input suite (tests/fuzz): FUZZ_EXAMPLES cases per test;
+# the runs per format and outcome go to fuzz-report.json.
+FUZZ_EXAMPLES ?= 400
+
+fuzz: $(STAMP)
+	TOONMOTION_FUZZ_PROFILE=long TOONMOTION_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(BIN)/python -m pytest -p no:cacheprovider tests/fuzz
+	cat fuzz-report.json
 
 BENCH_STAMP := $(VENV)/.installed-bench
 

@@ -58,3 +58,49 @@ def test_the_module_runs_as_the_command():
         [sys.executable, "-m", "toonmotion.cli", "--version"], capture_output=True, text=True
     )
     assert done.returncode == 0 and done.stdout.startswith("toonmotion ")
+
+
+def test_a_bug_is_one_line_with_a_report_hint_and_its_own_exit_status(capsys, monkeypatch):
+    from toonmotion.cli import rigging
+    from toonmotion.cli.app import INTERNAL_ERROR
+
+    def broken(*args, **kwargs):
+        raise KeyError("oops")
+
+    monkeypatch.setattr(rigging.api, "load_project", broken)
+    code, out, err = _run(["show", "somewhere", "-o", "x.png"], capsys)
+    assert code == INTERNAL_ERROR == 70
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith("toonmotion: error: internal error (KeyError: 'oops'); this is a bug in toonmotion")
+
+
+def test_library_warnings_never_reach_the_user(capsys, monkeypatch):
+    import warnings
+
+    from toonmotion.cli import rigging
+    from toonmotion.errors import ProjectError
+
+    def noisy(*args, **kwargs):
+        warnings.warn("overflow encountered", RuntimeWarning, stacklevel=1)
+        raise ProjectError("no project at somewhere")
+
+    monkeypatch.setattr(rigging.api, "load_project", noisy)
+    code, out, err = _run(["show", "somewhere", "-o", "x.png"], capsys)
+    assert (code, err) == (2, "toonmotion: error: no project at somewhere\n")
+
+
+def test_a_limit_is_raised_for_one_run_with_the_global_option(capsys, tmp_path):
+    from toonmotion import limits
+
+    code, out, err = _run(["--limit", "frames=12", "--limit", "joints=9", "edits", tmp_path], capsys)
+    assert code == 2 and "no project at" in err
+    assert limits.current().frames == 12  # in force until the next run sets its own
+    code, out, err = _run(["--limit", "frames=lots", "edits", tmp_path], capsys)
+    assert (code, err.strip()) == (2, "toonmotion: error: --limit takes NAME=N, e.g. --limit "
+                                      "canvas_pixels=100000000; got 'frames=lots'")
+    limits.set_limits(limits.Limits())
+
+
+def test_negative_coordinates_are_arguments_not_options(capsys, tmp_path):
+    code, out, err = _run(["correct", tmp_path, "head", "-100,-100", "-50,-100", "-50,-50"], capsys)
+    assert code == 2 and "no project at" in err and "No such option" not in err

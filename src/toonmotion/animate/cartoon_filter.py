@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -95,7 +96,7 @@ class FilterSettings:
     @property
     def radius(self) -> int:
         """How many frames either side of its centre the kernel reaches: ``ceil(3 sigma + |shift|)``."""
-        return math.ceil(KERNEL_SIGMAS * self.sigma + abs(self.shift))
+        return math.ceil(min(KERNEL_SIGMAS * self.sigma + abs(self.shift), sys.float_info.max))
 
 
 def cartoon_filter(signal: ArrayLike, settings: FilterSettings) -> NDArray[np.float64]:

@@ -350,7 +350,7 @@ def _plan(setup, settings, frame_shape):
     for m, (w, h) in enumerate(setup.sizes):
         size = (max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5))))
         r = settings.search if settings.search is not None else max(MIN_SEARCH, SEARCH_FRACTION * max(w, h))
-        w_beta = 1.0 / r**2 if settings.w_beta is None else settings.w_beta
+        w_beta = (1.0 / r) ** 2 if settings.w_beta is None else settings.w_beta
         parent = int(setup.skeleton.parents[m]) if settings.rotate else -1
         joints.append(plan_joint(size, min(r, widest), settings.w_alpha, w_beta, parent,
                                  int(setup.skeleton.parents[m])))

@@ -59,8 +59,12 @@ def deform_settings(no_area: bool, stage_one_only: bool, weights: str, joint_wid
 
 
 def filter_settings(strength: float | None, sigma: float, shift: float) -> FilterSettings | None:
-    """The cartoon filter's settings, or None when no (or a zero) strength is given."""
-    return FilterSettings(strength=strength, sigma=sigma, shift=shift) if strength else None
+    """The cartoon filter's settings, or None when no (or a zero) strength is given.
+
+    The width and shift are checked either way: a bad value is refused, not silently unused.
+    """
+    settings = FilterSettings(strength=strength or 0.0, sigma=sigma, shift=shift)
+    return settings if strength else None
 
 
 def numbers(text: str, count: int, option: str) -> tuple[float, ...]:

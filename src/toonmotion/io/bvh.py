@@ -70,6 +70,7 @@ def _parse(lines, where):
     """A :class:`BvhClip` from the file's lines; ``where`` names the file in errors."""
     tokens, motion_at = _hierarchy_tokens(lines, where)
     names, parents, offsets, channels = _hierarchy(tokens, where)
+    limits.check("joints", len(names), f"{where}'s joint count (End Sites included)")
     motion, frame_time = _motion(lines, motion_at, sum(len(c) for c in channels), where)
     return BvhClip(
         names=tuple(names),
