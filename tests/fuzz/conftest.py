@@ -30,7 +30,7 @@ from toonmotion.rig.pose import Pose, rotate_about
 from toonmotion.samples import sample_character, sample_character_on
 
 _COMMON = dict(deadline=None, suppress_health_check=list(HealthCheck), print_blob=True)
-settings.register_profile("quick", max_examples=6, derandomize=True, **_COMMON)
+settings.register_profile("quick", max_examples=12, derandomize=True, **_COMMON)
 settings.register_profile(
     "long", max_examples=int(os.environ.get("TOONMOTION_FUZZ_EXAMPLES", "400")), **_COMMON
 )
@@ -50,7 +50,9 @@ def _bounded_memory():
     resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
     if os.environ.get("TOONMOTION_FUZZ_PROFILE") == "long":
         report = {f"{kind} {result}": n for (kind, result), n in sorted(TALLY.items())}
-        Path("fuzz-report.json").write_text(json.dumps(report, indent=1) + "\n")
+        Path(os.environ.get("TOONMOTION_FUZZ_REPORT", "fuzz-report.json")).write_text(
+            json.dumps(report, indent=1) + "\n"
+        )
 
 
 @pytest.fixture(scope="session")

@@ -132,12 +132,12 @@ def test_csv_bytes(tmp_path):
     from toonmotion.rig.skeleton import Skeleton
 
     skeleton = Skeleton.from_joints([("hip", None, (0.0, 0.0)), ("knee", "hip", (0.0, 10.0))])
-    positions = [[[1.0, 2.5], [0.1, 1 / 3]], [[-0.0, 1e-300], [123456789.0, 2.0]]]
+    positions = [[[1.0, 2.5], [0.1, 1 / 3]], [[-0.0, 1e-300], [1234567.125, 2.0]]]
     save_motion_csv(tmp_path / "m.csv", Motion(skeleton, positions, fps=3))
     assert (tmp_path / "m.csv").read_bytes() == (
         b"frame,time,hip_x,hip_y,knee_x,knee_y\n"
         b"0,0.0,1.0,2.5,0.1,0.3333333333333333\n"
-        b"1,0.3333333333333333,-0.0,1e-300,123456789.0,2.0\n"
+        b"1,0.3333333333333333,-0.0,1e-300,1234567.125,2.0\n"
     )
     save_motion_csv(tmp_path / "c.csv", Motion(skeleton, positions, fps=3, confidence=[[1, 0.5], [0, 0.25]]))
     assert (tmp_path / "c.csv").read_text().splitlines()[:2] == [

@@ -21,9 +21,9 @@ from toonmotion.rig.skeleton import Skeleton
 
 AWKWARD = [
     ("root", None, (0.1 + 0.2, 1.0 / 3.0)),
-    ("arm", "root", (-1e-300, 123456789.123456789)),
+    ("arm", "root", (-1e-300, 9876543.123456789)),
     ("hand", "arm", (5e-324, np.nextafter(1.0, 2.0))),
-    ("ünïcode joint", "root", (-0.0, 2.0**52 + 1)),
+    ("ünïcode joint", "root", (-0.0, 2.0**23 + 2.0**-29)),  # every mantissa bit, within MAX_COORDINATE
     ("hat", None, (np.pi, -np.e)),
 ]
 

@@ -15,7 +15,7 @@ def _skeleton():
     return Skeleton.from_joints([
         ("head", None, (0.1 + 0.2, 1.0 / 3.0)),
         ("hand", "arm", (5e-324, np.nextafter(1.0, 2.0))),
-        ("arm", "head", (-0.0, 123456789.123456789)),
+        ("arm", "head", (-0.0, 9876543.123456789)),
     ])
 
 

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from toonmotion import limits
 from toonmotion.animate.timeline import Timeline, pose_at
 from toonmotion.errors import MotionError
-from toonmotion.geometry.arrays import frame_rate, frozen_array
+from toonmotion.geometry.arrays import check_coordinates, frame_rate, frozen_array
 from toonmotion.rig.pose import Pose
 from toonmotion.rig.skeleton import Skeleton
 
@@ -62,6 +62,7 @@ class Motion:
             frame = int(np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))[0])
             raise MotionError(f"frame {frame} of the motion has a non-finite joint position")
         limits.check("frames", len(positions), "the motion's frame count")
+        check_coordinates(positions, "the motion's positions", MotionError)
         object.__setattr__(self, "fps", frame_rate(self.fps, name="the motion's fps", error=MotionError))
         if self.confidence is not None:
             confidence = frozen_array(self.confidence, dtype=np.float64, name="the motion's confidence",

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
 from scipy.sparse.linalg import splu
 
-from toonmotion.errors import SettingsError
+from toonmotion.errors import MeshError, SettingsError
 from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.coordinates import (
     as_complex,
@@ -200,8 +200,12 @@ class JointSolver:
         self._epsilon = _REGULARISE * max(float(np.abs(normal.diagonal()).mean()), 1e-300)
         normal = normal + self._epsilon * sp.identity(len(self.free), format="csc")
         # The normal matrix is Hermitian positive definite: no pivoting needed.
-        self._factor = splu(normal, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                            options={"SymmetricMode": True})
+        try:
+            self._factor = splu(normal, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                                options={"SymmetricMode": True})
+        except RuntimeError:  # "Factor is exactly singular": no sound mesh gives that
+            raise MeshError("the mesh's joint-area system cannot be solved: the mesh is degenerate "
+                            "(rig the drawing again)") from None
         self._from_fixed = (-(Ff.conj().T @ Fx)).tocsr()
         self._from_edges = (w3 * A3[:, self.free].conj().T).tocsr()
 

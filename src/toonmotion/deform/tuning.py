@@ -125,6 +125,4 @@ def _points(value: ArrayLike, what: str, *, minimum: int) -> NDArray[np.float64]
         raise EditError(f"{what} must be a list of [x, y] points")
     if len(P) < minimum:
         raise EditError(f"{what} needs at least {minimum} point{'s' if minimum > 1 else ''}, got {len(P)}")
-    if not np.all(np.isfinite(P)):
-        raise EditError(f"{what} has a non-finite coordinate")
-    return frozen_array(P, dtype=np.float64, name=what, error=EditError)
+    return frozen_array(P, dtype=np.float64, name=what, error=EditError, coordinates=True)

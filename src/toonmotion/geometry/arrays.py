@@ -35,6 +35,21 @@ _ACCEPTS = {"b": "b", "i": "biuf", "u": "biuf", "f": "biuf"}
 _LETTERS = "nmkl"
 
 
+# No coordinate in drawing pixels lies further out than this: ten million pixels is far beyond any
+# picture toonmotion may draw (toonmotion.limits canvas_side), and beyond it floating-point
+# geometry (areas, intersections, solves) loses all its precision.
+MAX_COORDINATE = 10_000_000.0
+
+
+def check_coordinates(values: NDArray[Any], name: str, error: type[Exception]) -> None:
+    """Raise ``error`` unless every value is finite and within :data:`MAX_COORDINATE` of 0."""
+    if not np.isfinite(values).all():
+        raise error(f"{name} has a non-finite value (NaN or infinity)")
+    if values.size and np.abs(values).max() > MAX_COORDINATE:
+        raise error(f"{name} has a coordinate beyond {MAX_COORDINATE:,.0f} pixels from the origin "
+                    f"({float(np.abs(values).max()):.3g}); nothing toonmotion draws reaches that far")
+
+
 def frozen_array(
     value: ArrayLike,
     *,
@@ -43,6 +58,7 @@ def frozen_array(
     name: str = "array",
     error: type[Exception] = ValueError,
     finite: bool = False,
+    coordinates: bool = False,
 ) -> NDArray[Any]:
     """A read-only, C-contiguous copy of ``value`` as ``dtype``.
 
@@ -61,6 +77,9 @@ def frozen_array(
         Raised, with a one-line message naming ``name``, when the value does not fit.
     finite : bool
         Also refuse NaN and infinite values.
+    coordinates : bool
+        The values are drawing pixels: also refuse NaN, infinity and values beyond
+        :data:`MAX_COORDINATE` (:func:`check_coordinates`).
 
     Returns
     -------
@@ -74,6 +93,8 @@ def frozen_array(
         raise error(f"{name} must have shape {_pattern(shape)}, got {out.shape}")
     if finite and out.dtype.kind == "f" and not np.isfinite(out).all():
         raise error(f"{name} has a non-finite value (NaN or infinity)")
+    if coordinates:
+        check_coordinates(out, name, error)
     out.setflags(write=False)
     return out
 
@@ -86,12 +107,14 @@ def frozen_arrays(
     name: str = "array",
     error: type[Exception] = ValueError,
     finite: bool = False,
+    coordinates: bool = False,
 ) -> tuple[NDArray[Any], ...]:
     """:func:`frozen_array` of every item, as a tuple; messages name ``name[i]``."""
     if isinstance(values, np.ndarray) and values.ndim == 0 or not isinstance(values, Iterable):
         raise error(f"{name} must be a sequence of arrays, got {type(values).__name__}")
     return tuple(
-        frozen_array(v, dtype=dtype, shape=shape, name=f"{name}[{i}]", error=error, finite=finite)
+        frozen_array(v, dtype=dtype, shape=shape, name=f"{name}[{i}]", error=error, finite=finite,
+                     coordinates=coordinates)
         for i, v in enumerate(values)
     )
 
@@ -151,6 +174,8 @@ def finite_point(value: object, *, name: str, error: type[Exception] = ValueErro
         raise error(f"{name} has position {value!r}; give two numbers [x, y]") from None
     if not (np.isfinite(x) and np.isfinite(y)):
         raise error(f"{name} has a non-finite position ({x}, {y})")
+    if max(abs(x), abs(y)) > MAX_COORDINATE:
+        raise error(f"{name} has position ({x:.3g}, {y:.3g}), over {MAX_COORDINATE:,.0f} px from the origin")
     return x, y
 
 

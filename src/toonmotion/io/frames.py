@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import os
 import re
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -214,13 +215,13 @@ def _load_animated(path, limits):
         ) from None
     with image:
         w, h = image.size
-        limits.check(path.name, getattr(image, "n_frames", 1), w, h)
         frames, durations = [], []
-        try:
+        try:  # Pillow counts frames by reading past each one: a damaged file can fail here too
+            limits.check(path.name, getattr(image, "n_frames", 1), w, h)
             for frame in ImageSequence.Iterator(image):
                 frames.append(np.asarray(frame.convert("RGB")))
                 durations.append(frame.info.get("duration") or 0)
-        except (OSError, EOFError, SyntaxError, ValueError) as error:
+        except (OSError, EOFError, SyntaxError, ValueError, IndexError, struct.error) as error:
             raise VideoReadError(
                 f"cannot read {path}: frame {len(frames)} is damaged or truncated ({error})"
             ) from None

@@ -423,7 +423,7 @@ def _from_model(m: ProjectFile, folder: Path) -> Character:
     )
     curve_skeleton = _curve_skeleton(m.curve_skeleton)
     skeleton = skeleton_from_joints(m.skeleton.joints)
-    mesh = _mesh(m.mesh)
+    mesh = _mesh(m.mesh, size)
     names = skeleton.bone_names
     unknown = set(m.depth) - set(names)
     if unknown:
@@ -452,8 +452,14 @@ def _curve_skeleton(m: _CurveSkeleton) -> CurveSkeleton:
     )
 
 
-def _mesh(m: _Mesh) -> Mesh:
+def _mesh(m: _Mesh, size: tuple[int, int]) -> Mesh:
     V = np.array(m.vertices, dtype=float)
+    # The rest mesh is traced from the drawing's pixels: it lies on the canvas.
+    outside = (V < -1.0).any(axis=1) | (V[:, 0] > size[0]) | (V[:, 1] > size[1])
+    if outside.any():
+        i = int(np.flatnonzero(outside)[0])
+        raise ProjectError(f"mesh vertex {i} at ({V[i, 0]:.6g}, {V[i, 1]:.6g}) lies outside the "
+                           f"{size[0]}x{size[1]} drawing")
     F = np.array(m.triangles, dtype=np.int64)
     boundary = tuple(np.array(loop, dtype=np.int64) for loop in m.boundary)
     n_outline = sum(len(loop) for loop in boundary)

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import PoseError
-from toonmotion.geometry.arrays import finite_point, frozen_array
+from toonmotion.geometry.arrays import MAX_COORDINATE, finite_point, frozen_array
 from toonmotion.rig.kinematics import rotation, transform
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
 
@@ -95,6 +95,11 @@ def check_pose(skeleton: Skeleton, pose: Pose, *, where: str = "pose") -> Pose:
     if not np.all(np.isfinite(positions)):
         row = int(np.flatnonzero(~np.isfinite(positions).all(axis=1))[0])
         raise PoseError(f"{where}: joint {skeleton.names[row]!r} has a non-finite position")
+    if np.abs(positions).max() > MAX_COORDINATE:
+        row = int(np.abs(positions).max(axis=1).argmax())
+        x, y = positions[row]
+        raise PoseError(f"{where}: joint {skeleton.names[row]!r} is at ({x:.3g}, {y:.3g}), beyond "
+                        f"{MAX_COORDINATE:,.0f} pixels from the origin")
     bones = skeleton.bones
     rest = skeleton.bone_lengths
     posed = np.linalg.norm(positions[bones[:, 1]] - positions[bones[:, 0]], axis=1)

@@ -59,7 +59,7 @@ class Skeleton:
         if np.any((parents < -1) | (parents >= np.arange(k))):
             raise SkeletonError("a skeleton's parents must be -1 (a root) or an earlier joint: parents first")
         positions = frozen_array(self.positions, dtype=np.float64, shape=(k, 2),
-                                 name="a skeleton's positions", error=SkeletonError, finite=True)
+                                 name="a skeleton's positions", error=SkeletonError, coordinates=True)
         object.__setattr__(self, "names", names)
         object.__setattr__(self, "parents", parents)
         object.__setattr__(self, "positions", positions)

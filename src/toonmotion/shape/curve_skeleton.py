@@ -59,14 +59,14 @@ class CurveSkeleton:
     def __post_init__(self) -> None:
         error = SkeletonError
         nodes = frozen_array(self.nodes, dtype=np.float64, shape=(None, 2), name="a curve skeleton's nodes",
-                             error=error, finite=True)
+                             error=error, coordinates=True)
         k = len(nodes)
         radius = frozen_array(self.radius, dtype=np.float64, shape=(k,), name="a curve skeleton's radius",
-                              error=error, finite=True)
+                              error=error, coordinates=True)
         branches = frozen_array(self.branches, dtype=np.int64, shape=(None, 2),
                                 name="a curve skeleton's branches", error=error)
         paths = frozen_arrays(self.paths, dtype=np.float64, shape=(None, 2), name="a curve skeleton's paths",
-                              error=error, finite=True)
+                              error=error, coordinates=True)
         kinds = tuple(self.kinds)
         if len(kinds) != k or not all(kind in NODE_KINDS for kind in kinds):
             raise error(f"a curve skeleton needs one kind per node ({k}), each of {', '.join(NODE_KINDS)}")

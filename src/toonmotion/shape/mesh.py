@@ -57,7 +57,7 @@ class Mesh:
 
     def __post_init__(self) -> None:
         V = frozen_array(self.V, dtype=np.float64, shape=(None, 2), name="a mesh's V", error=MeshError,
-                         finite=True)
+                         coordinates=True)
         F = frozen_array(self.F, dtype=np.int64, shape=(None, 3), name="a mesh's F", error=MeshError)
         boundary = frozen_arrays(self.boundary, dtype=np.int64, shape=(None,), name="a mesh's boundary",
                                  error=MeshError)

@@ -44,9 +44,9 @@ class Part:
     def __post_init__(self) -> None:
         what = "a silhouette part's"
         outer = frozen_array(self.outer, dtype=np.float64, shape=(None, 2), name=f"{what} outer loop",
-                             error=MeshError, finite=True)
+                             error=MeshError, coordinates=True)
         holes = frozen_arrays(self.holes, dtype=np.float64, shape=(None, 2), name=f"{what} holes",
-                              error=MeshError, finite=True)
+                              error=MeshError, coordinates=True)
         for loop in (outer, *holes):
             if len(loop) < 3:
                 raise MeshError(f"a silhouette loop needs at least 3 points, got {len(loop)}")
