@@ -104,3 +104,10 @@ def test_a_limit_is_raised_for_one_run_with_the_global_option(capsys, tmp_path):
 def test_negative_coordinates_are_arguments_not_options(capsys, tmp_path):
     code, out, err = _run(["correct", tmp_path, "head", "-100,-100", "-50,-100", "-50,-50"], capsys)
     assert code == 2 and "no project at" in err and "No such option" not in err
+
+
+def test_help_lists_the_commands_in_workflow_order(capsys):
+    code, out, err = _run(["--help"], capsys)
+    listed = re.findall(r"^│ (\w+) ", out, flags=re.MULTILINE)
+    workflow = ["rig", "show", "sample", "pose", "animate", "tune", "track", "retarget"]
+    assert [c for c in listed if c in workflow] == workflow

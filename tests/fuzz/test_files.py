@@ -148,7 +148,9 @@ def test_track_joints_json(valid, data):
 
 @given(data=st.data(), role=st.sampled_from(["drawing", "mask", "frame"]))
 def test_images(valid, data, role):
-    rgba = np.asarray(Image.open(valid / "hero.png").convert("RGBA"))
+    # Spoil a picture of the size it stands in for: a frame must match the other frames.
+    base = valid / ("frames/f_1.png" if role == "frame" else "hero.png")
+    rgba = np.asarray(Image.open(base).convert("RGBA"))
     limit = limits.current().image_pixels
     payload, suffix, must_refuse, what = data.draw(spoiled_image(rgba, limit), label="image")
     work = _workspace(valid)

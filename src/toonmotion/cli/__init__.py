@@ -7,7 +7,15 @@ and :mod:`~toonmotion.cli.capture` (track, retarget). Errors the user can fix pr
 ``toonmotion: error: ...``, and exit with status 2 (:func:`~toonmotion.cli.app.main`).
 """
 
-from toonmotion.cli import animation, capture, editing, rigging
+# The order the groups register their commands in is the order --help lists them: the workflow's.
+from toonmotion.cli import rigging  # isort: split
+
+from toonmotion.cli import animation  # isort: split
+
+from toonmotion.cli import editing  # isort: split
+
+from toonmotion.cli import capture  # isort: split
+
 from toonmotion.cli.app import app, main
 
 __all__ = ["animation", "app", "capture", "editing", "main", "rigging"]

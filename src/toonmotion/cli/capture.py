@@ -58,15 +58,14 @@ def track(
         raise SettingsError("--resume needs the --joints file the tracking used (for the rectangle sizes)")
     if overlay is not None:
         animation_format(overlay)
+    flat = None if background is None else options.colour(background)  # checked even when unused
     frames, video_fps = load_frames(source)
-    rate = fps or video_fps or 24.0
+    rate = fps if fps is not None else video_fps or 24.0  # a given fps is checked by the motion
     start = 0
     if joints is not None:
         skeleton, sizes, start = load_joints(joints)
     else:
-        skeleton, sizes = api.suggest_joints(
-            frames, colour=None if background is None else options.colour(background)
-        )
+        skeleton, sizes = api.suggest_joints(frames, colour=flat)
         suggested = output.with_name(output.stem + ".joints.json")
         save_joints(suggested, skeleton, sizes)
         options.warn(f"suggested {len(skeleton)} joints from frame 0 -> {suggested} (edit it, pass --joints)")
