@@ -171,6 +171,7 @@ def test_images(valid, data, role):
             )
             must_refuse = must_refuse or "size" in what  # a mask must match the drawing's size
         else:
+            must_refuse = must_refuse and "alpha" not in what  # footage frames drop their alpha
             frames = work / "frames"
             first = sorted(frames.iterdir())[1]
             first.unlink()
