@@ -458,3 +458,13 @@ def test_version_2_depth_edits_follow_the_bone_order(saved, character):
     save_project(saved, loaded)
     assert json.loads((saved / PROJECT_FILE).read_text())["version"] == 3
     _assert_same(load_project(saved), loaded)
+
+
+def test_a_project_is_not_saved_into_a_folder_of_other_files(character, tmp_path):
+    (tmp_path / "holiday.jpg").write_bytes(b"mine")
+    with pytest.raises(ProjectError, match=r"holds other files \(holiday.jpg, ...\) and no project"):
+        save_project(tmp_path, character)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["holiday.jpg"]
+    (tmp_path / "empty").mkdir()
+    save_project(tmp_path / "empty", character)  # an empty folder is fine, and so is a project
+    save_project(tmp_path / "empty", character)

@@ -221,8 +221,8 @@ def save_project(path: str | Path, character: Character) -> None:
     Parameters
     ----------
     path : str or Path
-        The project folder. If it exists it must be a folder; a project in it is replaced, and
-        if saving fails the folder is left as it was.
+        The project folder. If it exists it must be a project folder (a project in it is
+        replaced) or an empty folder; if saving fails the folder is left as it was.
     character : Character
 
     Examples
@@ -240,6 +240,12 @@ def save_project(path: str | Path, character: Character) -> None:
     folder = Path(path)
     if folder.exists() and not folder.is_dir():
         raise ProjectError(f"{folder} is a file; a project is a folder, so give a folder path")
+    if folder.is_dir() and not (folder / PROJECT_FILE).is_file():
+        others = sorted(p.name for p in folder.iterdir()
+                        if not p.name.startswith(".") and not _ASSET_NAME.fullmatch(p.name))
+        if others:
+            raise ProjectError(f"{folder} holds other files ({others[0]}, ...) and no project; give a new or "
+                               "empty folder, or a project folder to replace")
     folder.mkdir(parents=True, exist_ok=True)
     old = _referenced_assets(folder)
     assets, written, saved = {}, [], False
