@@ -57,7 +57,50 @@ COMMANDS = {
     "depth": (["depth", "P"], {"": "text"}),
     "correct": (["correct", "P", "head"], {"": "text"}),
     "remesh": (["remesh", "P"], {"--vertices": "number", "--spacing": "number"}),
+    "undo": (["undo", "P"], {"--steps": "number"}),
+    "redo": (["redo", "P"], {"--steps": "number"}),
+    "retarget": (
+        ["retarget", "motion.json", "P", "-o", "re.gif", "--size", "40x60"],
+        {
+            "--map": "text",
+            "--exaggerate": "number",
+            "--sigma": "number",
+            "--size": "text",
+            "--output": "path",
+        },
+    ),
+    "sample": (["sample", "-o", "s.png"], {"--skeleton": "path", "--keys": "path", "--output": "path"}),
+    "pose-output": (["pose", "P", "pose.json"], {"--output": "path"}),
+    "animate-output": (
+        ["animate", "P", "keys.json", "--size", "40x60"],
+        {"--output": "path", "--save-motion": "path"},
+    ),
+    "filter-output": (["filter", "motion.json", "--strength", "1"], {"--output": "path"}),
 }
+
+# Output paths: odd names and suffixes, folders that exist, nested folders that do not (nothing outside
+# the scratch folder, and never its parent).
+PATHS = [
+    "",
+    ".",
+    "out",
+    "out.txt",
+    "out.PNG",
+    "out.gif",
+    "out.mp4",
+    "out.json",
+    "out.yaml",
+    "P",
+    "hero.png",
+    "frames",
+    "new/deeper/out.png",
+    "new/deeper/",
+    "out_%04d.png",
+    "out_%d_%d.png",
+    "out_{}.png",
+    "x" * 300,
+    "out.json/inner.png",
+]
 
 TEXTS = [
     "",
@@ -92,10 +135,8 @@ def test_hostile_option_values(valid, command, data):
     argv, options = COMMANDS[command]
     option = data.draw(st.sampled_from(sorted(options)), label="option")
     kind = options[option]
-    value = data.draw(
-        st.sampled_from(HOSTILE_OPTION_NUMBERS if kind == "number" else TEXTS + HOSTILE_OPTION_NUMBERS),
-        label="value",
-    )
+    choices = {"number": HOSTILE_OPTION_NUMBERS, "path": PATHS}.get(kind, TEXTS + HOSTILE_OPTION_NUMBERS)
+    value = data.draw(st.sampled_from(choices), label="value")
     extra = [value] if not option else [option, value]
     if command == "correct" and value:
         extra = [value, "60,60", "80,80"]
