@@ -163,3 +163,17 @@ def test_a_bvh_claiming_a_trillion_frames_is_refused_before_any_work(tmp_path):
     path.write_text(header + "MOTION\nFrames: 1000000000000\nFrame Time: 0.04\n")
     with pytest.raises(LimitError, match="frame count is over the limit frames=100,000"):
         load_bvh(path)
+
+
+def test_the_overview_limit_is_on_the_picture_written():
+    from toonmotion.render.overview import render_overview
+    from toonmotion.rig.pipeline import rig_drawing
+    from toonmotion.samples import sample_character
+
+    drawing, skeleton = sample_character(scale=0.3)
+    hero = rig_drawing(drawing, skeleton=skeleton)
+    with pytest.raises(LimitError, match=r"the picture to draw, \d+x99000 pixels"):
+        render_overview(hero, height=90_000)
+    with limits.using(canvas_side=800):  # its panels are drawn at twice the size: no matter
+        picture = render_overview(hero, height=510)
+    assert max(picture.size) <= 800

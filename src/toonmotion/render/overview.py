@@ -55,8 +55,8 @@ def render_overview(character: Character, *, height: int = 720) -> Image.Image:
     """
     w, h = character.size
     scale = height / h
+    # The limit is on the picture written; its panels are drawn at twice the size, then shrunk.
     check_canvas(2 * w * scale + 30, height * 1.1, why="choose a smaller height")
-    check_canvas(w * scale * _SUPERSAMPLE, height * _SUPERSAMPLE, why="choose a smaller height")
     left = _panel_curve_skeleton(character, scale)
     right = _panel_rig(character, scale)
     title_h = max(28, height // 22)
