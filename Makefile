@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench fuzz clean
+.PHONY: demo test lint bench fuzz browser clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -24,10 +24,18 @@ demo: $(STAMP)
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo.mp4
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo_exaggerated.gif --exaggerate 1.5
 
-test: $(STAMP)
+test: $(STAMP) browser
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
 	$(BIN)/python -m pytest
+
+# The editor's browser tests drive Debian's Chromium (Playwright); installed here when missing and
+# run as root (as CI is). Elsewhere the tests skip without it, except under CI=true.
+browser:
+	@command -v chromium >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; \
+	  else echo "the editor's browser tests need Debian's chromium: sudo apt-get install chromium"; fi; }
 
 # The long profile of the generated-bad-input suite (tests/fuzz): FUZZ_EXAMPLES cases per test;
 # the runs per format and outcome go to fuzz-report.json.
@@ -48,6 +56,7 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/deform.py
 	$(BIN)/python benchmarks/edit.py
 	$(BIN)/python benchmarks/track.py
+	$(BIN)/python benchmarks/editor.py
 
 clean:
 	rm -rf $(VENV) demo

@@ -13,7 +13,7 @@ PACKAGE = Path(toonmotion.__file__).parent
 
 # Top to bottom. Each set is one layer; a module may import its own layer and any below it.
 LAYERS = (
-    {"cli"},
+    {"cli", "web"},
     {"api"},
     {"io", "render", "testing", "samples", "sample_animation"},
     {"capture"},

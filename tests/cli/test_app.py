@@ -111,3 +111,15 @@ def test_help_lists_the_commands_in_workflow_order(capsys):
     listed = re.findall(r"^│ (\w+) ", out, flags=re.MULTILINE)
     workflow = ["rig", "show", "sample", "pose", "animate", "tune", "track", "retarget"]
     assert [c for c in listed if c in workflow] == workflow
+
+
+def test_edit_refuses_a_missing_project_and_a_busy_port_in_one_line(capsys, tmp_path):
+    import socket
+
+    code, out, err = _run(["edit", tmp_path / "nothing", "--port", "0"], capsys)
+    assert code == 2 and err.startswith("toonmotion: error: no project at") and err.count("\n") == 1
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen(1)
+        code, out, err = _run(["edit", tmp_path, "--port", busy.getsockname()[1]], capsys)
+    assert code == 2 and "toonmotion: error: cannot serve on 127.0.0.1:" in err and err.count("\n") == 1

@@ -16,6 +16,8 @@ from toonmotion.cli import editing  # isort: split
 
 from toonmotion.cli import capture  # isort: split
 
+from toonmotion.cli import editor  # isort: split
+
 from toonmotion.cli.app import app, main
 
-__all__ = ["animation", "app", "capture", "editing", "main", "rigging"]
+__all__ = ["animation", "app", "capture", "editing", "editor", "main", "rigging"]

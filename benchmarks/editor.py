@@ -1,0 +1,115 @@
+"""The editor's live posing: the round trip of a joint drag over the WebSocket; JSON lines.
+
+    python benchmarks/editor.py [DRAWING_DIR ...]
+
+Each drawing (default: every drawing in ../shared/data/drawings, with its char_cfg.yaml
+skeleton) is rigged to about 1,500 vertices and served by the editor (``toonmotion.web``) on a
+free loopback port. A client then drags one joint through a sweep of poses, as a pointer does,
+one message at a time: each message is sent when the previous reply has arrived.
+
+Keys, one line per drawing:
+  drawing, vertices       mesh size
+  drags                   messages timed
+  roundtrip_median_ms     message sent -> deformed vertices received (goal: at most 15)
+  roundtrip_p99_ms        the 99th percentile (goal: at most 50)
+  updates_per_s           1000 / median (goal: at least 30)
+"""
+
+import argparse
+import asyncio
+import json
+import math
+import socket
+import statistics
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import uvicorn
+import websockets
+
+from toonmotion import api
+from toonmotion.io.drawing_folder import load_drawing_folder
+from toonmotion.rig.character import RigSettings
+from toonmotion.web.server import create_app, new_token
+
+DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "drawings"
+DRAGS = 300
+
+
+def _serve(folder: Path):
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(16)
+    port = listener.getsockname()[1]
+    token = new_token()
+    server = uvicorn.Server(uvicorn.Config(create_app(folder, token=token), log_level="warning"))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
+    thread.start()
+    while not server.started:
+        time.sleep(0.02)
+    return server, thread, f"ws://127.0.0.1:{port}/ws?token={token}"
+
+
+def _sweep(character, count):
+    """Poses of the first joint with a child turning its subtree back and forth, as a drag."""
+    skeleton = character.skeleton
+    moving = [n for i, n in enumerate(skeleton.names) if skeleton.parents[i] >= 0 and i in skeleton.parents]
+    joint = moving[len(moving) // 2]
+    for step in range(count):
+        angle = 0.8 * math.sin(2 * math.pi * step / 60)
+        yield api.rotate_joint(character, joint, angle).positions.tolist()
+
+
+async def _drag(url, poses):
+    times = []
+    async with websockets.connect(url, max_size=None) as socket_:
+        for ident, positions in enumerate(poses):
+            started = time.perf_counter()
+            await socket_.send(json.dumps({"id": ident, "type": "pose", "positions": positions}))
+            reply = json.loads(await socket_.recv())
+            times.append((time.perf_counter() - started) * 1000)
+            if reply["type"] != "mesh":
+                raise RuntimeError(reply["message"])
+    return times[10:]  # the first replies warm the solver
+
+
+def bench(folder):
+    drawing = load_drawing_folder(folder)
+    character = api.rig_image(drawing.texture, mask=drawing.mask, skeleton=drawing.skeleton,
+                              settings=RigSettings(vertices=1500))
+    with tempfile.TemporaryDirectory() as scratch:
+        project = Path(scratch) / "project"
+        api.save_project(project, character)
+        server, thread, url = _serve(project)
+        try:
+            times = asyncio.run(_drag(url, list(_sweep(character, DRAGS))))
+        finally:
+            server.should_exit = True
+            thread.join(timeout=10)
+    median = statistics.median(times)
+    return {
+        "drawing": folder.name,
+        "vertices": len(character.mesh.V),
+        "drags": len(times),
+        "roundtrip_median_ms": round(median, 2),
+        "roundtrip_p99_ms": round(statistics.quantiles(times, n=100)[98], 2),
+        "updates_per_s": round(1000 / median, 1),
+    }
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("drawings", nargs="*", type=Path, help="drawing folders")
+    args = parser.parse_args(argv)
+    folders = args.drawings or sorted(p for p in DEFAULT_DIR.iterdir() if (p / "texture.png").is_file())
+    if not folders:
+        sys.exit(f"no drawings found (looked in {DEFAULT_DIR})")
+    for folder in folders:
+        print(json.dumps(bench(folder)), flush=True)
+
+
+if __name__ == "__main__":
+    main()

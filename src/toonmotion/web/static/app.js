@@ -1,0 +1,111 @@
+// The editor's shell: reads the token from the address, loads the project, opens the live
+// connection, and mounts the panels. A panel is one module exporting {name, title, mount(ctx)};
+// mount returns {unmount()}. Add a panel by importing it into PANELS.
+import { MeshView } from "./mesh_view.js";
+import * as posePanel from "./pose_panel.js";
+
+const PANELS = [posePanel];
+
+const token = new URLSearchParams(location.search).get("token") || "";
+
+export function showError(message) {
+  const box = document.getElementById("error");
+  box.textContent = message;
+  box.hidden = !message;
+}
+
+function status(text) {
+  document.getElementById("status").textContent = text;
+}
+
+async function getJSON(path) {
+  const reply = await fetch(path, { headers: { "X-Toonmotion-Token": token } });
+  const body = await reply.json().catch(() => ({ error: `${reply.status} ${reply.statusText}` }));
+  if (!reply.ok) throw new Error(body.error || `${reply.status} ${reply.statusText}`);
+  return body;
+}
+
+function loadImage(src) {
+  return new Promise((resolve, reject) => {
+    const image = new Image();
+    image.onload = () => resolve(image);
+    image.onerror = () => reject(new Error("the drawing could not be loaded"));
+    image.src = src;
+  });
+}
+
+// The live connection: request(message) resolves with the server's reply to it. Replies carry
+// the id of the message they answer; an error reply rejects.
+class Live {
+  constructor(url) {
+    this.next = 1;
+    this.waiting = new Map();
+    this.opened = new Promise((resolve, reject) => {
+      this.socket = new WebSocket(url);
+      this.socket.onopen = () => resolve();
+      this.socket.onerror = () => reject(new Error("the live connection failed"));
+    });
+    this.socket.onmessage = (event) => {
+      const reply = JSON.parse(event.data);
+      const pending = this.waiting.get(reply.id);
+      if (!pending) return;
+      this.waiting.delete(reply.id);
+      if (reply.type === "error") pending.reject(new Error(reply.message));
+      else pending.resolve(reply);
+    };
+    this.socket.onclose = (event) => {
+      showError(`the connection to toonmotion closed${event.reason ? ": " + event.reason : ""}; reload to reconnect`);
+      for (const pending of this.waiting.values()) pending.reject(new Error("connection closed"));
+      this.waiting.clear();
+    };
+  }
+
+  async request(message) {
+    await this.opened;
+    const id = this.next++;
+    return new Promise((resolve, reject) => {
+      this.waiting.set(id, { resolve, reject });
+      this.socket.send(JSON.stringify({ ...message, id }));
+    });
+  }
+}
+
+async function start() {
+  try {
+    status("loading…");
+    const project = await getJSON("api/project");
+    document.getElementById("project-name").textContent = project.name;
+    const texture = await loadImage(`api/texture.png?token=${encodeURIComponent(token)}`);
+    const wsURL = `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws?token=${encodeURIComponent(token)}`;
+    const live = new Live(wsURL);
+    await live.opened;
+    const view = new MeshView(document.getElementById("mesh"), document.getElementById("overlay"), project, texture);
+    const ctx = { project, view, live, side: document.getElementById("side"), status, showError };
+    window.toonmotion = ctx; // for tests and the console
+    mountPanels(ctx);
+    status("ready");
+  } catch (error) {
+    status("");
+    showError(error.message);
+  }
+}
+
+function mountPanels(ctx) {
+  const nav = document.getElementById("panels");
+  let current = null;
+  for (const panel of PANELS) {
+    const button = document.createElement("button");
+    button.textContent = panel.title;
+    button.dataset.panel = panel.name;
+    button.onclick = () => {
+      if (current) current.unmount();
+      for (const b of nav.children) b.setAttribute("aria-pressed", String(b === button));
+      ctx.side.replaceChildren();
+      current = panel.mount(ctx);
+    };
+    nav.append(button);
+  }
+  nav.firstChild.click();
+}
+
+start();

@@ -1,0 +1,125 @@
+// The Pose panel: drag a joint and the drawing follows live (needle model + joint-area solve on
+// the server). The rest bones are shown as red reference lines from each posed parent
+// (thesis fig. 6.2a). While a reply is awaited, newer drags replace the queued pose, so the
+// drawing keeps up with the pointer instead of falling behind it.
+
+export const name = "pose";
+export const title = "Pose";
+
+const HANDLE = 7; // joint handle radius, CSS pixels
+
+export function mount(ctx) {
+  const { project, view, live, side, status, showError } = ctx;
+  const rest = project.joints.map((j) => j.position.slice());
+  const positions = rest.map((p) => p.slice());
+  let dragging = -1, queued = null, busy = false;
+
+  side.innerHTML = `<h2>Pose</h2>
+    <p>Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent.</p>
+    <p><button id="pose-reset">Reset to the rest pose</button></p>
+    <p id="pose-timing"></p>`;
+
+  view.drawOverlay = (pen) => {
+    const ratio = window.devicePixelRatio || 1;
+    pen.lineWidth = 2 * ratio;
+    project.joints.forEach((joint, i) => {
+      if (joint.parent < 0) return;
+      const [px, py] = positions[joint.parent];
+      const [rx, ry] = [rest[i][0] - rest[joint.parent][0], rest[i][1] - rest[joint.parent][1]];
+      line(pen, view.toCanvas([px, py]), view.toCanvas([px + rx, py + ry]), "rgba(220, 40, 40, 0.8)");
+      line(pen, view.toCanvas([px, py]), view.toCanvas(positions[i]), "rgba(20, 20, 20, 0.9)");
+    });
+    positions.forEach((p, i) => {
+      const [x, y] = view.toCanvas(p);
+      pen.beginPath();
+      pen.arc(x, y, HANDLE * ratio, 0, 2 * Math.PI);
+      pen.fillStyle = i === dragging ? "#f6ad55" : "#fff";
+      pen.fill();
+      pen.strokeStyle = "#222";
+      pen.stroke();
+    });
+  };
+
+  async function send() {
+    if (busy || !queued) return;
+    busy = true;
+    const pose = queued;
+    queued = null;
+    const started = performance.now();
+    try {
+      const reply = await live.request({ type: "pose", positions: pose });
+      view.setVertices(reply.U);
+      document.getElementById("pose-timing").textContent = `last update ${(performance.now() - started).toFixed(1)} ms`;
+      showError("");
+    } catch (error) {
+      showError(error.message);
+    } finally {
+      busy = false;
+      send();
+    }
+  }
+
+  function posed() {
+    queued = positions.map((p) => p.slice());
+    view.draw();
+    send();
+  }
+
+  function nearest(event) {
+    const ratio = window.devicePixelRatio || 1;
+    let best = -1, bestDistance = (HANDLE + 4) * ratio;
+    const [ex, ey] = view.toCanvas(view.toDrawing(event));
+    positions.forEach((p, i) => {
+      const [x, y] = view.toCanvas(p);
+      const d = Math.hypot(x - ex, y - ey);
+      if (d <= bestDistance) { best = i; bestDistance = d; }
+    });
+    return best;
+  }
+
+  const overlay = view.overlay;
+  const down = (event) => {
+    dragging = nearest(event);
+    if (dragging < 0) return;
+    overlay.setPointerCapture(event.pointerId);
+    view.draw();
+  };
+  const move = (event) => {
+    if (dragging < 0) return;
+    positions[dragging] = view.toDrawing(event);
+    posed();
+  };
+  const up = () => {
+    dragging = -1;
+    view.draw();
+  };
+  overlay.addEventListener("pointerdown", down);
+  overlay.addEventListener("pointermove", move);
+  overlay.addEventListener("pointerup", up);
+  overlay.addEventListener("pointercancel", up);
+  document.getElementById("pose-reset").onclick = () => {
+    rest.forEach((p, i) => { positions[i] = p.slice(); });
+    posed();
+  };
+  status("drag a joint");
+  view.draw();
+
+  return {
+    positions,
+    unmount() {
+      overlay.removeEventListener("pointerdown", down);
+      overlay.removeEventListener("pointermove", move);
+      overlay.removeEventListener("pointerup", up);
+      overlay.removeEventListener("pointercancel", up);
+      view.drawOverlay = () => {};
+    },
+  };
+}
+
+function line(pen, [x0, y0], [x1, y1], colour) {
+  pen.beginPath();
+  pen.moveTo(x0, y0);
+  pen.lineTo(x1, y1);
+  pen.strokeStyle = colour;
+  pen.stroke();
+}

@@ -1,0 +1,160 @@
+"""Tests for toonmotion.web.server without a browser: security, the project's data, live posing
+and one-line errors."""
+
+import io
+import json
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+from PIL import Image
+from starlette.websockets import WebSocketDisconnect
+
+from toonmotion import api
+from toonmotion.errors import ProjectError
+from toonmotion.rig.pipeline import rig_drawing
+from toonmotion.samples import sample_character
+from toonmotion.web.server import MAX_MESSAGE_BYTES, create_app
+
+TOKEN = "secret-token"
+ORIGIN = "http://127.0.0.1:8000"
+
+
+@pytest.fixture(scope="module")
+def project(tmp_path_factory):
+    drawing, skeleton = sample_character(scale=0.5)
+    folder = tmp_path_factory.mktemp("web") / "hero"
+    api.save_project(folder, rig_drawing(drawing, skeleton=skeleton))
+    return folder
+
+
+@pytest.fixture(scope="module")
+def client(project):
+    return TestClient(create_app(project, token=TOKEN, origins=(ORIGIN,)))
+
+
+def _get(client, path, **headers):
+    return client.get(path, headers={"X-Toonmotion-Token": TOKEN, **headers})
+
+
+def test_the_page_and_its_code_are_served_without_the_token(client):
+    page = client.get("/")
+    assert page.status_code == 200 and "toonmotion editor" in page.text
+    for name in ("app.js", "mesh_view.js", "pose_panel.js", "editor.css"):
+        assert client.get(f"/static/{name}").status_code == 200
+    assert client.get("/favicon.ico").status_code == 204
+
+
+@pytest.mark.parametrize("headers", [{}, {"X-Toonmotion-Token": "wrong"}, {"X-Toonmotion-Token": ""}])
+def test_the_project_needs_the_token(client, headers):
+    reply = client.get("/api/project", headers=headers)
+    assert reply.status_code == 403
+    assert reply.json() == {"error": "missing or wrong token: open the address 'toonmotion edit' printed"}
+
+
+def test_a_page_from_another_origin_is_refused(client):
+    reply = _get(client, "/api/project", Origin="http://evil.example")
+    assert (reply.status_code, reply.json()) == (
+        403,
+        {"error": "requests from http://evil.example are not allowed"},
+    )
+    assert _get(client, "/api/project", Origin=ORIGIN).status_code == 200
+    assert client.get("/", headers={"Origin": "http://evil.example"}).status_code == 403
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/static/../server.py",
+        "/static/..%2Fserver.py",
+        "/static/%2e%2e/server.py",
+        "/static/__init__.py",
+        "/static/../../../../etc/passwd",
+        "/static/%2Fetc%2Fpasswd",
+        "/static/index.html%00.js",
+        "/api/../server.py",
+        "/api/texture.png/../../project.json",
+        "/hero/project.json",
+        "/project.json",
+    ],
+)
+def test_no_request_reaches_a_file_the_server_does_not_name(client, path):
+    reply = _get(client, path)
+    assert reply.status_code in (403, 404)
+    assert "def create_app" not in reply.text and "root:" not in reply.text and '"format"' not in reply.text
+    assert list(reply.json()) == ["error"]
+
+
+def test_the_project_data_is_the_saved_character(client, project):
+    character = api.load_project(project)
+    data = _get(client, "/api/project").json()
+    assert (data["width"], data["height"]) == character.size
+    np.testing.assert_array_equal(np.reshape(data["vertices"], (-1, 2)), character.mesh.V)
+    triangles = np.sort(np.reshape(data["triangles"], (-1, 3)), axis=1)
+    expected = np.sort(character.mesh.F, axis=1)
+    assert sorted(map(tuple, triangles)) == sorted(map(tuple, expected))  # all of them, in draw order
+    assert [j["name"] for j in data["joints"]] == list(character.skeleton.names)
+    texture = np.asarray(Image.open(io.BytesIO(_get(client, "/api/texture.png").content)))
+    np.testing.assert_array_equal(texture, character.texture)
+
+
+def _pose(character, joint, angle):
+    return api.rotate_joint(character, joint, angle).positions.tolist()
+
+
+def test_a_pose_comes_back_as_the_deformed_mesh_the_library_computes(client, project):
+    character = api.load_project(project)
+    positions = _pose(character, "right_elbow", 0.9)
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        socket.send_text(json.dumps({"id": 7, "type": "pose", "positions": positions}))
+        reply = socket.receive_json()
+    assert (reply["id"], reply["type"]) == (7, "mesh")
+    expected = api.pose_character(character, api.rotate_joint(character, "right_elbow", 0.9))
+    np.testing.assert_allclose(np.reshape(reply["U"], (-1, 2)), expected.deformation.U, atol=1e-3)
+    assert np.abs(np.reshape(reply["U"], (-1, 2)) - character.mesh.V).max() > 5  # the arm moved
+
+
+@pytest.mark.parametrize(
+    ("message", "said"),
+    [
+        ("not json", "a message must be a JSON object"),
+        ("[1, 2]", "a message must be a JSON object"),
+        ("[" * 100_000, "a message must be a JSON object"),
+        ('{"type": "dance"}', "unknown message type 'dance'"),
+        ('{"id": 3, "type": "pose"}', "'positions' must list [x, y] for each of the 17 joints"),
+        ('{"type": "pose", "positions": [[1, 2]]}', "for each of the 17 joints"),
+        ('{"type": "pose", "positions": ' + json.dumps([["a", "b"]] * 17) + "}", "[x, y] pairs of numbers"),
+        ('{"type": "pose", "positions": ' + json.dumps([[1, 2, 3]] * 17) + "}", "[x, y] pairs of numbers"),
+        ('{"type": "pose", "positions": ' + json.dumps([[1e300, 1]] * 17) + "}", "pixels from the origin"),
+        ('{"type": "pose", "positions": ' + json.dumps([[0, 0]] * 17) + "}", "is squashed"),
+        ("x" * (MAX_MESSAGE_BYTES + 1), "1,000,000 bytes at most"),
+    ],
+)
+def test_a_bad_message_gets_a_one_line_error_and_the_connection_lives_on(client, project, message, said):
+    character = api.load_project(project)
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        socket.send_text(message)
+        reply = socket.receive_json()
+        assert reply["type"] == "error" and said in reply["message"] and "\n" not in reply["message"]
+        socket.send_text(json.dumps({"id": 1, "type": "pose", "positions": _pose(character, "head", 0.1)}))
+        assert socket.receive_json()["type"] == "mesh"
+
+
+@pytest.mark.parametrize("query", ["", "?token=wrong"])
+def test_the_live_connection_needs_the_token(client, query):
+    with pytest.raises(WebSocketDisconnect) as closed, client.websocket_connect(f"/ws{query}") as socket:
+        socket.receive_text()
+    assert closed.value.code == 1008
+
+
+def test_a_live_connection_from_another_origin_is_refused(client):
+    with (
+        pytest.raises(WebSocketDisconnect),
+        client.websocket_connect(f"/ws?token={TOKEN}", headers={"Origin": "http://evil.example"}) as socket,
+    ):
+        socket.receive_text()
+
+
+def test_a_bad_project_fails_before_the_server_starts(tmp_path):
+    with pytest.raises(ProjectError, match="no project at"):
+        create_app(tmp_path / "nothing", token=TOKEN)
