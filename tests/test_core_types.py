@@ -342,7 +342,7 @@ def test_bad_fields_are_refused_in_one_line(cls, change, error, message):
         (lambda: Silhouette(parts=(np.zeros((3, 2)),)), TypeError, "must be Part objects"),
         (lambda: Silhouette(parts=(), tolerance=-1.0), MeshError, "tolerance must be a finite number >= 0"),
         (lambda: DepthEdit(value=1, bone=5), EditError, "names its bone by a string"),
-        (lambda: DepthEdit(value=1, at=("x", 2)), EditError, "two finite numbers"),
+        (lambda: DepthEdit(value=1, at=("x", 2)), EditError, "give two numbers"),
         (lambda: Overlap("a", "b", -1.0, False), ValueError, "area must be a finite number >= 0"),
         (lambda: Overlap("a", None, 1.0, False), TypeError, "names two bones"),
         (lambda: DeformSettings(preserve_area="yes"), SettingsError, "preserve_area must be true or false"),

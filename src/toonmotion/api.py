@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.animate.animation import (
     Animation,
@@ -50,7 +50,9 @@ from toonmotion.io.skeleton_json import load_skeleton_file
 from toonmotion.progress import Progress
 from toonmotion.render.frame import fit_view, render_frame
 from toonmotion.render.sequence import write_animation
+from toonmotion.rig.binding import Correction
 from toonmotion.rig.character import Character, RigSettings
+from toonmotion.rig.edits import DepthEdit, apply_edit, redo, region_at, undo
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose, rotate_about
 from toonmotion.rig.skeleton import Skeleton
@@ -67,6 +69,10 @@ __all__ = [
     "SameDepthOverlap",
     "TrackSettings",
     "animate_character",
+    "correct_regions",
+    "set_depth",
+    "undo_edits",
+    "redo_edits",
     "track_footage",
     "exaggerate",
     "filter_motion",
@@ -462,3 +468,122 @@ def filter_motion(
     True
     """
     return exaggerate(motion, FilterSettings(strength=strength, sigma=sigma, shift=shift), joints=joints)
+
+
+def set_depth(character: Character, value: int, *, bone: str | None = None,
+              at: tuple[float, float] | None = None, by: int | None = None) -> Character:
+    """``character`` with a bone region's depth layer set (thesis 3.5); higher is in front.
+
+    Parameters
+    ----------
+    character : Character
+    value : int
+        The depth, within ±1,000,000 (ignored when ``by`` is given).
+    bone : str, optional
+        The region's bone (named after its child joint).
+    at : (float, float), optional
+        Instead of ``bone``: the region holding the rest-mesh vertex nearest this point, as a
+        click on the drawing picks it.
+    by : int, optional
+        Change the region's current depth by this much instead of setting ``value``.
+
+    Returns
+    -------
+    Character
+        With the edit applied and recorded (:func:`undo_edits` takes it back); save it with
+        :func:`save_project`.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> hero = set_depth(hero, 0, at=tuple(hero.skeleton.positions[7]), by=1)
+    >>> int(hero.depth.max()), len(hero.edits)
+    (1, 1)
+    """
+    if by is not None:
+        index = region_at(character, at) if at is not None else character.skeleton.bone_names.index(bone)
+        value = int(character.depth[index]) + int(by)
+    return apply_edit(character, DepthEdit(value=value, bone=bone, at=at))
+
+
+def correct_regions(character: Character, bone: str, curve: ArrayLike) -> Character:
+    """``character`` with every vertex inside a closed ``curve`` attached to ``bone`` (thesis 3.5).
+
+    Parameters
+    ----------
+    character : Character
+    bone : str
+        The bone (named after its child joint) the vertices go to.
+    curve : sequence of (x, y)
+        A closed curve in drawing pixels, at least three points (a lasso).
+
+    Returns
+    -------
+    Character
+        With the correction applied and recorded (:func:`undo_edits` takes it back).
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> x, y = hero.skeleton.positions[hero.skeleton.index("head")]
+    >>> lasso = [(x - 9, y - 9), (x + 9, y - 9), (x + 9, y + 9), (x - 9, y + 9)]
+    >>> fixed = correct_regions(hero, "neck", lasso)
+    >>> bool((fixed.binding.bone != hero.binding.bone).any())
+    True
+    """
+    return apply_edit(character, Correction(curve=np.asarray(curve, dtype=float), bone=bone))
+
+
+def undo_edits(character: Character, steps: int = 1) -> Character:
+    """``character`` with its last ``steps`` region corrections and depth settings taken back.
+
+    Parameters
+    ----------
+    character : Character
+    steps : int
+        How many edits, at least 1.
+
+    Returns
+    -------
+    Character
+        The edits taken back can be made again with :func:`redo_edits` until a new edit is made.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> back = undo_edits(set_depth(hero, 2, bone="head"))
+    >>> int(back.depth.max()), len(back.undone)
+    (0, 1)
+    """
+    return undo(character, steps)[0]
+
+
+def redo_edits(character: Character, steps: int = 1) -> Character:
+    """``character`` with its last ``steps`` undone edits made again.
+
+    Parameters
+    ----------
+    character : Character
+    steps : int
+        How many, at least 1.
+
+    Returns
+    -------
+    Character
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> again = redo_edits(undo_edits(set_depth(hero, 2, bone="head")))
+    >>> int(again.depth.max()), len(again.edits)
+    (2, 1)
+    """
+    return redo(character, steps)[0]

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import os
-import resource
 from pathlib import Path
 
 import numpy as np
@@ -36,18 +35,9 @@ settings.register_profile(
 )
 settings.load_profile(os.environ.get("TOONMOTION_FUZZ_PROFILE", "quick"))
 
-# A run that asks for more memory than this fails with MemoryError (exit 70) instead of
-# taking the machine down: every limit must hold well below it.
-_MEMORY = int(float(os.environ.get("TOONMOTION_FUZZ_MEMORY_GB", "8")) * 2**30)
-
-
 @pytest.fixture(scope="session", autouse=True)
-def _bounded_memory():
-    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    if hard == resource.RLIM_INFINITY or hard > _MEMORY:
-        resource.setrlimit(resource.RLIMIT_AS, (_MEMORY, hard))
+def _report():
     yield
-    resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
     if os.environ.get("TOONMOTION_FUZZ_PROFILE") == "long":
         report = {f"{kind} {result}": n for (kind, result), n in sorted(TALLY.items())}
         Path(os.environ.get("TOONMOTION_FUZZ_REPORT", "fuzz-report.json")).write_text(

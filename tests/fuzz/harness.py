@@ -14,6 +14,7 @@ import hashlib
 import io
 import json
 import os
+import resource
 import signal
 import time
 from collections import Counter
@@ -25,6 +26,11 @@ from toonmotion.cli import main
 
 # Seconds one run may take: a hang is a failure.
 TIME_LIMIT = float(os.environ.get("TOONMOTION_FUZZ_TIME_LIMIT", "60"))
+
+# A run that asks for more memory than this fails with MemoryError (exit 70) instead of taking
+# the machine down: every limit must hold well below it. Set for each run only, not for the
+# rest of the test session (a browser reserves far more address space than it uses).
+MEMORY = int(float(os.environ.get("TOONMOTION_FUZZ_MEMORY_GB", "8")) * 2**30)
 
 # Runs per format and outcome, for the long profile's report.
 TALLY: Counter[tuple[str, str]] = Counter()
@@ -51,6 +57,9 @@ def run_cli(argv: list[str], cwd: Path) -> Outcome:
         raise Hang
 
     previous = signal.signal(signal.SIGALRM, hang)
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    cap = MEMORY if hard == resource.RLIM_INFINITY else min(MEMORY, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
     signal.setitimer(signal.ITIMER_REAL, TIME_LIMIT)
     start = time.perf_counter()
     status: int | None
@@ -68,6 +77,7 @@ def run_cli(argv: list[str], cwd: Path) -> Outcome:
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
+        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
         os.chdir(before)
         limits.set_limits(limits.Limits())
     return Outcome(status, out.getvalue(), err.getvalue(), time.perf_counter() - start)

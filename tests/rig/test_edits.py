@@ -124,7 +124,9 @@ def test_without_edits_is_the_automatic_rig(character, edited):
         ({"value": 1, "bone": "head", "at": (1, 2)}, "exactly one of them"),
         ({"value": 1.5, "bone": "head"}, "whole number"),
         ({"value": True, "bone": "head"}, "whole number"),
-        ({"value": 1, "at": (np.nan, 2)}, "two finite numbers"),
+        ({"value": 1, "at": (np.nan, 2)}, "point has a non-finite position"),
+        ({"value": 1, "at": (1, 2, 3)}, "give two numbers"),
+        ({"value": 1, "at": (2e7, 2)}, "over 10,000,000 px from the origin"),
     ],
 )
 def test_malformed_depth_edits(kwargs, message):

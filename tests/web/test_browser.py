@@ -145,3 +145,31 @@ def test_dragging_a_joint_deforms_the_drawing_live(page, editor):
     np.testing.assert_allclose(
         np.reshape(page.evaluate("Array.from(window.toonmotion.view.vertices)"), (-1, 2)), rest, atol=1e-2
     )
+
+
+def test_regions_click_a_region_forward_lasso_vertices_to_a_bone_and_undo(page, editor):
+    folder = editor[1]
+    page.click("nav button[data-panel=regions]")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('click a region')")
+    _close_to_golden(_stage(page), "regions.png")
+    x, y = _joint_on_screen(page, "right_elbow")
+    page.mouse.click(x, y)
+    page.wait_for_function("window.toonmotion.project.edits === 1")
+    assert api.load_project(folder).depth.max() == 1  # saved as it happened
+    hx, hy = _joint_on_screen(page, "head")
+    page.select_option("#regions-bone", "neck")
+    page.mouse.move(hx - 25, hy - 25)
+    page.mouse.down()
+    for px, py in [(hx + 25, hy - 25), (hx + 25, hy + 25), (hx - 25, hy + 25), (hx - 25, hy - 20)]:
+        page.mouse.move(px, py, steps=4)
+    page.mouse.up()
+    page.wait_for_function("window.toonmotion.project.edits === 2")
+    saved = api.load_project(folder)
+    neck = saved.skeleton.bone_names.index("neck")
+    head = saved.skeleton.positions[saved.skeleton.index("head")]
+    near = np.hypot(*(saved.mesh.V - head).T) < 8
+    assert (saved.binding.bone[near] == neck).all()
+    page.keyboard.press("Control+z")
+    page.wait_for_function("window.toonmotion.project.edits === 1 && window.toonmotion.project.undone === 1")
+    assert len(api.load_project(folder).edits) == 1
+    assert page.errors == [] and page.locator("#error").is_hidden()

@@ -158,3 +158,62 @@ def test_a_live_connection_from_another_origin_is_refused(client):
 def test_a_bad_project_fails_before_the_server_starts(tmp_path):
     with pytest.raises(ProjectError, match="no project at"):
         create_app(tmp_path / "nothing", token=TOKEN)
+
+
+@pytest.fixture
+def editable(tmp_path, project):
+    """A fresh copy of the project, edited by its own server."""
+    import shutil
+
+    folder = tmp_path / "hero"
+    shutil.copytree(project, folder)
+    return folder, TestClient(create_app(folder, token=TOKEN, origins=(ORIGIN,)))
+
+
+def _send(socket, message):
+    socket.send_text(json.dumps(message))
+    return socket.receive_json()
+
+
+def test_region_edits_are_saved_at_once_and_undo_and_redo_survive_a_reload(editable):
+    folder, client = editable
+    character = api.load_project(folder)
+    hand = character.skeleton.positions[character.skeleton.index("right_hand")].tolist()
+    head = character.skeleton.positions[character.skeleton.index("head")]
+    lasso = [(head + d).tolist() for d in ([-9, -9], [9, -9], [9, 9], [-9, 9])]
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        up = _send(socket, {"id": 1, "type": "depth", "at": hand, "by": 1})
+        assert (up["type"], up["edits"], up["undone"]) == ("regions", 1, 0)
+        assert api.load_project(folder).depth.max() == 1  # saved before the reply
+        fixed = _send(socket, {"type": "correct", "bone": "neck", "curve": lasso})
+        saved = api.load_project(folder)
+        assert fixed["edits"] == len(saved.edits) == 2
+        assert fixed["vertex_bone"] == saved.binding.bone.tolist() != character.binding.bone.tolist()
+        assert _send(socket, {"type": "undo"})["edits"] == 1
+    reloaded = TestClient(create_app(folder, token=TOKEN))  # a new server on the saved project
+    with reloaded.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        again = _send(socket, {"type": "redo"})
+    assert (again["edits"], again["undone"]) == (2, 0)
+    np.testing.assert_array_equal(api.load_project(folder).binding.bone, saved.binding.bone)
+    # The triangles come back in draw order: the raised region's triangles last.
+    front = np.reshape(again["triangles"], (-1, 3))[-1]
+    assert saved.depth[saved.binding.bone[front[0]]] == 1
+
+
+@pytest.mark.parametrize(("message", "said"), [
+    ({"type": "depth", "at": [10, 10], "by": 5}, "'by' must be 1"),
+    ({"type": "depth", "at": "here", "by": 1}, "'at' must be [x, y]"),
+    ({"type": "depth", "at": [1e300, 1], "by": 1}, "over 10,000,000 px from the origin"),
+    ({"type": "correct", "bone": 3, "curve": [[0, 0], [1, 0], [0, 1]]}, "'bone' must name"),
+    ({"type": "correct", "bone": "neck", "curve": [[0, 0]]}, "3 to 10,000"),
+    ({"type": "correct", "bone": "nobody", "curve": [[0, 0], [50, 0], [0, 50]]}, "nobody"),
+    ({"type": "undo"}, "no edits to undo"),
+    ({"type": "redo"}, "nothing to redo"),
+])
+def test_a_bad_region_edit_changes_nothing(editable, message, said):
+    folder, client = editable
+    before = (folder / "project.json").read_bytes()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        reply = _send(socket, message)
+    assert reply["type"] == "error" and said in reply["message"], reply
+    assert (folder / "project.json").read_bytes() == before

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -18,8 +18,6 @@ from toonmotion.errors import SettingsError
 from toonmotion.io.image import save_png
 from toonmotion.io.tuned_pose import load_tuned_pose, save_tuned_pose, with_edits, without_last_edit
 from toonmotion.render.frame import natural_size
-from toonmotion.rig.binding import Correction
-from toonmotion.rig.edits import DepthEdit, apply_edit, redo, undo
 from toonmotion.rig.edits import describe as describe_edit
 
 
@@ -35,7 +33,7 @@ def depth(
     character = api.load_project(project)
     names = character.skeleton.bone_names
     for item in settings or []:
-        character = apply_edit(character, _depth_edit(item, names))
+        character = api.set_depth(character, **_depth_target(item, names))
     if not settings:
         for name, d in zip(names, character.depth, strict=True):
             typer.echo(f"{name:>20} {d}")
@@ -57,7 +55,7 @@ def correct(
     character = api.load_project(project)
     points = np.array([options.point(p, "a curve point X,Y") for p in curve])
     before = character.binding.bone
-    character = apply_edit(character, Correction(curve=points, bone=bone))
+    character = api.correct_regions(character, bone, points)
     api.save_project(project, character)
     moved = int(np.count_nonzero(character.binding.bone != before))
     typer.echo(
@@ -71,7 +69,9 @@ Steps = Annotated[int, typer.Option("--steps", help="How many edits.")]
 @app.command("undo")
 def undo_edits(project: options.Project, steps: Steps = 1) -> None:
     """Take back a project's last corrections or depth settings."""
-    character, taken = undo(api.load_project(project), steps)
+    before = api.load_project(project)
+    character = api.undo_edits(before, steps)
+    taken = before.edits[len(character.edits):]
     api.save_project(project, character)
     for edit in taken[::-1]:
         typer.echo(f"undid: {describe_edit(edit)}")
@@ -80,7 +80,9 @@ def undo_edits(project: options.Project, steps: Steps = 1) -> None:
 @app.command("redo")
 def redo_edits(project: options.Project, steps: Steps = 1) -> None:
     """Make again edits taken back by 'undo' (until a new edit is made)."""
-    character, again = redo(api.load_project(project), steps)
+    before = api.load_project(project)
+    character = api.redo_edits(before, steps)
+    again = before.undone[: len(before.undone) - len(character.undone)]
     api.save_project(project, character)
     for edit in again:
         typer.echo(f"redid: {describe_edit(edit)}")
@@ -163,16 +165,17 @@ def tune(
             )
 
 
-def _depth_edit(item: str, names: list[str] | tuple[str, ...]) -> DepthEdit:
+def _depth_target(item: str, names: list[str] | tuple[str, ...]) -> dict[str, Any]:
+    """``BONE=N`` or ``@X,Y=N`` as :func:`toonmotion.api.set_depth`'s arguments."""
     target, _, value = item.rpartition("=")
     try:
         depth = int(value)
     except ValueError:
         raise SettingsError(f"give a whole-number depth after '=' in {item!r}") from None
     if target.startswith("@"):
-        return DepthEdit(value=depth, at=options.point(target[1:], "@X,Y"))
+        return {"value": depth, "at": options.point(target[1:], "@X,Y")}
     if target in names:
-        return DepthEdit(value=depth, bone=target)
+        return {"value": depth, "bone": target}
     raise SettingsError(f"no bone is called {target!r}; the bones are: {', '.join(names)}")
 
 

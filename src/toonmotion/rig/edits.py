@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.errors import EditError, SettingsError, ToonmotionError
+from toonmotion.geometry.arrays import finite_point
 from toonmotion.rig.binding import Correction, attach_inside, decompose
 from toonmotion.rig.character import Character
 
@@ -53,12 +54,7 @@ class DepthEdit:
         if self.bone is not None and not isinstance(self.bone, str):
             raise EditError(f"a depth edit names its bone by a string, got {self.bone!r}")
         if self.at is not None:
-            try:
-                at = tuple(float(v) for v in self.at)
-            except (TypeError, ValueError):
-                raise EditError(f"a depth edit's point must be two finite numbers, got {self.at!r}") from None
-            if len(at) != 2 or not np.all(np.isfinite(at)):
-                raise EditError(f"a depth edit's point must be two finite numbers, got {self.at!r}")
+            at = finite_point(self.at, name="a depth edit's point", error=EditError)
             object.__setattr__(self, "at", at)
         object.__setattr__(self, "value", int(self.value))
 

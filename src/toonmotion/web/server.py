@@ -14,6 +14,11 @@ The WebSocket protocol (JSON text messages; ``id`` is echoed back):
 * ``{"id": 1, "type": "pose", "positions": [[x, y], ...]}``: every joint's position, in the
   skeleton's order. Reply: ``{"id": 1, "type": "mesh", "U": [x0, y0, x1, y1, ...]}``, the
   deformed vertices (the needle model, then the joint-area solve).
+* Edits of the regions, each saved in the project before the reply (atomic writes, as the
+  CLI's), each recorded for undo: ``{"type": "depth", "at": [x, y], "by": 1}`` (the region
+  there one layer up or down), ``{"type": "correct", "bone": name, "curve": [[x, y], ...]}``
+  (a lasso), ``{"type": "undo"}``, ``{"type": "redo"}``. Reply: ``{"type": "regions", ...}``
+  with the regions as :func:`regions` gives them.
 """
 
 from __future__ import annotations
@@ -35,14 +40,15 @@ from starlette.exceptions import HTTPException
 from toonmotion import api
 from toonmotion.deform.deformer import Deformer
 from toonmotion.deform.depth import draw_order
-from toonmotion.errors import PoseError, ToonmotionError
+from toonmotion.errors import EditError, PoseError, ToonmotionError
 from toonmotion.io.image import png_bytes
 from toonmotion.rig.pose import Pose, check_pose
 
 STATIC = Path(__file__).parent / "static"
 # The page's own files: nothing else under STATIC, and nothing outside it, is served.
-PAGE_FILES = {"index.html": "text/html", "app.js": "text/javascript", "mesh_view.js": "text/javascript",
-              "pose_panel.js": "text/javascript", "editor.css": "text/css"}
+PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "text/javascript",
+              "mesh_view.js": "text/javascript", "pose_panel.js": "text/javascript",
+              "regions_panel.js": "text/javascript"}
 # A WebSocket message longer than this is refused unread (a pose of 10,000 joints fits easily).
 MAX_MESSAGE_BYTES = 1_000_000
 
@@ -69,6 +75,12 @@ class Editing:
             if self._deformer is None:
                 self._deformer = Deformer(self.character)
             return self._deformer
+
+    def edited(self, character: api.Character) -> None:
+        """Save ``character`` in the project, then make it the one edited (a failed save changes nothing)."""
+        with self.lock:
+            api.save_project(self.folder, character)
+            self.character, self._deformer = character, None
 
 
 def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()) -> FastAPI:
@@ -159,18 +171,31 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
 
 
 def describe(editing: Editing) -> dict[str, Any]:
-    """The project as the page draws it: size, rest mesh in draw order, skeleton, depth."""
+    """The project as the page draws it: size, rest mesh, skeleton, and its regions."""
     character = editing.character
     mesh, skeleton = character.mesh, character.skeleton
-    order = draw_order(mesh, character.binding, character.depth)
     return {
         "name": editing.folder.name,
         "width": character.size[0],
         "height": character.size[1],
         "vertices": mesh.V.ravel().tolist(),
-        "triangles": mesh.F[order].ravel().tolist(),
         "joints": [{"name": n, "parent": int(p), "position": skeleton.positions[i].tolist()}
                    for i, (n, p) in enumerate(zip(skeleton.names, skeleton.parents, strict=True))],
+        "bones": list(skeleton.bone_names),
+        **regions(character),
+    }
+
+
+def regions(character: api.Character) -> dict[str, Any]:
+    """The bone regions: the triangles in draw order (depth layers), each vertex's bone (an index
+    into the bone names), each bone's depth, and how many edits there are to undo and redo."""
+    order = draw_order(character.mesh, character.binding, character.depth)
+    return {
+        "triangles": character.mesh.F[order].ravel().tolist(),
+        "vertex_bone": character.binding.bone.tolist(),
+        "depth": character.depth.tolist(),
+        "edits": len(character.edits),
+        "undone": len(character.undone),
     }
 
 
@@ -192,12 +217,50 @@ def answer(editing: Editing, text: str) -> dict[str, Any]:
         kind = message.get("type")
         if kind == "pose":
             return {"id": ident, "type": "mesh", "U": _posed(editing, message.get("positions"))}
-        raise PoseError(f"unknown message type {kind!r}; the editor sends 'pose'")
+        if kind in _EDITS:
+            editing.edited(_EDITS[kind](editing.character, message))
+            return {"id": ident, "type": "regions", **regions(editing.character)}
+        raise PoseError(f"unknown message type {kind!r}; the editor sends {', '.join(map(repr, _KINDS))}")
     except ToonmotionError as error:
         return {"id": ident, "type": "error", "message": _one_line(str(error))}
     except Exception as error:  # a bug: one line to the page, the details to the log
         log.error("internal error answering a message: %s: %s", type(error).__name__, error)
         return {"id": ident, "type": "error", "message": _bug(error)}
+
+
+def _point(value: Any, what: str) -> tuple[float, float]:
+    if not (isinstance(value, list) and len(value) == 2 and all(_is_number(v) for v in value)):
+        raise EditError(f"{what} must be [x, y], got {str(value)[:40]}")
+    return float(value[0]), float(value[1])
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _depth(character: api.Character, message: dict[str, Any]) -> api.Character:
+    by = message.get("by")
+    if by not in (-1, 1) or isinstance(by, bool):
+        raise EditError("'by' must be 1 (one layer up) or -1 (one down)")
+    return api.set_depth(character, 0, at=_point(message.get("at"), "'at'"), by=by)
+
+
+def _correct(character: api.Character, message: dict[str, Any]) -> api.Character:
+    bone, curve = message.get("bone"), message.get("curve")
+    if not isinstance(bone, str):
+        raise EditError("'bone' must name the bone to attach to")
+    if not isinstance(curve, list) or not 3 <= len(curve) <= 10_000:
+        raise EditError("'curve' must be a closed curve of 3 to 10,000 [x, y] points")
+    return api.correct_regions(character, bone, [_point(p, "a curve point") for p in curve])
+
+
+_EDITS = {
+    "depth": _depth,
+    "correct": _correct,
+    "undo": lambda character, message: api.undo_edits(character),
+    "redo": lambda character, message: api.redo_edits(character),
+}
+_KINDS = ("pose", *_EDITS)
 
 
 def _posed(editing: Editing, positions: Any) -> list[float]:

@@ -3,8 +3,9 @@
 // mount returns {unmount()}. Add a panel by importing it into PANELS.
 import { MeshView } from "./mesh_view.js";
 import * as posePanel from "./pose_panel.js";
+import * as regionsPanel from "./regions_panel.js";
 
-const PANELS = [posePanel];
+const PANELS = [posePanel, regionsPanel];
 
 const token = new URLSearchParams(location.search).get("token") || "";
 

@@ -79,6 +79,15 @@ export class MeshView {
             ((event.clientY - box.top) * ratio - this.offset[1]) / this.scale];
   }
 
+  // The triangles in draw order (back to front), after a depth change.
+  setTriangles(flat) {
+    const gl = this.gl;
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.indexBuffer);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, new Uint32Array(flat), gl.STATIC_DRAW);
+    this.count = flat.length;
+    this.draw();
+  }
+
   setVertices(flat) {
     this.vertices = new Float32Array(flat);
     this.draw();
