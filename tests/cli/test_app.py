@@ -123,3 +123,23 @@ def test_edit_refuses_a_missing_project_and_a_busy_port_in_one_line(capsys, tmp_
         busy.listen(1)
         code, out, err = _run(["edit", tmp_path, "--port", busy.getsockname()[1]], capsys)
     assert code == 2 and "toonmotion: error: cannot serve on 127.0.0.1:" in err and err.count("\n") == 1
+
+
+def test_edit_rigs_a_drawing_into_a_project_beside_it_once(capsys, tmp_path):
+    import socket
+
+    from toonmotion.io.image import save_png
+    from toonmotion.io.project import load_project
+    from toonmotion.samples import sample_character
+
+    save_png(tmp_path / "hero.png", sample_character(scale=0.4)[0])
+    with socket.socket() as busy:  # the server cannot start: the command ends after the rigging
+        busy.bind(("127.0.0.1", 0))
+        busy.listen(1)
+        port = busy.getsockname()[1]
+        code, out, err = _run(["edit", tmp_path / "hero.png", "--port", port], capsys)
+        assert code == 2 and out.startswith("rigged hero.png: ") and "cannot serve on" in err
+        rigged = load_project(tmp_path / "hero")
+        code, out, err = _run(["edit", tmp_path / "hero.png", "--port", port], capsys)
+        assert out.startswith("opening ") and "made from hero.png" in out
+    assert load_project(tmp_path / "hero").mesh.V.tolist() == rigged.mesh.V.tolist()

@@ -9,14 +9,18 @@ from typing import Annotated
 
 import typer
 
-from toonmotion.cli import options
+from toonmotion import api
 from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
+from toonmotion.io.project import PROJECT_FILE
 
 
 @app.command()
 def edit(
-    project: options.Project,
+    target: Annotated[Path, typer.Argument(
+        metavar="PROJECT|IMAGE",
+        help="A project folder, or a drawing: it is rigged into a project folder beside it, named after it "
+        "(opened again next time).")],
     port: Annotated[int, typer.Option("--port", help="Port to serve on \\[default: a free one].", min=0,
                                       max=65535)] = 0,
     host: Annotated[str, typer.Option(
@@ -28,6 +32,7 @@ def edit(
 
     from toonmotion.web.server import create_app, new_token
 
+    project = _project_for(target)
     listener = _listen(host, port)
     bound = listener.getsockname()[1]
     token = new_token()
@@ -40,6 +45,21 @@ def edit(
         webbrowser.open(url)
     config = uvicorn.Config(server_app, log_level="warning", ws_max_size=2_000_000)
     uvicorn.Server(config).run(sockets=[listener])
+
+
+def _project_for(target: Path) -> Path:
+    """The project to edit: ``target``, or for a drawing the project beside it (rigged if new)."""
+    if not target.is_file():
+        return target
+    project = target.with_suffix("")
+    if (project / PROJECT_FILE).is_file():
+        typer.echo(f"opening {project}, the project made from {target.name}")
+        return project
+    character = api.rig_image(target)
+    api.save_project(project, character)
+    typer.echo(f"rigged {target.name}: {len(character.mesh.V)} vertices, {len(character.skeleton)} joints "
+               f"-> {project}")
+    return project
 
 
 def _listen(host: str, port: int) -> socket.socket:
