@@ -139,6 +139,10 @@ def test_dragging_a_joint_deforms_the_drawing_live(page, editor):
     changed = np.abs(after - before).max(axis=2) > 48
     assert changed.mean() > 0.002  # and the canvas shows it
     _close_to_golden(after, "dragged.png")
+    # The hand now lies on the head, at the same depth: the panel says so and what to do.
+    page.wait_for_function("document.getElementById('pose-overlaps').textContent !== ''")
+    warning = page.locator("#pose-overlaps").text_content()
+    assert "head and right_hand overlap at the same depth" in warning and "Regions panel" in warning
     assert page.errors == [] and page.locator("#error").is_hidden()
     page.click("#pose-reset")
     page.wait_for_timeout(300)

@@ -200,16 +200,19 @@ def test_region_edits_are_saved_at_once_and_undo_and_redo_survive_a_reload(edita
     assert saved.depth[saved.binding.bone[front[0]]] == 1
 
 
-@pytest.mark.parametrize(("message", "said"), [
-    ({"type": "depth", "at": [10, 10], "by": 5}, "'by' must be 1"),
-    ({"type": "depth", "at": "here", "by": 1}, "'at' must be [x, y]"),
-    ({"type": "depth", "at": [1e300, 1], "by": 1}, "over 10,000,000 px from the origin"),
-    ({"type": "correct", "bone": 3, "curve": [[0, 0], [1, 0], [0, 1]]}, "'bone' must name"),
-    ({"type": "correct", "bone": "neck", "curve": [[0, 0]]}, "3 to 10,000"),
-    ({"type": "correct", "bone": "nobody", "curve": [[0, 0], [50, 0], [0, 50]]}, "nobody"),
-    ({"type": "undo"}, "no edits to undo"),
-    ({"type": "redo"}, "nothing to redo"),
-])
+@pytest.mark.parametrize(
+    ("message", "said"),
+    [
+        ({"type": "depth", "at": [10, 10], "by": 5}, "'by' must be 1"),
+        ({"type": "depth", "at": "here", "by": 1}, "'at' must be [x, y]"),
+        ({"type": "depth", "at": [1e300, 1], "by": 1}, "over 10,000,000 px from the origin"),
+        ({"type": "correct", "bone": 3, "curve": [[0, 0], [1, 0], [0, 1]]}, "'bone' must name"),
+        ({"type": "correct", "bone": "neck", "curve": [[0, 0]]}, "3 to 10,000"),
+        ({"type": "correct", "bone": "nobody", "curve": [[0, 0], [50, 0], [0, 50]]}, "nobody"),
+        ({"type": "undo"}, "no edits to undo"),
+        ({"type": "redo"}, "nothing to redo"),
+    ],
+)
 def test_a_bad_region_edit_changes_nothing(editable, message, said):
     folder, client = editable
     before = (folder / "project.json").read_bytes()
@@ -217,3 +220,24 @@ def test_a_bad_region_edit_changes_nothing(editable, message, said):
         reply = _send(socket, message)
     assert reply["type"] == "error" and said in reply["message"], reply
     assert (folder / "project.json").read_bytes() == before
+
+
+def test_the_overlaps_of_a_pose_name_the_regions_at_one_depth(client, project):
+    character = api.load_project(project)
+    raised = api.rotate_joint(character, "right_shoulder", 1.6).positions.tolist()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        rest = _send(socket, {"type": "overlaps", "positions": character.skeleton.positions.tolist()})
+        found = _send(socket, {"type": "overlaps", "positions": raised})
+    assert rest == {"id": None, "type": "overlaps", "pairs": []}
+    expected = api.same_depth_overlaps(
+        character,
+        [
+            (
+                0,
+                api.pose_character(
+                    character, api.rotate_joint(character, "right_shoulder", 1.6)
+                ).deformation.U,
+            )
+        ],
+    )
+    assert [(p["a"], p["b"]) for p in found["pairs"]] == [(o.bone_a, o.bone_b) for o in expected] != []

@@ -14,6 +14,8 @@ The WebSocket protocol (JSON text messages; ``id`` is echoed back):
 * ``{"id": 1, "type": "pose", "positions": [[x, y], ...]}``: every joint's position, in the
   skeleton's order. Reply: ``{"id": 1, "type": "mesh", "U": [x0, y0, x1, y1, ...]}``, the
   deformed vertices (the needle model, then the joint-area solve).
+* ``{"type": "overlaps", "positions": [...]}``: the regions that overlap at the same depth in
+  that pose. Reply: ``{"type": "overlaps", "pairs": [{"a": bone, "b": bone, "area": px2}]}``.
 * Edits of the regions, each saved in the project before the reply (atomic writes, as the
   CLI's), each recorded for undo: ``{"type": "depth", "at": [x, y], "by": 1}`` (the region
   there one layer up or down), ``{"type": "correct", "bone": name, "curve": [[x, y], ...]}``
@@ -35,6 +37,7 @@ from typing import Any
 import numpy as np
 from fastapi import FastAPI, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import FileResponse, JSONResponse, Response
+from numpy.typing import NDArray
 from starlette.exceptions import HTTPException
 
 from toonmotion import api
@@ -216,7 +219,13 @@ def answer(editing: Editing, text: str) -> dict[str, Any]:
             ident = None
         kind = message.get("type")
         if kind == "pose":
-            return {"id": ident, "type": "mesh", "U": _posed(editing, message.get("positions"))}
+            U = _posed(editing, message.get("positions"))
+            return {"id": ident, "type": "mesh", "U": np.round(U, 3).ravel().tolist()}
+        if kind == "overlaps":
+            U = _posed(editing, message.get("positions"))
+            found = api.same_depth_overlaps(editing.character, [(0, U)])
+            pairs = [{"a": o.bone_a, "b": o.bone_b, "area": round(o.area, 1)} for o in found]
+            return {"id": ident, "type": "overlaps", "pairs": pairs}
         if kind in _EDITS:
             editing.edited(_EDITS[kind](editing.character, message))
             return {"id": ident, "type": "regions", **regions(editing.character)}
@@ -260,10 +269,10 @@ _EDITS = {
     "undo": lambda character, message: api.undo_edits(character),
     "redo": lambda character, message: api.redo_edits(character),
 }
-_KINDS = ("pose", *_EDITS)
+_KINDS = ("pose", "overlaps", *_EDITS)
 
 
-def _posed(editing: Editing, positions: Any) -> list[float]:
+def _posed(editing: Editing, positions: Any) -> NDArray[np.float64]:
     skeleton = editing.character.skeleton
     if not isinstance(positions, list) or len(positions) != len(skeleton):
         raise PoseError(f"'positions' must list [x, y] for each of the {len(skeleton)} joints")
@@ -274,8 +283,7 @@ def _posed(editing: Editing, positions: Any) -> list[float]:
     if array.shape != (len(skeleton), 2):
         raise PoseError("'positions' must be [x, y] pairs of numbers")
     pose = check_pose(skeleton, Pose(array))
-    frame = api.pose_character(editing.deformer, pose)
-    return np.round(frame.deformation.U, 3).ravel().tolist()
+    return api.pose_character(editing.deformer, pose).deformation.U
 
 
 def _bug(error: Exception) -> str:

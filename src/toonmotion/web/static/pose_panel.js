@@ -17,7 +17,8 @@ export function mount(ctx) {
   side.innerHTML = `<h2>Pose</h2>
     <p>Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent.</p>
     <p><button id="pose-reset">Reset to the rest pose</button></p>
-    <p id="pose-timing"></p>`;
+    <p id="pose-timing"></p>
+    <div id="pose-overlaps"></div>`;
 
   view.drawOverlay = (pen) => {
     const ratio = window.devicePixelRatio || 1;
@@ -90,9 +91,28 @@ export function mount(ctx) {
     posed();
   };
   const up = () => {
+    if (dragging < 0) return;
     dragging = -1;
     view.draw();
+    overlaps();
   };
+
+  // Regions at the same depth that overlap in this pose: which is in front is undecided.
+  async function overlaps() {
+    const box = document.getElementById("pose-overlaps");
+    try {
+      const reply = await live.request({ type: "overlaps", positions });
+      box.replaceChildren(...reply.pairs.map(({ a, b, area }) => {
+        const p = document.createElement("p");
+        p.className = "warning";
+        p.textContent = `${a} and ${b} overlap at the same depth (${Math.round(area)} px²): ` +
+          "bring one forward in the Regions panel.";
+        return p;
+      }));
+    } catch (error) {
+      showError(error.message);
+    }
+  }
   overlay.addEventListener("pointerdown", down);
   overlay.addEventListener("pointermove", move);
   overlay.addEventListener("pointerup", up);
@@ -100,6 +120,7 @@ export function mount(ctx) {
   document.getElementById("pose-reset").onclick = () => {
     rest.forEach((p, i) => { positions[i] = p.slice(); });
     posed();
+    overlaps();
   };
   status("drag a joint");
   view.draw();
