@@ -1,0 +1,67 @@
+"""toonmotion's public library API: the calls every front end makes.
+
+The command line (:mod:`toonmotion.cli`) and the editor parse what the user gave, call one of
+these, and report. Each is a thin, documented wrapper; the work sits in the layers below
+(``docs/architecture.md``). They are re-exported from the package, so ``toonmotion.rig_image(...)`` works.
+
+>>> import numpy as np
+>>> import toonmotion
+>>> from toonmotion.samples import sample_character
+>>> drawing, skeleton = sample_character()
+>>> hero = toonmotion.rig_image(drawing, skeleton=skeleton)
+>>> frame = toonmotion.pose_character(hero, toonmotion.rotate_joint(hero, "right_elbow", 0.8))
+>>> frame.deformation.U.shape == hero.mesh.V.shape
+True
+>>> picture = toonmotion.render_pose(hero, frame)
+>>> picture.dtype, picture.shape[2]
+(dtype('uint8'), 4)
+"""
+
+from __future__ import annotations
+
+from toonmotion.animate.animation import Animation, SameDepthOverlap, exaggerate, same_depth_overlaps
+from toonmotion.animate.cartoon_filter import FilterSettings
+from toonmotion.animate.motion import Motion
+from toonmotion.api.animation import animate_character, filter_motion
+from toonmotion.api.capture import track_footage
+from toonmotion.api.posing import PosedFrame, pose_character, pose_view, render_pose, rotate_joint
+from toonmotion.api.rigging import correct_regions, redo_edits, rig_image, set_depth, undo_edits
+from toonmotion.capture.footage import Capture, suggest_joints
+from toonmotion.capture.retarget import retarget
+from toonmotion.capture.tracker import TrackSettings
+from toonmotion.deform.deformer import DeformSettings
+from toonmotion.io.project import load_project, save_project
+from toonmotion.render.sequence import write_animation
+from toonmotion.rig.character import Character, RigSettings
+
+__all__ = [
+    "Animation",
+    "Capture",
+    "Character",
+    "DeformSettings",
+    "FilterSettings",
+    "Motion",
+    "PosedFrame",
+    "RigSettings",
+    "SameDepthOverlap",
+    "TrackSettings",
+    "animate_character",
+    "correct_regions",
+    "exaggerate",
+    "filter_motion",
+    "load_project",
+    "pose_character",
+    "pose_view",
+    "redo_edits",
+    "render_pose",
+    "retarget",
+    "rig_image",
+    "rotate_joint",
+    "same_depth_overlaps",
+    "save_project",
+    "set_depth",
+    "suggest_joints",
+    "track_footage",
+    "undo_edits",
+    "write_animation",
+]

@@ -1,0 +1,114 @@
+"""Animating a rigged drawing and exaggerating motion: the calls behind ``animate`` and
+``filter``."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from toonmotion.animate.animation import (
+    Animation,
+    animate_motion,
+    animate_timeline,
+    exaggerate,
+)
+from toonmotion.animate.cartoon_filter import FilterSettings
+from toonmotion.animate.motion import Motion
+from toonmotion.animate.timeline import Timeline
+from toonmotion.deform.deformer import Deformer, DeformSettings
+from toonmotion.rig.character import Character
+
+
+def animate_character(
+    character: Character | Deformer,
+    source: Timeline | Motion,
+    *,
+    settings: DeformSettings | None = None,
+    exaggeration: FilterSettings | None = None,
+    method: str = "interpolate",
+    fps: float | None = None,
+) -> Animation:
+    """Deform every frame of key-frames (a :class:`Timeline`) or of a :class:`Motion`.
+
+    Parameters
+    ----------
+    character : Character or Deformer
+    source : Timeline or Motion
+        Key-frames (:func:`toonmotion.io.pose_json.load_keyframes`), or a motion captured,
+        retargeted or read from a file; its skeleton must be ``character``'s.
+    settings : DeformSettings, optional
+        Used only when ``character`` is a Character.
+    exaggeration : FilterSettings, optional
+        Runs the cartoon animation filter (thesis 5.2) over the poses first.
+    method : {"interpolate", "solve"}
+        For key-frames: blend the keys' solved meshes (thesis eq. 3.11), or run stage two on every
+        in-between too (slower, steadier on large turns).
+    fps : float, optional
+        Overrides a motion's frame rate (a timeline carries its own).
+
+    Returns
+    -------
+    Animation
+        Every frame's joints and deformed mesh, for :func:`write_animation`.
+
+    Examples
+    --------
+    >>> from toonmotion.api import rig_image
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> keys = sample_keyframes(hero.skeleton)
+    >>> animation = animate_character(hero, keys)
+    >>> len(animation.meshes) == keys.keys[-1].frame - keys.keys[0].frame + 1
+    True
+    """
+    deformer = character if isinstance(character, Deformer) else Deformer(character, settings)
+    if isinstance(source, Motion):
+        return animate_motion(deformer, source, exaggeration=exaggeration, fps=fps)
+    return animate_timeline(deformer, source, exaggeration=exaggeration, method=method)
+
+
+def filter_motion(
+    motion: Motion,
+    strength: float,
+    *,
+    sigma: float = 3.0,
+    shift: float = 0.0,
+    joints: Sequence[str] | None = None,
+) -> Motion:
+    """The cartoon animation filter on a motion (thesis 5.2): anticipation and follow-through.
+
+    Parameters
+    ----------
+    motion : Motion
+    strength : float
+        The filter's ``A``: about 1 to 2 is lively, 0 leaves the motion as it is.
+    sigma : float
+        The filter's width in frames.
+    shift : float
+        A delay in frames (positive: the exaggeration lags the motion).
+    joints : sequence of str, optional
+        Filter only these joints' paths, carrying what hangs below them. By default the root's
+        path and every bone's angle and length are filtered.
+
+    Returns
+    -------
+    Motion
+        Same skeleton, frames and fps.
+
+    Raises
+    ------
+    FilterError
+        A width or shift the motion cannot carry, or an unknown joint.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from toonmotion.rig.skeleton import Skeleton
+    >>> arm = Skeleton.from_joints([("shoulder", None, (0, 0)), ("hand", "shoulder", (10, 0))])
+    >>> steps = np.zeros((20, 2, 2)); steps[:, 1, 0] = 10; steps[10:, :, 0] += 30  # a jump right
+    >>> moved = filter_motion(Motion(arm, steps, fps=12.0), 1.0).positions[:, 0, 0]
+    >>> bool(moved.min() < 0 and moved.max() > 30)  # it winds up and overshoots
+    True
+    """
+    return exaggerate(motion, FilterSettings(strength=strength, sigma=sigma, shift=shift), joints=joints)

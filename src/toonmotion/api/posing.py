@@ -1,0 +1,187 @@
+"""Posing a rigged drawing and drawing the result: the calls behind ``pose``, ``tune`` and the
+editor's Pose panel."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion.animate.pose_filter import exaggerate_pose
+from toonmotion.deform.deformer import Deformation, Deformer, DeformSettings
+from toonmotion.deform.tuning import TuningEdit, apply_tuning
+from toonmotion.render.frame import fit_view, render_frame
+from toonmotion.rig.character import Character
+from toonmotion.rig.pose import Pose, rotate_about
+
+
+@dataclass(frozen=True)
+class PosedFrame:
+    """A character deformed to one pose.
+
+    Attributes
+    ----------
+    pose : Pose
+        The joint positions used (after the single-frame filter, when asked for).
+    deformation : Deformation
+        ``U`` (the deformed vertices), stage one's result, stage two's iterations and energies.
+    """
+
+    pose: Pose
+    deformation: Deformation
+
+
+def rotate_joint(character: Character, joint: str, angle: float) -> Pose:
+    """The rest pose with the bones below ``joint`` turned by ``angle`` radians about it.
+
+    Parameters
+    ----------
+    character : Character
+    joint : str
+        A joint of ``character.skeleton``; it stays put and everything below it turns.
+    angle : float
+        Radians; positive turns from +x towards +y (clockwise on screen, where y points down).
+
+    Returns
+    -------
+    Pose
+        Every joint's position, for :func:`pose_character`.
+
+    Examples
+    --------
+    >>> from toonmotion.api import rig_image
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> pose = rotate_joint(hero, "right_elbow", 0.5)
+    >>> moved = np.linalg.norm(pose.positions - hero.skeleton.positions, axis=1) > 1e-9
+    >>> [name for name, m in zip(hero.skeleton.names, moved) if m]
+    ['right_hand']
+    """
+    skeleton = character.skeleton
+    return Pose(rotate_about(skeleton, skeleton.positions, joint, angle))
+
+
+def pose_character(
+    character: Character | Deformer,
+    pose: Pose,
+    *,
+    edits: Sequence[TuningEdit] = (),
+    accel: tuple[float, float] | None = None,
+    fixed: Sequence[str] = (),
+    root: str | None = None,
+    settings: DeformSettings | None = None,
+) -> PosedFrame:
+    """Deform a character to a pose (needle model, then the joint-area solve), then apply ``edits``.
+
+    Parameters
+    ----------
+    character : Character or Deformer
+        The rigged drawing, or a :class:`Deformer` already built for it: build one when posing
+        many times, since building it is the costly step.
+    pose : Pose
+        Every joint's position, in ``character.skeleton``'s order.
+    edits : sequence of TuningEdit, optional
+        Fine-tuning sketch curves and drags, in drawing pixels, applied in order.
+    accel : (float, float), optional
+        An acceleration in pixels at ``root``: the single-frame cartoon filter (thesis 5.2.1)
+        first exaggerates the pose as if it moved so.
+    fixed : sequence of str, optional
+        Joints ``accel`` must not move (feet on the ground).
+    root : str, optional
+        Where ``accel`` acts; the skeleton's root by default.
+    settings : DeformSettings, optional
+        Used only when ``character`` is a Character.
+
+    Returns
+    -------
+    PosedFrame
+        The pose used and the deformation (``deformation.U``: the deformed mesh vertices).
+
+    Examples
+    --------
+    >>> from toonmotion.api import rig_image
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> frame = pose_character(hero, rotate_joint(hero, "right_elbow", 0.8))
+    >>> frame.deformation.U.shape == hero.mesh.V.shape
+    True
+    """
+    deformer = character if isinstance(character, Deformer) else Deformer(character, settings)
+    if accel is not None:
+        pose = exaggerate_pose(deformer.character.skeleton, pose, accel, tuple(fixed), root=root)
+    result = apply_tuning(deformer, pose, deformer.deform(pose), tuple(edits))
+    return PosedFrame(pose=pose, deformation=result)
+
+
+def render_pose(
+    character: Character,
+    frame: PosedFrame,
+    *,
+    size: tuple[int, int] | None = None,
+    background: tuple[int, int, int] | None = None,
+    overlays: Sequence[str] = (),
+) -> NDArray[np.uint8]:
+    """A posed frame as a picture, its view grown to hold the whole figure (:func:`pose_view`).
+
+    Parameters
+    ----------
+    character : Character
+    frame : PosedFrame
+        From :func:`pose_character`.
+    size : (int, int), optional
+        ``(width, height)`` of the picture; by default the view at one pixel per drawing pixel.
+    background : (int, int, int), optional
+        An opaque RGB background; transparent by default.
+    overlays : sequence of str, optional
+        Drawn over the figure: any of :data:`toonmotion.render.frame.OVERLAYS` (the mesh, the
+        skeleton, ...).
+
+    Returns
+    -------
+    (H, W, 4) uint8
+        RGBA pixels.
+
+    Examples
+    --------
+    >>> from toonmotion.api import rig_image
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> picture = render_pose(hero, pose_character(hero, rotate_joint(hero, "head", 0.3)),
+    ...                       size=(120, 160), background=(255, 255, 255))
+    >>> picture.shape, bool((picture[..., 3] == 255).all())
+    ((160, 120, 4), True)
+    """
+    return render_frame(character, frame.deformation.U, pose=frame.pose, size=size,
+                        view=pose_view(character, frame), background=background, overlays=overlays)
+
+
+def pose_view(character: Character, frame: PosedFrame) -> tuple[float, float, float, float]:
+    """The view :func:`render_pose` draws: the drawing's canvas and the posed figure.
+
+    Parameters
+    ----------
+    character : Character
+    frame : PosedFrame
+        From :func:`pose_character`.
+
+    Returns
+    -------
+    (x0, y0, x1, y1) float
+        In drawing pixels; it holds the drawing's own canvas and every deformed vertex.
+
+    Examples
+    --------
+    >>> from toonmotion.api import rig_image
+    >>> from toonmotion.samples import sample_character
+    >>> drawing, skeleton = sample_character(scale=0.5)
+    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> x0, y0, x1, y1 = pose_view(hero, pose_character(hero, rotate_joint(hero, "hip", 3.0)))
+    >>> (x0, y0) <= (0, 0) and (x1, y1) >= (drawing.shape[1], drawing.shape[0])
+    True
+    """
+    return fit_view(character, [frame.deformation.U])
