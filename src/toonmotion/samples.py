@@ -28,6 +28,7 @@ from shapely import affinity
 from shapely.geometry import LineString, Point, Polygon, box
 from shapely.ops import unary_union
 
+from toonmotion.rig.character import Character
 from toonmotion.rig.skeleton import Skeleton
 
 WIDTH, HEIGHT = 420, 600
@@ -120,6 +121,27 @@ def sample_character(*, scale: float = 1.0) -> tuple[NDArray[np.uint8], Skeleton
     """
     scale = _check_scale(scale)
     return _render(scale), _skeleton(scale)
+
+
+def sample_rig(*, scale: float = 0.5) -> Character:
+    """The sample character rigged with its skeleton: a :class:`Character` to try things on.
+
+    Parameters
+    ----------
+    scale : float
+        As for :func:`sample_character`; half size by default (210 x 300), which rigs in
+        about a third of a second.
+
+    Examples
+    --------
+    >>> hero = sample_rig()
+    >>> hero.size, len(hero.skeleton)
+    ((210, 300), 17)
+    """
+    from toonmotion.rig.pipeline import rig_drawing
+
+    drawing, skeleton = sample_character(scale=scale)
+    return rig_drawing(drawing, skeleton=skeleton)
 
 
 def sample_character_on(

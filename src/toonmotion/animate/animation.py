@@ -176,9 +176,9 @@ def same_depth_overlaps(
 
     Examples
     --------
-    >>> from toonmotion.samples import sample_character
+    >>> from toonmotion.samples import sample_rig
     >>> from toonmotion.rig.pipeline import rig_drawing
-    >>> hero = rig_drawing(*sample_character(scale=0.5)[:1], skeleton=sample_character(scale=0.5)[1])
+    >>> hero = sample_rig()
     >>> same_depth_overlaps(hero, [(0, hero.mesh.V)])  # the rest pose overlaps nothing
     []
     """

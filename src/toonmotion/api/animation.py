@@ -52,10 +52,8 @@ def animate_character(
 
     Examples
     --------
-    >>> from toonmotion.api import rig_image
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> from toonmotion.sample_animation import sample_keyframes
     >>> keys = sample_keyframes(hero.skeleton)
     >>> animation = animate_character(hero, keys)

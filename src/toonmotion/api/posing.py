@@ -51,10 +51,8 @@ def rotate_joint(character: Character, joint: str, angle: float) -> Pose:
 
     Examples
     --------
-    >>> from toonmotion.api import rig_image
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> pose = rotate_joint(hero, "right_elbow", 0.5)
     >>> moved = np.linalg.norm(pose.positions - hero.skeleton.positions, axis=1) > 1e-9
     >>> [name for name, m in zip(hero.skeleton.names, moved) if m]
@@ -102,10 +100,8 @@ def pose_character(
 
     Examples
     --------
-    >>> from toonmotion.api import rig_image
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> frame = pose_character(hero, rotate_joint(hero, "right_elbow", 0.8))
     >>> frame.deformation.U.shape == hero.mesh.V.shape
     True
@@ -147,10 +143,8 @@ def render_pose(
 
     Examples
     --------
-    >>> from toonmotion.api import rig_image
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> picture = render_pose(hero, pose_character(hero, rotate_joint(hero, "head", 0.3)),
     ...                       size=(120, 160), background=(255, 255, 255))
     >>> picture.shape, bool((picture[..., 3] == 255).all())
@@ -176,12 +170,10 @@ def pose_view(character: Character, frame: PosedFrame) -> tuple[float, float, fl
 
     Examples
     --------
-    >>> from toonmotion.api import rig_image
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> x0, y0, x1, y1 = pose_view(hero, pose_character(hero, rotate_joint(hero, "hip", 3.0)))
-    >>> (x0, y0) <= (0, 0) and (x1, y1) >= (drawing.shape[1], drawing.shape[0])
+    >>> (x0, y0) <= (0, 0) and (x1, y1) >= hero.size
     True
     """
     return fit_view(character, [frame.deformation.U])

@@ -93,9 +93,8 @@ def set_depth(character: Character, value: int, *, bone: str | None = None,
 
     Examples
     --------
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> hero = set_depth(hero, 0, at=tuple(hero.skeleton.positions[7]), by=1)
     >>> int(hero.depth.max()), len(hero.edits)
     (1, 1)
@@ -124,9 +123,8 @@ def correct_regions(character: Character, bone: str, curve: ArrayLike) -> Charac
 
     Examples
     --------
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> x, y = hero.skeleton.positions[hero.skeleton.index("head")]
     >>> lasso = [(x - 9, y - 9), (x + 9, y - 9), (x + 9, y + 9), (x - 9, y + 9)]
     >>> fixed = correct_regions(hero, "neck", lasso)
@@ -152,9 +150,8 @@ def undo_edits(character: Character, steps: int = 1) -> Character:
 
     Examples
     --------
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> back = undo_edits(set_depth(hero, 2, bone="head"))
     >>> int(back.depth.max()), len(back.undone)
     (0, 1)
@@ -177,9 +174,8 @@ def redo_edits(character: Character, steps: int = 1) -> Character:
 
     Examples
     --------
-    >>> from toonmotion.samples import sample_character
-    >>> drawing, skeleton = sample_character(scale=0.5)
-    >>> hero = rig_image(drawing, skeleton=skeleton)
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
     >>> again = redo_edits(undo_edits(set_depth(hero, 2, bone="head")))
     >>> int(again.depth.max()), len(again.edits)
     (2, 1)

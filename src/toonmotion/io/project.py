@@ -228,9 +228,9 @@ def save_project(path: str | Path, character: Character) -> None:
     Examples
     --------
     >>> import tempfile
-    >>> from toonmotion.samples import sample_character
+    >>> from toonmotion.samples import sample_rig
     >>> from toonmotion.rig.pipeline import rig_drawing
-    >>> hero = rig_drawing(*sample_character(scale=0.5)[:1], skeleton=sample_character(scale=0.5)[1])
+    >>> hero = sample_rig()
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     save_project(Path(folder) / "hero", hero)
     ...     again = load_project(Path(folder) / "hero")

@@ -83,10 +83,10 @@ def write_animation(path: str | Path, character: Character, animation: Animation
     Examples
     --------
     >>> import tempfile
-    >>> from toonmotion.samples import sample_character
+    >>> from toonmotion.samples import sample_rig
     >>> from toonmotion.api import animate_character, rig_image
     >>> from toonmotion.sample_animation import sample_keyframes
-    >>> hero = rig_image(*sample_character(scale=0.5)[:1], skeleton=sample_character(scale=0.5)[1])
+    >>> hero = sample_rig()
     >>> animation = animate_character(hero, sample_keyframes(hero.skeleton, fps=4.0))
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     count, size = write_animation(Path(folder) / "hop.gif", hero, animation, size=(80, 100))
