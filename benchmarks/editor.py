@@ -7,18 +7,27 @@ skeleton) is rigged to about 1,500 vertices and served by the editor (``toonmoti
 free loopback port. A client then drags one joint through a sweep of poses, as a pointer does,
 one message at a time: each message is sent when the previous reply has arrived.
 
+Then CLIENTS clients at once drag joints on the same server, each MESSAGES messages, each
+waiting for its reply before sending the next (a load test, on loopback).
+
 Keys, one line per drawing:
   drawing, vertices       mesh size
   drags                   messages timed
   roundtrip_median_ms     message sent -> deformed vertices received (goal: at most 15)
   roundtrip_p99_ms        the 99th percentile (goal: at most 50)
   updates_per_s           1000 / median (goal: at least 30)
+  load_clients            clients at once
+  load_messages           messages answered in all, and load_errors: error replies or lost messages
+  load_per_client_per_s   replies each client got per second, the median client
+  load_p99_ms             the 99th percentile round trip under load
+  peak_rss_mb             the benchmark process's peak memory (server included)
 """
 
 import argparse
 import asyncio
 import json
 import math
+import resource
 import socket
 import statistics
 import sys
@@ -37,6 +46,8 @@ from toonmotion.web.server import create_app, new_token
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "drawings"
 DRAGS = 300
+CLIENTS = 50
+MESSAGES = 40
 
 
 def _serve(folder: Path):
@@ -63,6 +74,25 @@ def _sweep(character, count):
         yield api.rotate_joint(character, joint, angle).positions.tolist()
 
 
+async def _load(url, poses):
+    """CLIENTS clients dragging at once; returns (per-client rates, all round trips, errors)."""
+
+    async def client():
+        times, errors = [], 0
+        async with websockets.connect(url, max_size=None) as socket_:
+            started = time.perf_counter()
+            for ident, positions in enumerate(poses):
+                sent = time.perf_counter()
+                await socket_.send(json.dumps({"id": ident, "type": "pose", "positions": positions}))
+                reply = json.loads(await socket_.recv())
+                times.append((time.perf_counter() - sent) * 1000)
+                errors += reply.get("type") != "mesh" or reply.get("id") != ident
+            return len(poses) / (time.perf_counter() - started), times, errors
+
+    results = await asyncio.gather(*(client() for _ in range(CLIENTS)))
+    return [r[0] for r in results], [t for r in results for t in r[1]], sum(r[2] for r in results)
+
+
 async def _drag(url, poses):
     times = []
     async with websockets.connect(url, max_size=None) as socket_:
@@ -86,6 +116,7 @@ def bench(folder):
         server, thread, url = _serve(project)
         try:
             times = asyncio.run(_drag(url, list(_sweep(character, DRAGS))))
+            rates, loaded, errors = asyncio.run(_load(url, list(_sweep(character, MESSAGES))))
         finally:
             server.should_exit = True
             thread.join(timeout=10)
@@ -97,6 +128,12 @@ def bench(folder):
         "roundtrip_median_ms": round(median, 2),
         "roundtrip_p99_ms": round(statistics.quantiles(times, n=100)[98], 2),
         "updates_per_s": round(1000 / median, 1),
+        "load_clients": CLIENTS,
+        "load_messages": len(loaded),
+        "load_errors": errors,
+        "load_per_client_per_s": round(statistics.median(rates), 1),
+        "load_p99_ms": round(statistics.quantiles(loaded, n=100)[98], 1),
+        "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
     }
 
 
