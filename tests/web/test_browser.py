@@ -177,3 +177,51 @@ def test_regions_click_a_region_forward_lasso_vertices_to_a_bone_and_undo(page, 
     page.wait_for_function("window.toonmotion.project.edits === 1 && window.toonmotion.project.undone === 1")
     assert len(api.load_project(folder).edits) == 1
     assert page.errors == [] and page.locator("#error").is_hidden()
+
+
+def _set_frame(page, frame: int) -> None:
+    page.evaluate(
+        """(frame) => { const s = document.getElementById('timeline-scrub');
+        s.value = String(frame); s.dispatchEvent(new Event('input')); }""",
+        frame,
+    )
+    page.wait_for_function(
+        "(f) => document.getElementById('timeline-frame').textContent === String(f)", arg=frame
+    )
+    page.wait_for_timeout(300)
+
+
+def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
+    from toonmotion.io.pose_json import load_keyframes
+
+    folder = editor[1]
+    page.click("nav button[data-panel=pose]")
+    page.click("#pose-reset")
+    page.click("nav button[data-panel=timeline]")
+    page.click("#timeline-key")  # the rest pose at frame 0
+    page.wait_for_function(
+        "window.toonmotion.project.keys && window.toonmotion.project.keys.keys.length === 1"
+    )
+    _set_frame(page, 12)
+    page.click("nav button[data-panel=pose]")
+    x, y = _joint_on_screen(page, "right_hand")
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + 40, y - 90, steps=10)
+    page.mouse.up()
+    page.wait_for_timeout(300)
+    page.click("nav button[data-panel=timeline]")
+    page.click("#timeline-key")  # the raised hand at frame 12
+    page.wait_for_function("window.toonmotion.project.keys.keys.length === 2")
+    timeline = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
+    assert [k.frame for k in timeline.keys] == [0, 12]  # saved in the project as it happened
+    _set_frame(page, 6)
+    served = np.reshape(page.evaluate("Array.from(window.toonmotion.view.vertices)"), (-1, 2))
+    expected = api.animate_character(api.load_project(folder), timeline).meshes[6][1]
+    np.testing.assert_allclose(served, expected, atol=1e-2)  # the library's in-between, drawn
+    _close_to_golden(_stage(page), "inbetween.png")
+    page.click("#timeline-play")
+    page.wait_for_timeout(800)
+    page.click("#timeline-play")
+    assert page.locator("#timeline-play").text_content() == "Play"
+    assert page.errors == [] and page.locator("#error").is_hidden()

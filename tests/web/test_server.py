@@ -241,3 +241,70 @@ def test_the_overlaps_of_a_pose_name_the_regions_at_one_depth(client, project):
         ],
     )
     assert [(p["a"], p["b"]) for p in found["pairs"]] == [(o.bone_a, o.bone_b) for o in expected] != []
+
+
+def test_keys_are_saved_in_the_project_folder_and_frames_are_the_librarys_animation(editable):
+    from toonmotion.io.pose_json import load_keyframes
+
+    folder, client = editable
+    character = api.load_project(folder)
+    rest = character.skeleton.positions.tolist()
+    bent = _pose(character, "right_elbow", 1.0)
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        assert "no key-frames yet" in _send(socket, {"type": "frame", "frame": 3})["message"]
+        _send(socket, {"type": "set_key", "frame": 0, "positions": rest})
+        reply = _send(socket, {"type": "set_key", "frame": 8, "positions": bent})
+        assert [k["frame"] for k in reply["keys"]["keys"]] == [0, 8]
+        timeline = load_keyframes(folder / "keys.json", character.skeleton)  # saved before the reply
+        assert [k.frame for k in timeline.keys] == [0, 8]
+        middle = _send(socket, {"type": "frame", "frame": 4})
+        beyond = _send(socket, {"type": "frame", "frame": 99})
+        moved = _send(socket, {"type": "move_key", "frame": 8, "to": 10})
+        assert [k["frame"] for k in moved["keys"]["keys"]] == [0, 10]
+        clash = _send(socket, {"type": "move_key", "frame": 0, "to": 10})
+        assert clash["type"] == "error" and "has a key already" in clash["message"]
+        _send(socket, {"type": "delete_key", "frame": 10})
+        last = _send(socket, {"type": "delete_key", "frame": 0})
+    expected = api.animate_character(character, timeline)
+    np.testing.assert_allclose(np.reshape(middle["U"], (-1, 2)), expected.meshes[4][1], atol=1e-3)
+    np.testing.assert_allclose(middle["positions"], expected.motion.positions[4], atol=1e-9)
+    assert beyond["frame"] == 8  # clamped to the keys' span
+    assert last == {"id": None, "type": "keys", "keys": None} and not (folder / "keys.json").exists()
+
+
+def test_the_editor_opens_with_the_projects_keys(editable):
+    folder, client = editable
+    character = api.load_project(folder)
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _send(socket, {"type": "set_key", "frame": 5, "positions": character.skeleton.positions.tolist()})
+    again = TestClient(create_app(folder, token=TOKEN))
+    data = again.get("/api/project", headers={"X-Toonmotion-Token": TOKEN}).json()
+    assert [k["frame"] for k in data["keys"]["keys"]] == [5]
+
+
+@pytest.mark.parametrize(
+    ("message", "said"),
+    [
+        ({"type": "set_key", "frame": -1, "positions": []}, "a frame number"),
+        ({"type": "set_key", "frame": 1.5, "positions": []}, "a frame number"),
+        ({"type": "set_key", "frame": True, "positions": []}, "a frame number"),
+        ({"type": "set_key", "frame": 200_000, "positions": None}, "'positions' must list"),
+        ({"type": "delete_key", "frame": 3}, "no key-frames yet"),
+        ({"type": "move_key", "frame": 3, "to": 4}, "no key-frames yet"),
+    ],
+)
+def test_a_bad_key_edit_changes_nothing(editable, message, said):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        reply = _send(socket, message)
+    assert reply["type"] == "error" and said in reply["message"], reply
+    assert not (folder / "keys.json").exists()
+
+
+def test_a_key_beyond_the_frames_limit_is_refused(editable):
+    folder, client = editable
+    rest = api.load_project(folder).skeleton.positions.tolist()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        reply = _send(socket, {"type": "set_key", "frame": 100_000, "positions": rest})
+    assert reply["type"] == "error" and "over the limit frames=100,000" in reply["message"]
+    assert not (folder / "keys.json").exists()

@@ -22,7 +22,7 @@ from __future__ import annotations
 from toonmotion.animate.animation import Animation, SameDepthOverlap, exaggerate, same_depth_overlaps
 from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
-from toonmotion.api.animation import animate_character, filter_motion
+from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, set_key
 from toonmotion.api.capture import track_footage
 from toonmotion.api.posing import PosedFrame, pose_character, pose_view, render_pose, rotate_joint
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_image, set_depth, undo_edits
@@ -47,9 +47,11 @@ __all__ = [
     "TrackSettings",
     "animate_character",
     "correct_regions",
+    "delete_key",
     "exaggerate",
     "filter_motion",
     "load_project",
+    "move_key",
     "pose_character",
     "pose_view",
     "redo_edits",
@@ -60,6 +62,7 @@ __all__ = [
     "same_depth_overlaps",
     "save_project",
     "set_depth",
+    "set_key",
     "suggest_joints",
     "track_footage",
     "undo_edits",

@@ -13,9 +13,12 @@ from toonmotion.animate.animation import (
 )
 from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
-from toonmotion.animate.timeline import Timeline
+from toonmotion.animate.timeline import Keyframe, Timeline, make_timeline
 from toonmotion.deform.deformer import Deformer, DeformSettings
+from toonmotion.errors import KeyframeError
 from toonmotion.rig.character import Character
+from toonmotion.rig.pose import Pose, check_pose
+from toonmotion.rig.skeleton import Skeleton
 
 
 def animate_character(
@@ -110,3 +113,105 @@ def filter_motion(
     True
     """
     return exaggerate(motion, FilterSettings(strength=strength, sigma=sigma, shift=shift), joints=joints)
+
+
+def set_key(skeleton: Skeleton, timeline: Timeline | None, frame: int, pose: Pose, *,
+            fps: float = 12.0, ease: str = "in-out") -> Timeline:
+    """``timeline`` with a key pose at ``frame`` (a new one, or replacing that frame's pose).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        The character's skeleton; the pose is checked against it.
+    timeline : Timeline or None
+        The key-frames so far (None: the first key).
+    frame : int
+        The frame number, from 0 (within the ``frames`` limit).
+    pose : Pose
+    fps, ease : float, str
+        For a first key: the animation's frame rate and easing; later keys keep the timeline's.
+
+    Returns
+    -------
+    Timeline
+        A replaced key keeps its fine-tuning edits.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
+    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
+    >>> from toonmotion.api import rotate_joint
+    >>> keys = set_key(hero.skeleton, keys, 12, rotate_joint(hero, "right_elbow", 1.0))
+    >>> [key.frame for key in keys.keys], keys.fps
+    ([0, 12], 12.0)
+    """
+    old = {key.frame: key for key in timeline.keys} if timeline is not None else {}
+    edits = old[frame].edits if frame in old else ()
+    if isinstance(frame, bool) or not isinstance(frame, int) or frame < 0:
+        raise KeyframeError(f"a key's frame must be a whole number >= 0, got {frame!r}")
+    old[frame] = Keyframe(frame, check_pose(skeleton, pose, where=f"key-frame {frame}"), edits)
+    if timeline is not None:
+        fps, ease = timeline.fps, timeline.ease
+    return make_timeline(skeleton, old.values(), fps=fps, ease=ease)
+
+
+def delete_key(skeleton: Skeleton, timeline: Timeline, frame: int) -> Timeline | None:
+    """``timeline`` without its key at ``frame`` (None when it was the last key).
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
+    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
+    >>> delete_key(hero.skeleton, keys, 0) is None
+    True
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    timeline : Timeline
+    frame : int
+        A frame that has a key.
+
+    Returns
+    -------
+    Timeline or None
+    """
+    left = [key for key in timeline.keys if key.frame != frame]
+    if len(left) == len(timeline.keys):
+        raise KeyframeError(f"there is no key at frame {frame}")
+    return make_timeline(skeleton, left, fps=timeline.fps, ease=timeline.ease) if left else None
+
+
+def move_key(skeleton: Skeleton, timeline: Timeline, frame: int, to: int) -> Timeline:
+    """``timeline`` with its key at ``frame`` moved to frame ``to`` (which must be free).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    timeline : Timeline
+    frame, to : int
+        The key's frame, and where it goes.
+
+    Returns
+    -------
+    Timeline
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
+    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
+    >>> [key.frame for key in move_key(hero.skeleton, keys, 0, 5).keys]
+    [5]
+    """
+    frames = [key.frame for key in timeline.keys]
+    if frame not in frames:
+        raise KeyframeError(f"there is no key at frame {frame}")
+    if to != frame and to in frames:
+        raise KeyframeError(f"frame {to} has a key already; delete it first or choose another frame")
+    if isinstance(to, bool) or not isinstance(to, int) or to < 0:
+        raise KeyframeError(f"a key's frame must be a whole number >= 0, got {to!r}")
+    moved = [Keyframe(to, key.pose, key.edits) if key.frame == frame else key for key in timeline.keys]
+    return make_timeline(skeleton, moved, fps=timeline.fps, ease=timeline.ease)

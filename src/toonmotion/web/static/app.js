@@ -4,8 +4,9 @@
 import { MeshView } from "./mesh_view.js";
 import * as posePanel from "./pose_panel.js";
 import * as regionsPanel from "./regions_panel.js";
+import * as timelinePanel from "./timeline_panel.js";
 
-const PANELS = [posePanel, regionsPanel];
+const PANELS = [posePanel, regionsPanel, timelinePanel];
 
 const token = new URLSearchParams(location.search).get("token") || "";
 

@@ -11,7 +11,9 @@ const HANDLE = 7; // joint handle radius, CSS pixels
 export function mount(ctx) {
   const { project, view, live, side, status, showError } = ctx;
   const rest = project.joints.map((j) => j.position.slice());
-  const positions = rest.map((p) => p.slice());
+  // The pose being made, shared with the other panels (the Timeline keys it).
+  ctx.pose = ctx.pose || rest.map((p) => p.slice());
+  const positions = ctx.pose;
   let dragging = -1, queued = null, busy = false;
 
   side.innerHTML = `<h2>Pose</h2>
@@ -123,7 +125,7 @@ export function mount(ctx) {
     overlaps();
   };
   status("drag a joint");
-  view.draw();
+  posed();
 
   return {
     positions,

@@ -1,0 +1,309 @@
+"""The open project in the editor, and the WebSocket messages that read and change it.
+
+Messages are JSON objects; ``id``, when given, is echoed back. An error is a reply too,
+``{"id": ..., "type": "error", "message": "..."}``, and changes nothing.
+
+* ``{"type": "pose", "positions": [[x, y], ...]}``: every joint's position, in the skeleton's
+  order. Reply: ``{"type": "mesh", "U": [x0, y0, x1, y1, ...]}``, the deformed vertices (the
+  needle model, then the joint-area solve).
+* ``{"type": "overlaps", "positions": [...]}``: the regions that overlap at the same depth in
+  that pose. Reply: ``{"type": "overlaps", "pairs": [{"a": bone, "b": bone, "area": px2}]}``.
+* Edits of the regions, each saved in the project before the reply (atomic writes, as the
+  CLI's) and recorded for undo: ``{"type": "depth", "at": [x, y], "by": 1 | -1}`` (the region
+  there one layer up or down), ``{"type": "correct", "bone": name, "curve": [[x, y], ...]}``
+  (a lasso), ``{"type": "undo"}``, ``{"type": "redo"}``. Reply: ``{"type": "regions", ...}``,
+  as :func:`regions` gives them.
+* Key-frames, saved in the project folder's ``keys.json`` (the key-frames format
+  ``toonmotion animate`` reads) before the reply: ``{"type": "set_key", "frame": n,
+  "positions": [...]}``, ``{"type": "delete_key", "frame": n}``, ``{"type": "move_key",
+  "frame": n, "to": m}``. Reply: ``{"type": "keys", ...}``, as :func:`keys` gives them.
+* ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
+  Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion import api
+from toonmotion.animate.timeline import Timeline
+from toonmotion.deform.deformer import Deformer
+from toonmotion.deform.depth import draw_order
+from toonmotion.errors import EditError, KeyframeError, PoseError, ToonmotionError
+from toonmotion.io.pose_json import load_keyframes, save_keyframes
+from toonmotion.rig.pose import Pose, check_pose
+
+# The project folder's key-frames, in the format `toonmotion animate` reads.
+KEYS_FILE = "keys.json"
+# A WebSocket message longer than this is refused unread (a pose of 10,000 joints fits easily).
+MAX_MESSAGE_BYTES = 1_000_000
+
+log = logging.getLogger("toonmotion.web")
+
+
+@dataclass
+class Editing:
+    """The open project, its key-frames and what is built once for them, shared by every client."""
+
+    folder: Path
+    character: api.Character
+    timeline: Timeline | None = None
+    lock: threading.RLock = field(default_factory=threading.RLock)
+    _deformer: Deformer | None = None
+    _animation: api.Animation | None = None
+
+    @classmethod
+    def open(cls, folder: str | Path) -> Editing:
+        """The project in ``folder`` and its ``keys.json`` if it has one (errors name the file)."""
+        folder = Path(folder)
+        character = api.load_project(folder)
+        keys = folder / KEYS_FILE
+        timeline = load_keyframes(keys, character.skeleton) if keys.is_file() else None
+        return cls(folder=folder, character=character, timeline=timeline)
+
+    @property
+    def deformer(self) -> Deformer:
+        with self.lock:
+            if self._deformer is None:
+                self._deformer = Deformer(self.character)
+            return self._deformer
+
+    @property
+    def animation(self) -> api.Animation:
+        """Every frame of the key-frames, deformed (computed once per change of keys or regions)."""
+        with self.lock:
+            if self.timeline is None:
+                raise KeyframeError("there are no key-frames yet: set a key first")
+            if self._animation is None:
+                self._animation = api.animate_character(self.deformer, self.timeline)
+            return self._animation
+
+    def edited(self, character: api.Character) -> None:
+        """Save ``character`` in the project, then make it the one edited (a failed save changes nothing)."""
+        with self.lock:
+            api.save_project(self.folder, character)
+            self.character, self._deformer, self._animation = character, None, None
+
+    def keyed(self, timeline: Timeline | None) -> None:
+        """Save the key-frames (none: the file goes), then make them the ones edited."""
+        with self.lock:
+            file = self.folder / KEYS_FILE
+            if timeline is None:
+                file.unlink(missing_ok=True)
+            else:
+                save_keyframes(file, self.character.skeleton, timeline)
+            self.timeline, self._animation = timeline, None
+
+
+def describe(editing: Editing) -> dict[str, Any]:
+    """The project as the page draws it: size, rest mesh, skeleton, regions and key-frames."""
+    character = editing.character
+    mesh, skeleton = character.mesh, character.skeleton
+    return {
+        "name": editing.folder.name,
+        "width": character.size[0],
+        "height": character.size[1],
+        "vertices": mesh.V.ravel().tolist(),
+        "joints": [{"name": n, "parent": int(p), "position": skeleton.positions[i].tolist()}
+                   for i, (n, p) in enumerate(zip(skeleton.names, skeleton.parents, strict=True))],
+        "bones": list(skeleton.bone_names),
+        **regions(character),
+        "keys": keys(editing.timeline),
+    }
+
+
+def regions(character: api.Character) -> dict[str, Any]:
+    """The bone regions: the triangles in draw order (depth layers), each vertex's bone (an index
+    into the bone names), each bone's depth, and how many edits there are to undo and redo."""
+    order = draw_order(character.mesh, character.binding, character.depth)
+    return {
+        "triangles": character.mesh.F[order].ravel().tolist(),
+        "vertex_bone": character.binding.bone.tolist(),
+        "depth": character.depth.tolist(),
+        "edits": len(character.edits),
+        "undone": len(character.undone),
+    }
+
+
+def keys(timeline: Timeline | None) -> dict[str, Any] | None:
+    """The key-frames: frame rate, easing, and each key's frame and joint positions."""
+    if timeline is None:
+        return None
+    return {"fps": timeline.fps, "ease": timeline.ease,
+            "keys": [{"frame": k.frame, "positions": k.pose.positions.tolist()} for k in timeline.keys]}
+
+
+def answer(editing: Editing, text: str) -> dict[str, Any]:
+    """The reply to one message (module docstring); errors are replies too."""
+    ident: Any = None
+    try:
+        if len(text) > MAX_MESSAGE_BYTES:
+            raise PoseError(f"a message may be {MAX_MESSAGE_BYTES:,} bytes at most, got {len(text):,}")
+        try:
+            message = json.loads(text)
+        except (ValueError, RecursionError):
+            raise PoseError("a message must be a JSON object") from None
+        if not isinstance(message, dict):
+            raise PoseError("a message must be a JSON object")
+        ident = message.get("id")
+        if not isinstance(ident, (int, str, type(None))) or isinstance(ident, bool):
+            ident = None
+        kind = message.get("type")
+        if kind not in _HANDLERS:
+            sent = ", ".join(map(repr, _HANDLERS))
+            raise PoseError(f"unknown message type {kind!r}; the editor sends {sent}")
+        return {"id": ident, **_HANDLERS[kind](editing, message)}
+    except ToonmotionError as error:
+        return {"id": ident, "type": "error", "message": one_line(str(error))}
+    except Exception as error:  # a bug: one line to the page, the details to the log
+        log.error("internal error answering a message: %s: %s", type(error).__name__, error)
+        return {"id": ident, "type": "error", "message": bug(error)}
+
+
+def bug(error: Exception) -> str:
+    return f"internal error ({type(error).__name__}); this is a bug in toonmotion, please report it"
+
+
+def one_line(text: str) -> str:
+    return " ".join(text.split())[:400]
+
+
+# --- handlers: (editing, message) -> the reply's fields -------------------------------------------
+
+
+def _pose(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+    U = _posed(editing, message.get("positions"))
+    return {"type": "mesh", "U": np.round(U, 3).ravel().tolist()}
+
+
+def _overlaps(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+    found = api.same_depth_overlaps(editing.character, [(0, _posed(editing, message.get("positions")))])
+    pairs = [{"a": o.bone_a, "b": o.bone_b, "area": round(o.area, 1)} for o in found]
+    return {"type": "overlaps", "pairs": pairs}
+
+
+def _region_edit(change: Callable[[api.Character, dict[str, Any]], api.Character]) -> Handler:
+    def handle(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+        editing.edited(change(editing.character, message))
+        return {"type": "regions", **regions(editing.character)}
+
+    return handle
+
+
+def _depth(character: api.Character, message: dict[str, Any]) -> api.Character:
+    by = message.get("by")
+    if by not in (-1, 1) or isinstance(by, bool):
+        raise EditError("'by' must be 1 (one layer up) or -1 (one down)")
+    return api.set_depth(character, 0, at=_point(message.get("at"), "'at'"), by=by)
+
+
+def _correct(character: api.Character, message: dict[str, Any]) -> api.Character:
+    bone, curve = message.get("bone"), message.get("curve")
+    if not isinstance(bone, str):
+        raise EditError("'bone' must name the bone to attach to")
+    if not isinstance(curve, list) or not 3 <= len(curve) <= 10_000:
+        raise EditError("'curve' must be a closed curve of 3 to 10,000 [x, y] points")
+    return api.correct_regions(character, bone, [_point(p, "a curve point") for p in curve])
+
+
+def _key_edit(change: Callable[[Editing, dict[str, Any]], Timeline | None]) -> Handler:
+    def handle(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+        with editing.lock:
+            editing.keyed(change(editing, message))
+            return {"type": "keys", "keys": keys(editing.timeline)}
+
+    return handle
+
+
+def _set_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
+    frame = _frame(message, "frame")
+    pose = Pose(_positions(editing, message.get("positions")))
+    return api.set_key(editing.character.skeleton, editing.timeline, frame, pose)
+
+
+def _delete_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
+    return api.delete_key(editing.character.skeleton, _timeline(editing), _frame(message, "frame"))
+
+
+def _move_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
+    return api.move_key(editing.character.skeleton, _timeline(editing), _frame(message, "frame"),
+                        _frame(message, "to"))
+
+
+def _frame_of_animation(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+    animation = editing.animation
+    frames = [frame for frame, _ in animation.meshes]
+    at = min(max(_frame(message, "frame"), frames[0]), frames[-1])
+    index = frames.index(at)
+    U = animation.meshes[index][1]
+    return {"type": "frame", "frame": at, "U": np.round(U, 3).ravel().tolist(),
+            "positions": animation.motion.positions[index].tolist()}
+
+
+Handler = Callable[[Editing, dict[str, Any]], dict[str, Any]]
+
+_HANDLERS: dict[str, Handler] = {
+    "pose": _pose,
+    "overlaps": _overlaps,
+    "depth": _region_edit(_depth),
+    "correct": _region_edit(_correct),
+    "undo": _region_edit(lambda character, message: api.undo_edits(character)),
+    "redo": _region_edit(lambda character, message: api.redo_edits(character)),
+    "set_key": _key_edit(_set_key),
+    "delete_key": _key_edit(_delete_key),
+    "move_key": _key_edit(_move_key),
+    "frame": _frame_of_animation,
+}
+
+
+# --- reading a message's fields -------------------------------------------------------------------
+
+
+def _point(value: Any, what: str) -> tuple[float, float]:
+    if not (isinstance(value, list) and len(value) == 2 and all(_is_number(v) for v in value)):
+        raise EditError(f"{what} must be [x, y], got {str(value)[:40]}")
+    return float(value[0]), float(value[1])
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _frame(message: dict[str, Any], name: str) -> int:
+    value = message.get(name)
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 2**31 - 1:
+        raise KeyframeError(f"'{name}' must be a frame number, a whole number >= 0, got {str(value)[:40]}")
+    return value
+
+
+def _timeline(editing: Editing) -> Timeline:
+    if editing.timeline is None:
+        raise KeyframeError("there are no key-frames yet: set a key first")
+    return editing.timeline
+
+
+def _positions(editing: Editing, positions: Any) -> NDArray[np.float64]:
+    skeleton = editing.character.skeleton
+    if not isinstance(positions, list) or len(positions) != len(skeleton):
+        raise PoseError(f"'positions' must list [x, y] for each of the {len(skeleton)} joints")
+    try:
+        array = np.array(positions, dtype=float)
+    except (TypeError, ValueError):
+        raise PoseError("'positions' must be [x, y] pairs of numbers") from None
+    if array.shape != (len(skeleton), 2):
+        raise PoseError("'positions' must be [x, y] pairs of numbers")
+    return check_pose(skeleton, Pose(array)).positions
+
+
+def _posed(editing: Editing, positions: Any) -> NDArray[np.float64]:
+    pose = Pose(_positions(editing, positions))
+    return api.pose_character(editing.deformer, pose).deformation.U

@@ -1,0 +1,116 @@
+// The Timeline panel: key-frames on a frame ruler. "Key this frame" keys the pose made in the
+// Pose panel at the current frame; keys can be moved and deleted; the slider scrubs through the
+// in-betweens and Play plays them at the animation's frame rate. Every change is saved in the
+// project folder's keys.json at once (the file `toonmotion animate PROJECT PROJECT/keys.json`
+// reads). Scrubbing to a frame also makes its pose the Pose panel's, to adjust and key again.
+
+export const name = "timeline";
+export const title = "Timeline";
+
+export function mount(ctx) {
+  const { project, view, live, side, status, showError } = ctx;
+  let playing = false, timer = null;
+  ctx.frame = ctx.frame || 0; // the current frame, kept while other panels are open
+
+  side.innerHTML = `<h2>Timeline</h2>
+    <p><input id="timeline-scrub" type="range" min="0" value="0" style="width: 100%"
+       aria-label="frame"> frame <output id="timeline-frame">0</output></p>
+    <p><button id="timeline-key">Key this frame</button> <button id="timeline-play">Play</button></p>
+    <ol id="timeline-keys"></ol>
+    <p>Make the pose in the Pose panel, then key it here.</p>`;
+  const scrub = document.getElementById("timeline-scrub");
+
+  function lastFrame() {
+    const keys = project.keys ? project.keys.keys : [];
+    return keys.length ? keys[keys.length - 1].frame : 0;
+  }
+
+  function showKeys() {
+    const list = document.getElementById("timeline-keys");
+    list.replaceChildren();
+    for (const key of project.keys ? project.keys.keys : []) {
+      const item = document.createElement("li");
+      item.dataset.frame = key.frame;
+      item.innerHTML = `key at frame <input type="number" min="0" value="${key.frame}" style="width: 5em"
+        aria-label="move to frame"> <button>Delete</button>`;
+      item.querySelector("input").onchange = (event) =>
+        change({ type: "move_key", frame: key.frame, to: Number(event.target.value) });
+      item.querySelector("button").onclick = () => change({ type: "delete_key", frame: key.frame });
+      list.append(item);
+    }
+    scrub.max = String(Math.max(24, lastFrame() + 12));
+  }
+
+  async function change(message) {
+    try {
+      const reply = await live.request(message);
+      project.keys = reply.keys;
+      showKeys();
+      showError("");
+      status("saved");
+      if (project.keys) await show(ctx.frame);
+    } catch (error) {
+      showError(error.message);
+      showKeys();
+    }
+  }
+
+  function mark(at) {
+    ctx.frame = at;
+    scrub.value = String(at);
+    document.getElementById("timeline-frame").textContent = String(at);
+  }
+
+  async function show(at) {
+    mark(at);
+    if (!project.keys) return;
+    const reply = await live.request({ type: "frame", frame: at });
+    view.setVertices(reply.U);
+    ctx.pose = reply.positions;
+  }
+
+  async function play() {
+    if (!project.keys || playing) return;
+    playing = true;
+    document.getElementById("timeline-play").textContent = "Stop";
+    const keys = project.keys.keys, first = keys[0].frame, last = keys[keys.length - 1].frame;
+    const step = 1000 / project.keys.fps;
+    let at = first;
+    const next = async () => {
+      if (!playing) return;
+      const started = performance.now();
+      try {
+        await show(at);
+      } catch (error) {
+        showError(error.message);
+        return stop();
+      }
+      at = at >= last ? first : at + 1;
+      timer = setTimeout(next, Math.max(0, step - (performance.now() - started)));
+    };
+    next();
+  }
+
+  function stop() {
+    playing = false;
+    clearTimeout(timer);
+    document.getElementById("timeline-play").textContent = "Play";
+  }
+
+  scrub.oninput = () => show(Number(scrub.value)).catch((error) => showError(error.message));
+  document.getElementById("timeline-key").onclick = () => {
+    const positions = ctx.pose || project.joints.map((j) => j.position);
+    change({ type: "set_key", frame: ctx.frame, positions });
+  };
+  document.getElementById("timeline-play").onclick = () => (playing ? stop() : play());
+  view.drawOverlay = () => {};
+  showKeys();
+  mark(ctx.frame); // the drawing stays as the Pose panel left it, to be keyed here
+  status(project.keys ? "scrub or play" : "key a pose to start");
+
+  return {
+    unmount() {
+      stop();
+    },
+  };
+}
