@@ -225,3 +225,18 @@ def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
     page.click("#timeline-play")
     assert page.locator("#timeline-play").text_content() == "Play"
     assert page.errors == [] and page.locator("#error").is_hidden()
+
+
+def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
+    folder = editor[1]
+    page.click("nav button[data-panel=export]")
+    page.fill("#export-name", "walk")
+    page.select_option("#export-format", "gif")
+    page.click("#export-go")
+    page.wait_for_function("document.getElementById('export-result').textContent.includes('exports/walk.gif')")
+    with Image.open(folder / "exports" / "walk.gif") as gif:
+        assert gif.n_frames == 13  # frames 0 to 12 of the keys set in the Timeline test
+    link = page.locator("#export-result a")
+    assert link.get_attribute("download") == "walk.gif"
+    assert page.locator("#export-progress").is_hidden() and page.errors == []
+    assert page.locator("#error").is_hidden()

@@ -308,3 +308,62 @@ def test_a_key_beyond_the_frames_limit_is_refused(editable):
         reply = _send(socket, {"type": "set_key", "frame": 100_000, "positions": rest})
     assert reply["type"] == "error" and "over the limit frames=100,000" in reply["message"]
     assert not (folder / "keys.json").exists()
+
+
+def _keyed(folder, socket):
+    character = api.load_project(folder)
+    _send(socket, {"type": "set_key", "frame": 0, "positions": character.skeleton.positions.tolist()})
+    _send(socket, {"type": "set_key", "frame": 6, "positions": _pose(character, "right_elbow", 1.0)})
+
+
+def test_an_export_reports_progress_and_writes_the_animation_into_the_project(editable):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _keyed(folder, socket)
+        socket.send_text(json.dumps({"id": 9, "type": "export", "format": "gif", "name": "wave"}))
+        said = [socket.receive_json()]
+        while said[-1]["type"] == "progress":
+            said.append(socket.receive_json())
+    progress, done = said[:-1], said[-1]
+    assert [(p["id"], p["index"], p["count"]) for p in progress] == [(9, i, 7) for i in range(1, 8)]
+    assert done == {
+        "id": 9,
+        "type": "exported",
+        "file": "exports/wave.gif",
+        "frames": 7,
+        "size": done["size"],
+    }
+    with Image.open(folder / "exports" / "wave.gif") as gif:
+        assert (gif.n_frames, list(gif.size)) == (7, done["size"])
+    download = _get(client, "/api/exports/wave.gif")
+    assert download.status_code == 200 and download.content == (folder / "exports" / "wave.gif").read_bytes()
+
+
+@pytest.mark.parametrize(
+    ("message", "said"),
+    [
+        ({"format": "gif", "name": "../../evil"}, "'name' must be"),
+        ({"format": "gif", "name": ""}, "'name' must be"),
+        ({"format": "gif", "name": ".hidden"}, "'name' must be"),
+        ({"format": "gif", "name": "a/b"}, "'name' must be"),
+        ({"format": "gif", "name": "x" * 65}, "'name' must be"),
+        ({"format": "gif", "name": 7}, "'name' must be"),
+        ({"format": "exe", "name": "ok"}, "'format' must be gif, mp4, png"),
+        ({"format": "gif", "name": "ok", "keys": False}, "no key-frames yet"),
+    ],
+)
+def test_a_bad_export_writes_nothing(editable, message, said):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        if message.pop("keys", True):
+            _keyed(folder, socket)
+        reply = _send(socket, {"type": "export", **message})
+    assert reply["type"] == "error" and said in reply["message"], reply
+    assert not (folder / "exports").exists() or list((folder / "exports").iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "name", ["..%2Fproject.json", "missing.gif", "wave.json", "wave", "%2e%2e%2fkeys.json"]
+)
+def test_only_an_export_can_be_downloaded(client, name):
+    assert _get(client, f"/api/exports/{name}").status_code == 404

@@ -14,6 +14,8 @@ What the WebSocket carries, and the open project's state, are :mod:`toonmotion.w
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import hmac
 import json
 import logging
@@ -27,7 +29,18 @@ from starlette.exceptions import HTTPException
 
 from toonmotion.errors import ToonmotionError
 from toonmotion.io.image import png_bytes
-from toonmotion.web.session import MAX_MESSAGE_BYTES, Editing, answer, bug, describe, one_line
+from toonmotion.web.session import (
+    EXPORT_FORMATS,
+    EXPORT_NAME,
+    EXPORTS,
+    MAX_MESSAGE_BYTES,
+    Editing,
+    answer,
+    bug,
+    describe,
+    export,
+    one_line,
+)
 
 __all__ = ["MAX_MESSAGE_BYTES", "PAGE_FILES", "create_app", "new_token"]
 
@@ -35,7 +48,8 @@ STATIC = Path(__file__).parent / "static"
 # The page's own files: nothing else under STATIC, and nothing outside it, is served.
 PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "text/javascript",
               "mesh_view.js": "text/javascript", "pose_panel.js": "text/javascript",
-              "regions_panel.js": "text/javascript", "timeline_panel.js": "text/javascript"}
+              "regions_panel.js": "text/javascript", "timeline_panel.js": "text/javascript",
+              "export_panel.js": "text/javascript"}
 
 log = logging.getLogger("toonmotion.web")
 
@@ -114,6 +128,16 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     def texture() -> Response:
         return Response(png_bytes(editing.character.texture), media_type="image/png")
 
+    @app.get("/api/exports/{name}")
+    def exported(name: str) -> FileResponse:
+        stem, dot, suffix = name.rpartition(".")
+        file = editing.folder / EXPORTS / name
+        if not (dot and EXPORT_NAME.fullmatch(stem) and f".{suffix}" in EXPORT_FORMATS.values()
+                and file.is_file()):
+            raise HTTPException(404, f"no export {name!r}")
+        return FileResponse(file, media_type="image/gif" if suffix == "gif" else "video/mp4",
+                            filename=name)
+
     @app.websocket("/ws")
     async def live(socket: WebSocket) -> None:
         given = socket.query_params.get("token")
@@ -122,11 +146,35 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
             await socket.close(code=1008, reason=refused[:120])
             return
         await socket.accept()
+        loop = asyncio.get_running_loop()
         try:
             while True:
                 text = await socket.receive_text()
-                await socket.send_text(json.dumps(answer(editing, text)))
+                if _is_export(text):  # long: off the event loop, with progress messages
+                    ident = json.loads(text).get("id")
+
+                    def progress(index: int, count: int, ident: Any = ident) -> None:
+                        said = {"id": ident, "type": "progress", "index": index, "count": count}
+                        asyncio.run_coroutine_threadsafe(socket.send_text(json.dumps(said)), loop)
+
+                    with contextlib.suppress(ToonmotionError):  # export() says what is wrong
+                        _ = editing.animation  # solved here, on the loop, like every other solve
+                    reply = await asyncio.to_thread(export, editing, text, progress)
+                else:
+                    reply = answer(editing, text)
+                await socket.send_text(json.dumps(reply))
         except WebSocketDisconnect:
             return
 
     return app
+
+
+def _is_export(text: str) -> bool:
+    """Whether a message asks for an export (checked cheaply; a bad message goes to ``answer``)."""
+    if len(text) > MAX_MESSAGE_BYTES or '"export"' not in text:
+        return False
+    try:
+        message = json.loads(text)
+    except (ValueError, RecursionError):
+        return False
+    return isinstance(message, dict) and message.get("type") == "export"

@@ -19,12 +19,19 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   "frame": n, "to": m}``. Reply: ``{"type": "keys", ...}``, as :func:`keys` gives them.
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
   Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
+* ``{"type": "export", "format": "gif" | "mp4" | "png", "name": "walk"}``: render the key-frames'
+  animation into the project folder's ``exports/`` (``walk.gif``, ``walk.mp4`` or the folder
+  ``walk/`` of PNG frames), through the CLI's atomic writes. While it runs, progress messages
+  ``{"type": "progress", "index": i, "count": n}`` carry the request's id; the reply is
+  ``{"type": "exported", "file": "exports/walk.gif", "frames": n, "size": [w, h]}``. The name is
+  letters, digits, ``-`` and ``_``: a request never names a path.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import re
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -44,6 +51,10 @@ from toonmotion.rig.pose import Pose, check_pose
 
 # The project folder's key-frames, in the format `toonmotion animate` reads.
 KEYS_FILE = "keys.json"
+# Where the editor's exports go, in the project folder; and what an export's name may be.
+EXPORTS = "exports"
+EXPORT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
+EXPORT_FORMATS = {"gif": ".gif", "mp4": ".mp4", "png": ""}
 # A WebSocket message longer than this is refused unread (a pose of 10,000 joints fits easily).
 MAX_MESSAGE_BYTES = 1_000_000
 
@@ -166,6 +177,37 @@ def answer(editing: Editing, text: str) -> dict[str, Any]:
         return {"id": ident, "type": "error", "message": one_line(str(error))}
     except Exception as error:  # a bug: one line to the page, the details to the log
         log.error("internal error answering a message: %s: %s", type(error).__name__, error)
+        return {"id": ident, "type": "error", "message": bug(error)}
+
+
+def export(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:
+    """The reply to an export message (module docstring), calling ``progress(index, count)``.
+
+    Meant to run off the server's event loop, once the loop has computed the animation
+    (:attr:`Editing.animation`): this takes it and the character, which are immutable, and only
+    renders and writes.
+    """
+    ident: Any = None
+    try:
+        message = json.loads(text)
+        ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
+        kind, name = message.get("format"), message.get("name")
+        if kind not in EXPORT_FORMATS:
+            raise KeyframeError(f"'format' must be {', '.join(EXPORT_FORMATS)}; got {str(kind)[:20]!r}")
+        if not isinstance(name, str) or not EXPORT_NAME.fullmatch(name):
+            raise KeyframeError("'name' must be 1 to 64 letters, digits, - or _, not starting with - or _")
+        with editing.lock:
+            character, animation = editing.character, editing.animation
+        relative = f"{EXPORTS}/{name}{EXPORT_FORMATS[kind]}"
+        count, size = api.write_animation(editing.folder / relative, character, animation,
+                                          progress=lambda stage, index, total: progress(index, total))
+        return {"id": ident, "type": "exported", "file": relative, "frames": count, "size": list(size)}
+    except ToonmotionError as error:
+        return {"id": ident, "type": "error", "message": one_line(str(error))}
+    except OSError as error:
+        return {"id": ident, "type": "error", "message": one_line(f"cannot write the export: {error}")}
+    except Exception as error:  # a bug: one line to the page, the details to the log
+        log.error("internal error exporting: %s: %s", type(error).__name__, error)
         return {"id": ident, "type": "error", "message": bug(error)}
 
 

@@ -5,8 +5,9 @@ import { MeshView } from "./mesh_view.js";
 import * as posePanel from "./pose_panel.js";
 import * as regionsPanel from "./regions_panel.js";
 import * as timelinePanel from "./timeline_panel.js";
+import * as exportPanel from "./export_panel.js";
 
-const PANELS = [posePanel, regionsPanel, timelinePanel];
+const PANELS = [posePanel, regionsPanel, timelinePanel, exportPanel];
 
 const token = new URLSearchParams(location.search).get("token") || "";
 
@@ -36,8 +37,9 @@ function loadImage(src) {
   });
 }
 
-// The live connection: request(message) resolves with the server's reply to it. Replies carry
-// the id of the message they answer; an error reply rejects.
+// The live connection: request(message, onProgress) resolves with the server's reply to it.
+// Replies carry the id of the message they answer; an error reply rejects; progress messages
+// on the way go to onProgress.
 class Live {
   constructor(url) {
     this.next = 1;
@@ -51,6 +53,10 @@ class Live {
       const reply = JSON.parse(event.data);
       const pending = this.waiting.get(reply.id);
       if (!pending) return;
+      if (reply.type === "progress") {
+        if (pending.progress) pending.progress(reply);
+        return;
+      }
       this.waiting.delete(reply.id);
       if (reply.type === "error") pending.reject(new Error(reply.message));
       else pending.resolve(reply);
@@ -62,11 +68,11 @@ class Live {
     };
   }
 
-  async request(message) {
+  async request(message, progress = null) {
     await this.opened;
     const id = this.next++;
     return new Promise((resolve, reject) => {
-      this.waiting.set(id, { resolve, reject });
+      this.waiting.set(id, { resolve, reject, progress });
       this.socket.send(JSON.stringify({ ...message, id }));
     });
   }

@@ -1,0 +1,58 @@
+// The Export panel: the key-frames' animation to a GIF, an MP4 or a folder of PNG frames, in the
+// project folder's exports/, with a progress bar. A GIF or an MP4 can then be downloaded.
+
+export const name = "export";
+export const title = "Export";
+
+export function mount(ctx) {
+  const { live, side, status, showError } = ctx;
+  side.innerHTML = `<h2>Export</h2>
+    <p>The animation of the key-frames (Timeline panel), into the project's <code>exports/</code>.</p>
+    <p><label>Name <input id="export-name" value="animation" pattern="[A-Za-z0-9][A-Za-z0-9_-]*"
+       maxlength="64"></label></p>
+    <p><label>Format <select id="export-format">
+      <option value="gif">GIF</option><option value="mp4">MP4</option><option value="png">PNG frames</option>
+    </select></label></p>
+    <p><button id="export-go">Export</button></p>
+    <p><progress id="export-progress" max="1" value="0" hidden></progress></p>
+    <p id="export-result"></p>`;
+  const button = document.getElementById("export-go");
+  const bar = document.getElementById("export-progress");
+  const result = document.getElementById("export-result");
+
+  button.onclick = async () => {
+    const format = document.getElementById("export-format").value;
+    const message = { type: "export", format, name: document.getElementById("export-name").value };
+    button.disabled = true;
+    bar.hidden = false;
+    bar.value = 0;
+    result.textContent = "";
+    status("exporting…");
+    try {
+      const reply = await live.request(message, ({ index, count }) => {
+        bar.max = count;
+        bar.value = index;
+      });
+      const [w, h] = reply.size;
+      result.textContent = `${reply.frames} frames, ${w}×${h} → ${reply.file} `;
+      if (format !== "png") {
+        const token = new URLSearchParams(location.search).get("token") || "";
+        const link = document.createElement("a");
+        link.href = `api/exports/${reply.file.split("/").pop()}?token=${encodeURIComponent(token)}`;
+        link.textContent = "download";
+        link.download = reply.file.split("/").pop();
+        result.append(link);
+      }
+      status("exported");
+      showError("");
+    } catch (error) {
+      showError(error.message);
+      status("");
+    } finally {
+      button.disabled = false;
+      bar.hidden = true;
+    }
+  };
+  status("export the animation");
+  return { unmount() {} };
+}
