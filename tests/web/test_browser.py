@@ -233,10 +233,38 @@ def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
     page.fill("#export-name", "walk")
     page.select_option("#export-format", "gif")
     page.click("#export-go")
-    page.wait_for_function("document.getElementById('export-result').textContent.includes('exports/walk.gif')")
+    page.wait_for_function(
+        "document.getElementById('export-result').textContent.includes('exports/walk.gif')"
+    )
     with Image.open(folder / "exports" / "walk.gif") as gif:
         assert gif.n_frames == 13  # frames 0 to 12 of the keys set in the Timeline test
     link = page.locator("#export-result a")
     assert link.get_attribute("download") == "walk.gif"
     assert page.locator("#export-progress").is_hidden() and page.errors == []
     assert page.locator("#error").is_hidden()
+
+
+def test_exaggerate_fix_the_feet_and_draw_the_acceleration(page, editor):
+    character = api.load_project(editor[1])
+    page.click("nav button[data-panel=pose]")
+    page.click("#pose-reset")
+    page.click("nav button[data-panel=exaggerate]")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('fix joints')")
+    for foot in ("right_foot", "left_foot"):
+        page.mouse.click(*_joint_on_screen(page, foot))
+    x, y = _joint_on_screen(page, "root")
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x, y - 60, steps=8)
+    page.mouse.up()
+    page.wait_for_timeout(400)
+    page.click("#exaggerate-use")
+    pose = np.asarray(page.evaluate("window.toonmotion.pose"))
+    feet = [character.skeleton.index(f) for f in ("right_foot", "left_foot")]
+    np.testing.assert_allclose(pose[feet], character.skeleton.positions[feet], atol=1e-9)  # held
+    assert pose[character.skeleton.index("root"), 1] > character.skeleton.positions[0, 1] + 10  # squashed
+    _close_to_golden(_stage(page), "exaggerated.png")
+    page.click("#exaggerate-play")
+    page.wait_for_timeout(600)
+    page.click("#exaggerate-play")
+    assert page.errors == [] and page.locator("#error").is_hidden()

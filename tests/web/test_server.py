@@ -367,3 +367,40 @@ def test_a_bad_export_writes_nothing(editable, message, said):
 )
 def test_only_an_export_can_be_downloaded(client, name):
     assert _get(client, f"/api/exports/{name}").status_code == 404
+
+
+def test_a_pose_with_an_acceleration_is_the_single_frame_filters(client, project):
+    character = api.load_project(project)
+    rest = character.skeleton.positions.tolist()
+    fixed = ["right_foot", "left_foot"]
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        reply = _send(socket, {"type": "pose", "positions": rest, "accel": [0, -30], "fixed": fixed})
+        bad = _send(socket, {"type": "pose", "positions": rest, "accel": [0, -30], "fixed": "feet"})
+        none = _send(socket, {"type": "pose", "positions": rest, "accel": [0, -30], "fixed": []})
+    expected = api.pose_character(
+        character, api.rotate_joint(character, "head", 0.0), accel=(0, -30), fixed=fixed
+    )
+    np.testing.assert_allclose(reply["positions"], expected.pose.positions, atol=1e-9)
+    np.testing.assert_allclose(np.reshape(reply["U"], (-1, 2)), expected.deformation.U, atol=1e-3)
+    feet = [character.skeleton.index(f) for f in fixed]
+    np.testing.assert_array_equal(np.asarray(reply["positions"])[feet], character.skeleton.positions[feet])
+    assert bad["type"] == "error" and "'fixed' must list" in bad["message"]
+    assert none["type"] == "error" and "fix at least one joint" in none["message"]
+
+
+def test_frames_and_exports_can_be_exaggerated(editable):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _keyed(folder, socket)
+        plain = _send(socket, {"type": "frame", "frame": 5})
+        lively = _send(socket, {"type": "frame", "frame": 5, "strength": 2.0, "sigma": 2.0})
+        bad = _send(socket, {"type": "frame", "frame": 5, "strength": "lots"})
+    from toonmotion.io.pose_json import load_keyframes
+
+    timeline = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
+    expected = api.animate_character(
+        api.load_project(folder), timeline, exaggeration=api.FilterSettings(strength=2.0, sigma=2.0)
+    )
+    np.testing.assert_allclose(lively["positions"], expected.motion.positions[5], atol=1e-9)
+    assert np.abs(np.subtract(lively["positions"], plain["positions"])).max() > 0.5
+    assert bad["type"] == "error" and "strength" in bad["message"]

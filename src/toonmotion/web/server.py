@@ -38,6 +38,7 @@ from toonmotion.web.session import (
     answer,
     bug,
     describe,
+    exaggeration_of,
     export,
     one_line,
 )
@@ -49,7 +50,7 @@ STATIC = Path(__file__).parent / "static"
 PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "text/javascript",
               "mesh_view.js": "text/javascript", "pose_panel.js": "text/javascript",
               "regions_panel.js": "text/javascript", "timeline_panel.js": "text/javascript",
-              "export_panel.js": "text/javascript"}
+              "exaggerate_panel.js": "text/javascript", "export_panel.js": "text/javascript"}
 
 log = logging.getLogger("toonmotion.web")
 
@@ -157,8 +158,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                         said = {"id": ident, "type": "progress", "index": index, "count": count}
                         asyncio.run_coroutine_threadsafe(socket.send_text(json.dumps(said)), loop)
 
-                    with contextlib.suppress(ToonmotionError):  # export() says what is wrong
-                        _ = editing.animation  # solved here, on the loop, like every other solve
+                    with contextlib.suppress(ToonmotionError, ValueError, AttributeError):
+                        editing.animated(exaggeration_of(json.loads(text)))  # solved on the loop
                     reply = await asyncio.to_thread(export, editing, text, progress)
                 else:
                     reply = answer(editing, text)

@@ -45,7 +45,7 @@ from toonmotion import api
 from toonmotion.animate.timeline import Timeline
 from toonmotion.deform.deformer import Deformer
 from toonmotion.deform.depth import draw_order
-from toonmotion.errors import EditError, KeyframeError, PoseError, ToonmotionError
+from toonmotion.errors import EditError, FilterError, KeyframeError, PoseError, ToonmotionError
 from toonmotion.io.pose_json import load_keyframes, save_keyframes
 from toonmotion.rig.pose import Pose, check_pose
 
@@ -71,6 +71,7 @@ class Editing:
     lock: threading.RLock = field(default_factory=threading.RLock)
     _deformer: Deformer | None = None
     _animation: api.Animation | None = None
+    _exaggerated: tuple[api.FilterSettings, api.Animation] | None = None
 
     @classmethod
     def open(cls, folder: str | Path) -> Editing:
@@ -91,9 +92,19 @@ class Editing:
     @property
     def animation(self) -> api.Animation:
         """Every frame of the key-frames, deformed (computed once per change of keys or regions)."""
+        return self.animated(None)
+
+    def animated(self, exaggeration: api.FilterSettings | None) -> api.Animation:
+        """The key-frames' animation, through the cartoon filter when ``exaggeration`` is given
+        (the last exaggerated one is kept, for scrubbing and playing it)."""
         with self.lock:
             if self.timeline is None:
                 raise KeyframeError("there are no key-frames yet: set a key first")
+            if exaggeration is not None:
+                if self._exaggerated is None or self._exaggerated[0] != exaggeration:
+                    found = api.animate_character(self.deformer, self.timeline, exaggeration=exaggeration)
+                    self._exaggerated = (exaggeration, found)
+                return self._exaggerated[1]
             if self._animation is None:
                 self._animation = api.animate_character(self.deformer, self.timeline)
             return self._animation
@@ -102,7 +113,7 @@ class Editing:
         """Save ``character`` in the project, then make it the one edited (a failed save changes nothing)."""
         with self.lock:
             api.save_project(self.folder, character)
-            self.character, self._deformer, self._animation = character, None, None
+            self.character, self._deformer, self._animation, self._exaggerated = character, None, None, None
 
     def keyed(self, timeline: Timeline | None) -> None:
         """Save the key-frames (none: the file goes), then make them the ones edited."""
@@ -112,7 +123,7 @@ class Editing:
                 file.unlink(missing_ok=True)
             else:
                 save_keyframes(file, self.character.skeleton, timeline)
-            self.timeline, self._animation = timeline, None
+            self.timeline, self._animation, self._exaggerated = timeline, None, None
 
 
 def describe(editing: Editing) -> dict[str, Any]:
@@ -197,7 +208,7 @@ def export(editing: Editing, text: str, progress: Callable[[int, int], None]) ->
         if not isinstance(name, str) or not EXPORT_NAME.fullmatch(name):
             raise KeyframeError("'name' must be 1 to 64 letters, digits, - or _, not starting with - or _")
         with editing.lock:
-            character, animation = editing.character, editing.animation
+            character, animation = editing.character, editing.animated(exaggeration_of(message))
         relative = f"{EXPORTS}/{name}{EXPORT_FORMATS[kind]}"
         count, size = api.write_animation(editing.folder / relative, character, animation,
                                           progress=lambda stage, index, total: progress(index, total))
@@ -223,8 +234,17 @@ def one_line(text: str) -> str:
 
 
 def _pose(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
-    U = _posed(editing, message.get("positions"))
-    return {"type": "mesh", "U": np.round(U, 3).ravel().tolist()}
+    if message.get("accel") is None:
+        U = _posed(editing, message.get("positions"))
+        return {"type": "mesh", "U": np.round(U, 3).ravel().tolist()}
+    fixed = message.get("fixed")
+    if not isinstance(fixed, list) or not all(isinstance(name, str) for name in fixed):
+        raise FilterError("'fixed' must list the names of the joints that stay put")
+    pose = Pose(_positions(editing, message.get("positions")))
+    frame = api.pose_character(editing.deformer, pose, accel=_point(message.get("accel"), "'accel'"),
+                               fixed=fixed)
+    return {"type": "mesh", "U": np.round(frame.deformation.U, 3).ravel().tolist(),
+            "positions": frame.pose.positions.tolist()}
 
 
 def _overlaps(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
@@ -281,8 +301,16 @@ def _move_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
                         _frame(message, "to"))
 
 
+def exaggeration_of(message: dict[str, Any]) -> api.FilterSettings | None:
+    """The cartoon filter a message asks for (``strength``, ``sigma``), or None."""
+    strength = message.get("strength")
+    if strength is None or strength == 0:
+        return None
+    return api.FilterSettings(strength=strength, sigma=message.get("sigma", 3.0))
+
+
 def _frame_of_animation(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
-    animation = editing.animation
+    animation = editing.animated(exaggeration_of(message))
     frames = [frame for frame, _ in animation.meshes]
     at = min(max(_frame(message, "frame"), frames[0]), frames[-1])
     index = frames.index(at)
