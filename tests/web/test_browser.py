@@ -268,3 +268,31 @@ def test_exaggerate_fix_the_feet_and_draw_the_acceleration(page, editor):
     page.wait_for_timeout(600)
     page.click("#exaggerate-play")
     assert page.errors == [] and page.locator("#error").is_hidden()
+
+
+def test_rig_move_a_joint_and_rig_again(page, editor):
+    """Last: it rigs the shared project again and reloads the page."""
+    folder = editor[1]
+    before = api.load_project(folder)
+    page.click("nav button[data-panel=rig]")
+    page.wait_for_function("document.getElementById('status').textContent === 'place the joints'")
+    _close_to_golden(_stage(page), "rig.png")
+    page.mouse.click(40, 200)  # an empty spot: a new joint, which the key-frames do not name
+    page.click("#rig-go")
+    page.wait_for_function("!document.getElementById('error').hidden")
+    assert "keep their names" in page.locator("#error").text_content()
+    page.click("#rig-delete")  # the new joint is selected: take it out again
+    x, y = _joint_on_screen(page, "head")
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + 4, y - 30, steps=5)
+    page.mouse.up()
+    with page.expect_navigation():
+        page.click("#rig-go")
+    page.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=30_000)
+    after = api.load_project(folder)
+    head = after.skeleton.index("head")
+    assert after.skeleton.names == before.skeleton.names
+    assert after.skeleton.positions[head, 1] < before.skeleton.positions[head, 1] - 5
+    assert len(after.edits) == len(before.edits)  # the region edits were replayed
+    assert page.locator("#error").is_hidden()

@@ -404,3 +404,59 @@ def test_frames_and_exports_can_be_exaggerated(editable):
     np.testing.assert_allclose(lively["positions"], expected.motion.positions[5], atol=1e-9)
     assert np.abs(np.subtract(lively["positions"], plain["positions"])).max() > 0.5
     assert bad["type"] == "error" and "strength" in bad["message"]
+
+
+def _joints(character):
+    s = character.skeleton
+    return [
+        {"name": n, "parent": None if p < 0 else s.names[p], "position": s.positions[i].tolist()}
+        for i, (n, p) in enumerate(zip(s.names, s.parents, strict=True))
+    ]
+
+
+def test_rig_again_with_an_edited_skeleton_replays_the_region_edits(editable):
+    folder, client = editable
+    character = api.load_project(folder)
+    joints = _joints(character)
+    joints[character.skeleton.index("head")]["position"][1] -= 6  # the head joint a little higher
+    joints.append({"name": "hat", "parent": "head", "position": [joints[4]["position"][0], 8.0]})
+    hand = character.skeleton.positions[character.skeleton.index("right_hand")].tolist()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _send(socket, {"type": "depth", "at": hand, "by": 1})
+        reply = _send(socket, {"type": "rig", "joints": joints})
+        data = _get(client, "/api/project").json()
+    saved = api.load_project(folder)
+    assert reply == {"id": None, "type": "rigged", "skipped": 0}
+    assert "hat" in saved.skeleton.names and len(saved.edits) == 1 and saved.depth.max() == 1
+    assert [j["name"] for j in data["joints"]] == list(saved.skeleton.names)  # the server serves the new rig
+    assert data["suggestions"] and data["curve_skeleton"]
+
+
+@pytest.mark.parametrize(
+    ("joints", "said"),
+    [
+        ([], "'joints' must list"),
+        ([{"name": 1, "parent": None, "position": [1, 1]}], "joint 1 needs a 'name'"),
+        ([{"name": "a", "parent": "nobody", "position": [50, 50]}], "nobody"),
+        ([{"name": "a", "parent": None, "position": "here"}], "position must be [x, y]"),
+        ([{"name": "a", "parent": None, "position": [5000, 5000]}], "px from the figure"),
+    ],
+)
+def test_a_bad_skeleton_changes_nothing(editable, joints, said):
+    folder, client = editable
+    before = (folder / "project.json").read_bytes()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        reply = _send(socket, {"type": "rig", "joints": joints})
+    assert reply["type"] == "error" and said in reply["message"], reply
+    assert (folder / "project.json").read_bytes() == before
+
+
+def test_while_there_are_keys_a_rig_keeps_the_joint_names(editable):
+    folder, client = editable
+    character = api.load_project(folder)
+    joints = _joints(character)
+    joints[-1]["name"] = "left_toe"
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _keyed(folder, socket)
+        reply = _send(socket, {"type": "rig", "joints": joints})
+    assert reply["type"] == "error" and "keep their names" in reply["message"]

@@ -25,7 +25,7 @@ from toonmotion.animate.motion import Motion
 from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, set_key
 from toonmotion.api.capture import track_footage
 from toonmotion.api.posing import PosedFrame, pose_character, pose_view, render_pose, rotate_joint
-from toonmotion.api.rigging import correct_regions, redo_edits, rig_image, set_depth, undo_edits
+from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
 from toonmotion.capture.footage import Capture, suggest_joints
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
@@ -57,6 +57,7 @@ __all__ = [
     "redo_edits",
     "render_pose",
     "retarget",
+    "rig_again",
     "rig_image",
     "rotate_joint",
     "same_depth_overlaps",

@@ -13,7 +13,7 @@ from toonmotion.io.skeleton_json import load_skeleton_file
 from toonmotion.progress import Progress
 from toonmotion.rig.binding import Correction
 from toonmotion.rig.character import Character, RigSettings
-from toonmotion.rig.edits import DepthEdit, apply_edit, redo, region_at, undo
+from toonmotion.rig.edits import DepthEdit, Edit, apply_edit, redo, region_at, replay, undo
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.skeleton import Skeleton
 
@@ -181,3 +181,35 @@ def redo_edits(character: Character, steps: int = 1) -> Character:
     (2, 1)
     """
     return redo(character, steps)[0]
+
+
+def rig_again(character: Character, skeleton: Skeleton) -> tuple[Character, list[tuple[Edit, str]]]:
+    """Rig ``character``'s drawing again with a new ``skeleton``, keeping its mask and settings,
+    and replay its region edits on the new rig.
+
+    Parameters
+    ----------
+    character : Character
+    skeleton : Skeleton
+        The new animation skeleton (joints placed, named and parented by the user).
+
+    Returns
+    -------
+    character : Character
+    skipped : list of (edit, str)
+        Edits that no longer apply (a correction to a bone that is gone), with the reason.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
+    >>> joints = [(n, None if p < 0 else hero.skeleton.names[p], tuple(x))
+    ...           for n, p, x in zip(hero.skeleton.names, hero.skeleton.parents, hero.skeleton.positions)]
+    >>> fewer = Skeleton.from_joints([j for j in joints if not j[0].startswith("left_")])
+    >>> again, skipped = rig_again(hero, fewer)
+    >>> len(again.skeleton), skipped
+    (11, [])
+    """
+    fresh = rig_drawing(character.texture, mask=character.mask, skeleton=skeleton,
+                        settings=character.settings)
+    return replay(fresh, character.edits)

@@ -50,7 +50,8 @@ STATIC = Path(__file__).parent / "static"
 PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "text/javascript",
               "mesh_view.js": "text/javascript", "pose_panel.js": "text/javascript",
               "regions_panel.js": "text/javascript", "timeline_panel.js": "text/javascript",
-              "exaggerate_panel.js": "text/javascript", "export_panel.js": "text/javascript"}
+              "exaggerate_panel.js": "text/javascript", "export_panel.js": "text/javascript",
+              "rig_panel.js": "text/javascript"}
 
 log = logging.getLogger("toonmotion.web")
 

@@ -17,6 +17,10 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   ``toonmotion animate`` reads) before the reply: ``{"type": "set_key", "frame": n,
   "positions": [...]}``, ``{"type": "delete_key", "frame": n}``, ``{"type": "move_key",
   "frame": n, "to": m}``. Reply: ``{"type": "keys", ...}``, as :func:`keys` gives them.
+* ``{"type": "rig", "joints": [{"name": ..., "parent": name or null, "position": [x, y]}, ...]}``:
+  rig the drawing again with this skeleton, replaying the region edits; saved before the reply
+  ``{"type": "rigged", "skipped": n}`` (edits that no longer apply). While there are key-frames,
+  the joints' names must stay the same (the keys name them).
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
   Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
 * ``{"type": "export", "format": "gif" | "mp4" | "png", "name": "walk"}``: render the key-frames'
@@ -45,9 +49,11 @@ from toonmotion import api
 from toonmotion.animate.timeline import Timeline
 from toonmotion.deform.deformer import Deformer
 from toonmotion.deform.depth import draw_order
-from toonmotion.errors import EditError, FilterError, KeyframeError, PoseError, ToonmotionError
+from toonmotion.errors import EditError, FilterError, KeyframeError, PoseError, SkeletonError, ToonmotionError
 from toonmotion.io.pose_json import load_keyframes, save_keyframes
 from toonmotion.rig.pose import Pose, check_pose
+from toonmotion.rig.skeleton import Skeleton
+from toonmotion.shape.curve_skeleton import joint_suggestions
 
 # The project folder's key-frames, in the format `toonmotion animate` reads.
 KEYS_FILE = "keys.json"
@@ -138,6 +144,11 @@ def describe(editing: Editing) -> dict[str, Any]:
         "joints": [{"name": n, "parent": int(p), "position": skeleton.positions[i].tolist()}
                    for i, (n, p) in enumerate(zip(skeleton.names, skeleton.parents, strict=True))],
         "bones": list(skeleton.bone_names),
+        # The curve skeleton (every 3rd pixel of each branch) and the joints it suggests, to place
+        # joints by (thesis 6.1).
+        "curve_skeleton": [path[::3].round(1).tolist() + [path[-1].tolist()]
+                           for path in character.curve_skeleton.paths],
+        "suggestions": joint_suggestions(character.curve_skeleton)[0].round(1).tolist(),
         **regions(character),
         "keys": keys(editing.timeline),
     }
@@ -286,6 +297,26 @@ def _key_edit(change: Callable[[Editing, dict[str, Any]], Timeline | None]) -> H
     return handle
 
 
+def _rig(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+    joints = message.get("joints")
+    if not isinstance(joints, list) or not joints:
+        raise SkeletonError("'joints' must list the skeleton's joints")
+    triples = []
+    for n, joint in enumerate(joints, start=1):
+        if not isinstance(joint, dict) or not isinstance(joint.get("name"), str) \
+                or not isinstance(joint.get("parent"), (str, type(None))):
+            raise SkeletonError(f"joint {n} needs a 'name', a 'parent' (a name or null) and a 'position'")
+        position = _point(joint.get("position"), f"joint {n}'s position")
+        triples.append((joint["name"], joint["parent"], position))
+    skeleton = Skeleton.from_joints(triples)
+    with editing.lock:
+        if editing.timeline is not None and set(skeleton.names) != set(editing.character.skeleton.names):
+            raise SkeletonError("the key-frames name the joints: keep their names, or delete the keys first")
+        character, skipped = api.rig_again(editing.character, skeleton)
+        editing.edited(character)
+    return {"type": "rigged", "skipped": len(skipped)}
+
+
 def _set_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
     frame = _frame(message, "frame")
     pose = Pose(_positions(editing, message.get("positions")))
@@ -332,6 +363,7 @@ _HANDLERS: dict[str, Handler] = {
     "delete_key": _key_edit(_delete_key),
     "move_key": _key_edit(_move_key),
     "frame": _frame_of_animation,
+    "rig": _rig,
 }
 
 

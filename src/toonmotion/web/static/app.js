@@ -3,12 +3,13 @@
 // mount returns {unmount()}. Add a panel by importing it into PANELS.
 import { MeshView } from "./mesh_view.js";
 import * as posePanel from "./pose_panel.js";
+import * as rigPanel from "./rig_panel.js";
 import * as regionsPanel from "./regions_panel.js";
 import * as timelinePanel from "./timeline_panel.js";
 import * as exaggeratePanel from "./exaggerate_panel.js";
 import * as exportPanel from "./export_panel.js";
 
-const PANELS = [posePanel, regionsPanel, timelinePanel, exaggeratePanel, exportPanel];
+const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, exportPanel];
 
 const token = new URLSearchParams(location.search).get("token") || "";
 
