@@ -51,7 +51,7 @@ PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "te
               "mesh_view.js": "text/javascript", "pose_panel.js": "text/javascript",
               "regions_panel.js": "text/javascript", "timeline_panel.js": "text/javascript",
               "exaggerate_panel.js": "text/javascript", "export_panel.js": "text/javascript",
-              "rig_panel.js": "text/javascript"}
+              "rig_panel.js": "text/javascript", "panel_kit.js": "text/javascript"}
 
 log = logging.getLogger("toonmotion.web")
 

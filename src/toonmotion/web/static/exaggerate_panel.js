@@ -5,6 +5,8 @@
 // Pose and Timeline panels. For the animation: the filter's strength and width, and a preview
 // that plays the key-frames with and without it.
 
+import { listen, nearest, newest } from "./panel_kit.js";
+
 export const name = "exaggerate";
 export const title = "Exaggerate";
 
@@ -16,7 +18,7 @@ export function mount(ctx) {
   const base = (ctx.pose || joints.map((j) => j.position)).map((p) => p.slice());
   const root = joints.findIndex((j) => j.parent < 0);
   let shown = base.map((p) => p.slice()), fixed = new Set(), arrow = null, dragging = false;
-  let playing = false, timer = null, busy = false, queued = null;
+  let playing = false, timer = null;
 
   side.innerHTML = `<h2>Exaggerate</h2>
     <p>Click joints to fix them (blue), then drag from the root to draw the acceleration.</p>
@@ -70,47 +72,23 @@ export function mount(ctx) {
     }
   };
 
-  async function send() {
-    if (busy || !queued) return;
-    busy = true;
-    const message = queued;
-    queued = null;
-    try {
-      const reply = await live.request(message);
-      view.setVertices(reply.U);
-      shown = reply.positions || base.map((p) => p.slice());
-      view.draw();
-      showError("");
-    } catch (error) {
-      showError(error.message);
-    } finally {
-      busy = false;
-      send();
-    }
-  }
+  const send = newest(live, (reply) => {
+    view.setVertices(reply.U);
+    shown = reply.positions || base.map((p) => p.slice());
+    view.draw();
+    showError("");
+  }, (error) => showError(error.message));
 
   function exaggerate() {
-    queued = arrow && fixed.size
+    send(arrow && fixed.size
       ? { type: "pose", positions: base, accel: arrow, fixed: [...fixed].map((i) => joints[i].name) }
-      : { type: "pose", positions: base };
-    send();
-  }
-
-  // The joint under the pointer; the root wins a tie (a hip often sits on it).
-  function nearest(event) {
-    const ratio = window.devicePixelRatio || 1;
-    const [ex, ey] = view.toCanvas(view.toDrawing(event));
-    let best = -1, bestDistance = (HANDLE + 4) * ratio;
-    shown.forEach((p, i) => {
-      const [x, y] = view.toCanvas(p), d = Math.hypot(x - ex, y - ey);
-      if (d < bestDistance || (d === bestDistance && i === root)) { best = i; bestDistance = d; }
-    });
-    return best;
+      : { type: "pose", positions: base });
   }
 
   const overlay = view.overlay;
   const down = (event) => {
-    const hit = nearest(event);
+    // The root first: a hip often sits on it.
+    const hit = nearest(view, [shown[root]], event, HANDLE + 4) === 0 ? root : nearest(view, shown, event, HANDLE + 4);
     if (hit === root) {
       dragging = true;
       overlay.setPointerCapture(event.pointerId);
@@ -128,9 +106,7 @@ export function mount(ctx) {
     exaggerate();
   };
   const up = () => { dragging = false; };
-  overlay.addEventListener("pointerdown", down);
-  overlay.addEventListener("pointermove", move);
-  overlay.addEventListener("pointerup", up);
+  const unlisten = listen(overlay, { pointerdown: down, pointermove: move, pointerup: up });
 
   document.getElementById("exaggerate-use").onclick = () => {
     ctx.pose = shown.map((p) => p.slice());
@@ -184,9 +160,7 @@ export function mount(ctx) {
   return {
     unmount() {
       stop();
-      overlay.removeEventListener("pointerdown", down);
-      overlay.removeEventListener("pointermove", move);
-      overlay.removeEventListener("pointerup", up);
+      unlisten();
       view.drawOverlay = () => {};
     },
   };

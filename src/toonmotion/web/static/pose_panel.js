@@ -3,6 +3,8 @@
 // (thesis fig. 6.2a). While a reply is awaited, newer drags replace the queued pose, so the
 // drawing keeps up with the pointer instead of falling behind it.
 
+import { listen, nearest, newest } from "./panel_kit.js";
+
 export const name = "pose";
 export const title = "Pose";
 
@@ -14,7 +16,7 @@ export function mount(ctx) {
   // The pose being made, shared with the other panels (the Timeline keys it).
   ctx.pose = ctx.pose || rest.map((p) => p.slice());
   const positions = ctx.pose;
-  let dragging = -1, queued = null, busy = false;
+  let dragging = -1, started = 0;
 
   side.innerHTML = `<h2>Pose</h2>
     <p>Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent.</p>
@@ -43,46 +45,21 @@ export function mount(ctx) {
     });
   };
 
-  async function send() {
-    if (busy || !queued) return;
-    busy = true;
-    const pose = queued;
-    queued = null;
-    const started = performance.now();
-    try {
-      const reply = await live.request({ type: "pose", positions: pose });
-      view.setVertices(reply.U);
-      document.getElementById("pose-timing").textContent = `last update ${(performance.now() - started).toFixed(1)} ms`;
-      showError("");
-    } catch (error) {
-      showError(error.message);
-    } finally {
-      busy = false;
-      send();
-    }
-  }
+  const send = newest(live, (reply) => {
+    view.setVertices(reply.U);
+    document.getElementById("pose-timing").textContent = `last update ${(performance.now() - started).toFixed(1)} ms`;
+    showError("");
+  }, (error) => showError(error.message));
 
   function posed() {
-    queued = positions.map((p) => p.slice());
+    started = performance.now();
+    send({ type: "pose", positions: positions.map((p) => p.slice()) });
     view.draw();
-    send();
-  }
-
-  function nearest(event) {
-    const ratio = window.devicePixelRatio || 1;
-    let best = -1, bestDistance = (HANDLE + 4) * ratio;
-    const [ex, ey] = view.toCanvas(view.toDrawing(event));
-    positions.forEach((p, i) => {
-      const [x, y] = view.toCanvas(p);
-      const d = Math.hypot(x - ex, y - ey);
-      if (d <= bestDistance) { best = i; bestDistance = d; }
-    });
-    return best;
   }
 
   const overlay = view.overlay;
   const down = (event) => {
-    dragging = nearest(event);
+    dragging = nearest(view, positions, event, HANDLE + 4);
     if (dragging < 0) return;
     overlay.setPointerCapture(event.pointerId);
     view.draw();
@@ -115,10 +92,7 @@ export function mount(ctx) {
       showError(error.message);
     }
   }
-  overlay.addEventListener("pointerdown", down);
-  overlay.addEventListener("pointermove", move);
-  overlay.addEventListener("pointerup", up);
-  overlay.addEventListener("pointercancel", up);
+  const unlisten = listen(overlay, { pointerdown: down, pointermove: move, pointerup: up, pointercancel: up });
   document.getElementById("pose-reset").onclick = () => {
     rest.forEach((p, i) => { positions[i] = p.slice(); });
     posed();
@@ -130,10 +104,7 @@ export function mount(ctx) {
   return {
     positions,
     unmount() {
-      overlay.removeEventListener("pointerdown", down);
-      overlay.removeEventListener("pointermove", move);
-      overlay.removeEventListener("pointerup", up);
-      overlay.removeEventListener("pointercancel", up);
+      unlisten();
       view.drawOverlay = () => {};
     },
   };

@@ -4,6 +4,8 @@
 // Undo / Redo (Ctrl+Z, Ctrl+Shift+Z or Ctrl+Y) take edits back and make them again, also after
 // a reload: the history lives in the project.
 
+import { listen } from "./panel_kit.js";
+
 export const name = "regions";
 export const title = "Regions";
 
@@ -98,10 +100,8 @@ export function mount(ctx) {
       edit({ type: "redo" });
     }
   };
-  overlay.addEventListener("pointerdown", down);
-  overlay.addEventListener("pointermove", move);
-  overlay.addEventListener("pointerup", up);
-  window.addEventListener("keydown", keys);
+  const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up }),
+                    listen(window, { keydown: keys })];
   document.getElementById("regions-undo").onclick = () => edit({ type: "undo" });
   document.getElementById("regions-redo").onclick = () => edit({ type: "redo" });
   view.setVertices(project.vertices); // regions are edited on the rest pose
@@ -110,10 +110,7 @@ export function mount(ctx) {
 
   return {
     unmount() {
-      overlay.removeEventListener("pointerdown", down);
-      overlay.removeEventListener("pointermove", move);
-      overlay.removeEventListener("pointerup", up);
-      window.removeEventListener("keydown", keys);
+      for (const off of unlisten) off();
       view.drawOverlay = () => {};
     },
   };

@@ -4,6 +4,8 @@
 // selected joint in the side panel. "Rig with this skeleton" rigs the drawing again (region
 // edits are replayed) and saves the project; the page then reloads on the new rig.
 
+import { listen, nearest } from "./panel_kit.js";
+
 export const name = "rig";
 export const title = "Rig";
 
@@ -93,25 +95,14 @@ export function mount(ctx) {
     });
   };
 
-  function nearest(points, event, reach) {
-    const ratio = window.devicePixelRatio || 1;
-    const [ex, ey] = view.toCanvas(view.toDrawing(event));
-    let best = -1, bestDistance = reach * ratio;
-    points.forEach((p, i) => {
-      const [x, y] = view.toCanvas(p), d = Math.hypot(x - ex, y - ey);
-      if (d < bestDistance) { best = i; bestDistance = d; }
-    });
-    return best;
-  }
-
   function snapped(event) {
-    const s = nearest(project.suggestions, event, SNAP);
+    const s = nearest(view, project.suggestions, event, SNAP);
     return s >= 0 ? project.suggestions[s].slice() : view.toDrawing(event);
   }
 
   const overlay = view.overlay;
   const down = (event) => {
-    const hit = nearest(draft.map((j) => j.position), event, HANDLE + 4);
+    const hit = nearest(view, draft.map((j) => j.position), event, HANDLE + 4);
     moved = false;
     if (hit >= 0) {
       selected = hit;
@@ -137,10 +128,8 @@ export function mount(ctx) {
   const keys = (event) => {
     if ((event.key === "Delete" || event.key === "Backspace") && document.activeElement === document.body) remove();
   };
-  overlay.addEventListener("pointerdown", down);
-  overlay.addEventListener("pointermove", move);
-  overlay.addEventListener("pointerup", up);
-  window.addEventListener("keydown", keys);
+  const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up }),
+                    listen(window, { keydown: keys })];
 
   document.getElementById("rig-go").onclick = async () => {
     const button = document.getElementById("rig-go");
@@ -161,10 +150,7 @@ export function mount(ctx) {
 
   return {
     unmount() {
-      overlay.removeEventListener("pointerdown", down);
-      overlay.removeEventListener("pointermove", move);
-      overlay.removeEventListener("pointerup", up);
-      window.removeEventListener("keydown", keys);
+      for (const off of unlisten) off();
       view.drawOverlay = () => {};
     },
   };

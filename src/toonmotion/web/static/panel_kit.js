@@ -1,0 +1,48 @@
+// What the panels share: event listeners that come off together, the handle under the pointer,
+// and a sender that keeps only the newest message waiting while one is answered (so the drawing
+// keeps up with the pointer instead of falling behind it).
+
+// Add handlers ({type: function}) to target; returns a function that removes them all.
+export function listen(target, handlers) {
+  for (const [type, handler] of Object.entries(handlers)) target.addEventListener(type, handler);
+  return () => {
+    for (const [type, handler] of Object.entries(handlers)) target.removeEventListener(type, handler);
+  };
+}
+
+// The index of the point (drawing pixels) nearest the pointer within reach CSS pixels, or -1;
+// on a tie the first point wins.
+export function nearest(view, points, event, reach) {
+  const ratio = window.devicePixelRatio || 1;
+  const [ex, ey] = view.toCanvas(view.toDrawing(event));
+  let best = -1, bestDistance = reach * ratio;
+  points.forEach((p, i) => {
+    const [x, y] = view.toCanvas(p), d = Math.hypot(x - ex, y - ey);
+    if (d < bestDistance) { best = i; bestDistance = d; }
+  });
+  return best;
+}
+
+// send(message) through live, one at a time; a message sent while another is answered replaces
+// any that was waiting. Replies go to onReply, errors to onError.
+export function newest(live, onReply, onError) {
+  let busy = false, queued = null;
+  async function next() {
+    if (busy || !queued) return;
+    busy = true;
+    const message = queued;
+    queued = null;
+    try {
+      onReply(await live.request(message));
+    } catch (error) {
+      onError(error);
+    } finally {
+      busy = false;
+      next();
+    }
+  }
+  return (message) => {
+    queued = message;
+    next();
+  };
+}
