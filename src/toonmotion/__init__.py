@@ -21,7 +21,7 @@ _API = (
     "Animation", "Capture", "Character", "DeformSettings", "FilterSettings", "Motion", "PosedFrame",
     "RigSettings", "SameDepthOverlap", "TrackSettings", "animate_character", "correct_regions",
     "delete_key", "exaggerate", "filter_motion", "load_project", "move_key", "pose_character",
-    "pose_view", "redo_edits", "render_pose", "retarget", "rig_again", "rig_image", "rotate_joint",
+    "pose_view", "redo_edits", "render_pose", "retarget", "retime", "rig_again", "rig_image", "rotate_joint",
     "same_depth_overlaps", "save_project", "set_depth", "set_key", "suggest_joints", "track_footage",
     "undo_edits", "write_animation",
 )

@@ -215,6 +215,11 @@ def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
     page.wait_for_function("window.toonmotion.project.keys.keys.length === 2")
     timeline = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
     assert [k.frame for k in timeline.keys] == [0, 12]  # saved in the project as it happened
+    page.fill("#timeline-fps", "24")
+    page.dispatch_event("#timeline-fps", "change")
+    page.wait_for_function("window.toonmotion.project.keys.fps === 24")
+    timeline = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
+    assert timeline.fps == 24.0
     _set_frame(page, 6)
     served = np.reshape(page.evaluate("Array.from(window.toonmotion.view.vertices)"), (-1, 2))
     expected = api.animate_character(api.load_project(folder), timeline).meshes[6][1]

@@ -460,3 +460,44 @@ def test_while_there_are_keys_a_rig_keeps_the_joint_names(editable):
         _keyed(folder, socket)
         reply = _send(socket, {"type": "rig", "joints": joints})
     assert reply["type"] == "error" and "keep their names" in reply["message"]
+
+
+def test_timing_changes_the_keys_rate_and_easing(editable):
+    from toonmotion.io.pose_json import load_keyframes
+
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _keyed(folder, socket)
+        reply = _send(socket, {"type": "timing", "fps": 24, "ease": "linear"})
+        bad_fps = _send(socket, {"type": "timing", "fps": 0})
+        bad_ease = _send(socket, {"type": "timing", "ease": "bouncy"})
+    assert (reply["keys"]["fps"], reply["keys"]["ease"]) == (24.0, "linear")
+    saved = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
+    assert (saved.fps, saved.ease, [k.frame for k in saved.keys]) == (24.0, "linear", [0, 6])
+    assert bad_fps["type"] == "error" and "fps" in bad_fps["message"]
+    assert bad_ease["type"] == "error" and "ease must be one of" in bad_ease["message"]
+
+
+def test_the_regions_name_the_vertices_that_fell_back(client, project):
+    character = api.load_project(project)
+    data = _get(client, "/api/project").json()
+    assert data["fallback"] == np.flatnonzero(character.binding.fallback).tolist()
+
+
+def test_an_exaggerated_export_is_the_filtered_animation(editable):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _keyed(folder, socket)
+        for message in ({"name": "plain"}, {"name": "lively", "strength": 3.0, "sigma": 2.0}):
+            reply = _send(socket, {"type": "export", "format": "png", **message})
+            while reply["type"] == "progress":
+                reply = socket.receive_json()
+            assert reply["type"] == "exported", reply
+    plain = sorted((folder / "exports" / "plain").glob("*.png"))
+    lively = sorted((folder / "exports" / "lively").glob("*.png"))
+    assert len(plain) == len(lively) == 7
+    differ = [
+        not np.array_equal(np.asarray(Image.open(a)), np.asarray(Image.open(b)))
+        for a, b in zip(plain, lively, strict=True)
+    ]
+    assert any(differ)

@@ -22,7 +22,7 @@ from __future__ import annotations
 from toonmotion.animate.animation import Animation, SameDepthOverlap, exaggerate, same_depth_overlaps
 from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
-from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, set_key
+from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, retime, set_key
 from toonmotion.api.capture import track_footage
 from toonmotion.api.posing import PosedFrame, pose_character, pose_view, render_pose, rotate_joint
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
@@ -57,6 +57,7 @@ __all__ = [
     "redo_edits",
     "render_pose",
     "retarget",
+    "retime",
     "rig_again",
     "rig_image",
     "rotate_joint",

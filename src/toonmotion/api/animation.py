@@ -215,3 +215,33 @@ def move_key(skeleton: Skeleton, timeline: Timeline, frame: int, to: int) -> Tim
         raise KeyframeError(f"a key's frame must be a whole number >= 0, got {to!r}")
     moved = [Keyframe(to, key.pose, key.edits) if key.frame == frame else key for key in timeline.keys]
     return make_timeline(skeleton, moved, fps=timeline.fps, ease=timeline.ease)
+
+
+def retime(skeleton: Skeleton, timeline: Timeline, *, fps: float | None = None,
+           ease: str | None = None) -> Timeline:
+    """``timeline`` with another frame rate or easing (the keys stay on their frames).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    timeline : Timeline
+    fps : float, optional
+        Frames per second, 0.01 to 1000.
+    ease : str, optional
+        ``"linear"``, ``"in-out"``, ``"in"`` or ``"out"``.
+
+    Returns
+    -------
+    Timeline
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
+    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
+    >>> faster = retime(hero.skeleton, keys, fps=24, ease="linear")
+    >>> faster.fps, faster.ease
+    (24.0, 'linear')
+    """
+    return make_timeline(skeleton, timeline.keys, fps=timeline.fps if fps is None else fps,
+                         ease=timeline.ease if ease is None else ease)

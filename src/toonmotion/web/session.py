@@ -21,6 +21,8 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   rig the drawing again with this skeleton, replaying the region edits; saved before the reply
   ``{"type": "rigged", "skipped": n}`` (edits that no longer apply). While there are key-frames,
   the joints' names must stay the same (the keys name them).
+* ``{"type": "timing", "fps": 12, "ease": "in-out"}``: the key-frames' rate and easing, saved
+  like a key edit. Reply: ``{"type": "keys", ...}``.
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
   Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
 * ``{"type": "export", "format": "gif" | "mp4" | "png", "name": "walk"}``: render the key-frames'
@@ -161,6 +163,8 @@ def regions(character: api.Character) -> dict[str, Any]:
     return {
         "triangles": character.mesh.F[order].ravel().tolist(),
         "vertex_bone": character.binding.bone.tolist(),
+        # Vertices the decomposition could not place by the rule and attached by distance.
+        "fallback": np.flatnonzero(character.binding.fallback).tolist(),
         "depth": character.depth.tolist(),
         "edits": len(character.edits),
         "undone": len(character.undone),
@@ -323,6 +327,14 @@ def _set_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
     return api.set_key(editing.character.skeleton, editing.timeline, frame, pose)
 
 
+def _timing(editing: Editing, message: dict[str, Any]) -> Timeline | None:
+    timeline = _timeline(editing)
+    fps, ease = message.get("fps", timeline.fps), message.get("ease", timeline.ease)
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)):
+        raise KeyframeError(f"'fps' must be a number of frames per second, got {str(fps)[:20]}")
+    return api.retime(editing.character.skeleton, timeline, fps=fps, ease=ease)
+
+
 def _delete_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
     return api.delete_key(editing.character.skeleton, _timeline(editing), _frame(message, "frame"))
 
@@ -362,6 +374,7 @@ _HANDLERS: dict[str, Handler] = {
     "set_key": _key_edit(_set_key),
     "delete_key": _key_edit(_delete_key),
     "move_key": _key_edit(_move_key),
+    "timing": _key_edit(_timing),
     "frame": _frame_of_animation,
     "rig": _rig,
 }

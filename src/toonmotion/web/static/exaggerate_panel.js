@@ -130,8 +130,7 @@ export function mount(ctx) {
       const started = performance.now();
       const on = document.getElementById("exaggerate-on").checked;
       const message = { type: "frame", frame: at };
-      if (on) Object.assign(message, { strength: Number(document.getElementById("exaggerate-strength").value),
-                                       sigma: Number(document.getElementById("exaggerate-sigma").value) });
+      if (on) Object.assign(message, settings());
       try {
         const reply = await live.request(message);
         view.setVertices(reply.U);
@@ -147,6 +146,15 @@ export function mount(ctx) {
     };
     next();
   }
+
+  // The animation's filter settings, also what the Export panel uses for an exaggerated export.
+  function settings() {
+    ctx.exaggeration = { strength: Number(document.getElementById("exaggerate-strength").value),
+                         sigma: Number(document.getElementById("exaggerate-sigma").value) };
+    return ctx.exaggeration;
+  }
+  document.getElementById("exaggerate-strength").onchange = settings;
+  document.getElementById("exaggerate-sigma").onchange = settings;
 
   function stop() {
     playing = false;

@@ -13,6 +13,8 @@ export function mount(ctx) {
     <p><label>Format <select id="export-format">
       <option value="gif">GIF</option><option value="mp4">MP4</option><option value="png">PNG frames</option>
     </select></label></p>
+    <p><label><input id="export-exaggerated" type="checkbox"> exaggerated (the Exaggerate panel's
+      strength and width, or 1.5 and 3)</label></p>
     <p><button id="export-go">Export</button></p>
     <p><progress id="export-progress" max="1" value="0" hidden></progress></p>
     <p id="export-result"></p>`;
@@ -23,6 +25,9 @@ export function mount(ctx) {
   button.onclick = async () => {
     const format = document.getElementById("export-format").value;
     const message = { type: "export", format, name: document.getElementById("export-name").value };
+    if (document.getElementById("export-exaggerated").checked) {
+      Object.assign(message, ctx.exaggeration || { strength: 1.5, sigma: 3 });
+    }
     button.disabled = true;
     bar.hidden = false;
     bar.value = 0;

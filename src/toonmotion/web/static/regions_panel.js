@@ -19,11 +19,17 @@ export function mount(ctx) {
     <p>Click a region to bring it forward (Shift-click: back). Draw a lasso round vertices to
     attach them to <select id="regions-bone"></select></p>
     <p><button id="regions-undo">Undo</button> <button id="regions-redo">Redo</button></p>
-    <p id="regions-state"></p>`;
+    <p id="regions-state"></p>
+    <p id="regions-fallback"></p>`;
   const select = document.getElementById("regions-bone");
   for (const bone of project.bones) select.append(new Option(bone, bone));
 
   function showState() {
+    const count = project.fallback.length;
+    document.getElementById("regions-fallback").textContent = count
+      ? `${count} vertices (red dots) were attached by distance, not by the decomposition's rule: ` +
+        "check them, and lasso them to the right bone if they are wrong."
+      : "";
     document.getElementById("regions-state").textContent =
       `${project.edits} edit${project.edits === 1 ? "" : "s"}, ${project.undone} to redo`;
     document.getElementById("regions-undo").disabled = project.edits === 0;
@@ -44,6 +50,12 @@ export function mount(ctx) {
       pen.fill();
     }
     pen.globalAlpha = 1;
+    pen.fillStyle = "#e53e3e";
+    for (const v of project.fallback) {
+      pen.beginPath();
+      pen.arc(...view.toCanvas([V[2 * v], V[2 * v + 1]]), 2.5 * (window.devicePixelRatio || 1), 0, 2 * Math.PI);
+      pen.fill();
+    }
     if (lasso && lasso.length > 1) {
       pen.beginPath();
       pen.moveTo(...view.toCanvas(lasso[0]));
@@ -61,7 +73,7 @@ export function mount(ctx) {
     try {
       const reply = await live.request(message);
       Object.assign(project, { triangles: reply.triangles, vertex_bone: reply.vertex_bone, depth: reply.depth,
-                               edits: reply.edits, undone: reply.undone });
+                               fallback: reply.fallback, edits: reply.edits, undone: reply.undone });
       view.setTriangles(reply.triangles);
       showState();
       showError("");

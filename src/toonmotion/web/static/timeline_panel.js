@@ -16,6 +16,9 @@ export function mount(ctx) {
     <p><input id="timeline-scrub" type="range" min="0" value="0" style="width: 100%"
        aria-label="frame"> frame <output id="timeline-frame">0</output></p>
     <p><button id="timeline-key">Key this frame</button> <button id="timeline-play">Play</button></p>
+    <p><label>Rate <input id="timeline-fps" type="number" min="0.01" max="1000" step="1" style="width: 4em">
+      fps</label> <label>Easing <select id="timeline-ease"><option>linear</option><option>in-out</option>
+      <option>in</option><option>out</option></select></label></p>
     <ol id="timeline-keys"></ol>
     <p>Make the pose in the Pose panel, then key it here.</p>`;
   const scrub = document.getElementById("timeline-scrub");
@@ -39,7 +42,29 @@ export function mount(ctx) {
       list.append(item);
     }
     scrub.max = String(Math.max(24, lastFrame() + 12));
+    if (project.keys) {
+      document.getElementById("timeline-fps").value = project.keys.fps;
+      document.getElementById("timeline-ease").value = project.keys.ease;
+    }
   }
+
+  // Onion skin: the keys either side of the current frame, as faint skeletons.
+  view.drawOverlay = (pen) => {
+    const keys = project.keys ? project.keys.keys : [];
+    const before = keys.filter((k) => k.frame < ctx.frame).pop(), after = keys.find((k) => k.frame > ctx.frame);
+    pen.lineWidth = 2 * (window.devicePixelRatio || 1);
+    for (const [key, colour] of [[before, "rgba(49, 130, 206, 0.45)"], [after, "rgba(221, 107, 32, 0.45)"]]) {
+      if (!key) continue;
+      pen.strokeStyle = colour;
+      project.joints.forEach((joint, i) => {
+        if (joint.parent < 0) return;
+        pen.beginPath();
+        pen.moveTo(...view.toCanvas(key.positions[joint.parent]));
+        pen.lineTo(...view.toCanvas(key.positions[i]));
+        pen.stroke();
+      });
+    }
+  };
 
   async function change(message) {
     try {
@@ -65,8 +90,8 @@ export function mount(ctx) {
     mark(at);
     if (!project.keys) return;
     const reply = await live.request({ type: "frame", frame: at });
-    view.setVertices(reply.U);
     ctx.pose = reply.positions;
+    view.setVertices(reply.U);
   }
 
   async function play() {
@@ -103,7 +128,10 @@ export function mount(ctx) {
     change({ type: "set_key", frame: ctx.frame, positions });
   };
   document.getElementById("timeline-play").onclick = () => (playing ? stop() : play());
-  view.drawOverlay = () => {};
+  const timing = () => change({ type: "timing", fps: Number(document.getElementById("timeline-fps").value),
+                                ease: document.getElementById("timeline-ease").value });
+  document.getElementById("timeline-fps").onchange = timing;
+  document.getElementById("timeline-ease").onchange = timing;
   showKeys();
   mark(ctx.frame); // the drawing stays as the Pose panel left it, to be keyed here
   status(project.keys ? "scrub or play" : "key a pose to start");
@@ -111,6 +139,7 @@ export function mount(ctx) {
   return {
     unmount() {
       stop();
+      view.drawOverlay = () => {};
     },
   };
 }
