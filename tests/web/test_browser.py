@@ -229,6 +229,12 @@ def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
     page.wait_for_timeout(800)
     page.click("#timeline-play")
     assert page.locator("#timeline-play").text_content() == "Play"
+    _set_frame(page, 18)
+    page.click("#timeline-keys li[data-frame='0'] .copy")  # back to the rest pose at 18
+    page.wait_for_function("window.toonmotion.project.keys.keys.length === 3")
+    copied = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
+    assert [k.frame for k in copied.keys] == [0, 12, 18]
+    np.testing.assert_array_equal(copied.keys[2].pose.positions, copied.keys[0].pose.positions)
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 
@@ -242,7 +248,7 @@ def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
         "document.getElementById('export-result').textContent.includes('exports/walk.gif')"
     )
     with Image.open(folder / "exports" / "walk.gif") as gif:
-        assert gif.n_frames == 13  # frames 0 to 12 of the keys set in the Timeline test
+        assert gif.n_frames == 19  # frames 0 to 18 of the keys set in the Timeline test
     link = page.locator("#export-result a")
     assert link.get_attribute("download") == "walk.gif"
     assert page.locator("#export-progress").is_hidden() and page.errors == []

@@ -1,5 +1,6 @@
 // The Timeline panel: key-frames on a frame ruler. "Key this frame" keys the pose made in the
-// Pose panel at the current frame; keys can be moved and deleted; the slider scrubs through the
+// Pose panel at the current frame; keys can be moved, copied to the current frame (a hold, or a
+// return to a pose) and deleted; the slider scrubs through the
 // in-betweens and Play plays them at the animation's frame rate. Every change is saved in the
 // project folder's keys.json at once (the file `toonmotion animate PROJECT PROJECT/keys.json`
 // reads). Scrubbing to a frame also makes its pose the Pose panel's, to adjust and key again.
@@ -35,10 +36,12 @@ export function mount(ctx) {
       const item = document.createElement("li");
       item.dataset.frame = key.frame;
       item.innerHTML = `key at frame <input type="number" min="0" value="${key.frame}" style="width: 5em"
-        aria-label="move to frame"> <button>Delete</button>`;
+        aria-label="move to frame"> <button class="copy">Copy here</button> <button class="delete">Delete</button>`;
       item.querySelector("input").onchange = (event) =>
         change({ type: "move_key", frame: key.frame, to: Number(event.target.value) });
-      item.querySelector("button").onclick = () => change({ type: "delete_key", frame: key.frame });
+      item.querySelector(".copy").title = "Key this pose again at the current frame";
+      item.querySelector(".copy").onclick = () => change({ type: "set_key", frame: ctx.frame, positions: key.positions });
+      item.querySelector(".delete").onclick = () => change({ type: "delete_key", frame: key.frame });
       list.append(item);
     }
     scrub.max = String(Math.max(24, lastFrame() + 12));
