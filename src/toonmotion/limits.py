@@ -46,6 +46,8 @@ class Limits:
         Separate pieces in a figure's mask (specks of dust or a dithered alpha count).
     file_bytes : int
         Size of a JSON, YAML or BVH file read.
+    upload_bytes : int
+        Size of a file sent to the editor (footage).
     """
 
     image_pixels: int = 40_000_000
@@ -57,6 +59,7 @@ class Limits:
     joints: int = 1_000
     figure_parts: int = 200
     file_bytes: int = 256_000_000
+    upload_bytes: int = 500_000_000
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

@@ -307,3 +307,30 @@ def test_rig_move_a_joint_and_rig_again(page, editor):
     assert after.skeleton.positions[head, 1] < before.skeleton.positions[head, 1] - 5
     assert len(after.edits) == len(before.edits)  # the region edits were replayed
     assert page.locator("#error").is_hidden()
+
+
+def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor, tmp_path):
+    from toonmotion.io.motion_json import load_motion
+    from toonmotion.samples import sample_character_on
+
+    folder = editor[1]
+    picture = sample_character_on("white", scale=0.5)[0]  # the character itself, walking right
+    frames = [Image.fromarray(np.roll(picture, 2 * t, axis=1)) for t in range(4)]
+    frames[0].save(tmp_path / "walk.gif", save_all=True, append_images=frames[1:], duration=80)
+    page.click("nav button[data-panel=capture]")
+    page.set_input_files("#capture-file", str(tmp_path / "walk.gif"))
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('place the joints')")
+    assert "4 frames of 210×300" in page.locator("#capture-info").text_content()
+    page.click("#capture-track")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
+    motion = load_motion(folder / "motions" / "captured.json")
+    assert motion.positions.shape[0] == 4
+    assert np.median(motion.positions[-1, :, 0] - motion.positions[0, :, 0]) == pytest.approx(6, abs=1)
+    page.evaluate("""() => { const s = document.getElementById('capture-scrub');
+        s.value = '3'; s.dispatchEvent(new Event('input')); }""")
+    page.click("#capture-play")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('the character plays')")
+    page.wait_for_timeout(500)
+    page.click("#capture-play")
+    assert page.evaluate("document.getElementById('mesh').style.visibility") == "visible"
+    assert page.errors == [] and page.locator("#error").is_hidden()

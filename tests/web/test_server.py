@@ -501,3 +501,81 @@ def test_an_exaggerated_export_is_the_filtered_animation(editable):
         for a, b in zip(plain, lively, strict=True)
     ]
     assert any(differ)
+
+
+def _walking_gif():
+    """Four frames of the sample walking right on white, as GIF bytes."""
+    from toonmotion.samples import sample_character_on
+
+    picture = sample_character_on("white", scale=0.5)[0]
+    frames = [Image.fromarray(np.roll(picture, 2 * t, axis=1)) for t in range(4)]
+    buffer = io.BytesIO()
+    frames[0].save(buffer, format="GIF", save_all=True, append_images=frames[1:], duration=80)
+    return buffer.getvalue()
+
+
+def test_footage_is_tracked_saved_and_retargeted(editable):
+    from toonmotion.io.motion_json import load_motion
+
+    folder, client = editable
+    sent = client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif())
+    assert sent.status_code == 200, sent.text
+    footage = sent.json()
+    assert (footage["frames"], footage["width"], footage["height"]) == (4, 210, 300)
+    assert footage["joints"] and all(len(j["size"]) == 2 for j in footage["joints"])
+    frame = Image.open(io.BytesIO(_get(client, "/api/footage/3.png").content))
+    assert frame.size == (210, 300)
+    # The character's own joints, placed on the figure (here it is the figure, at its size), so
+    # that the motion retargets by name.
+    joints = [{**j, "size": [16, 16]} for j in _joints(api.load_project(folder))]
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        socket.send_text(json.dumps({"id": 4, "type": "track", "joints": joints}))
+        reply = socket.receive_json()
+        while reply["type"] == "progress":
+            reply = socket.receive_json()
+        assert reply["type"] == "tracked", reply
+        retargeted = _send(socket, {"type": "retarget"})
+        shown = _send(socket, {"type": "frame", "frame": 3, "source": "capture"})
+    motion = load_motion(folder / "motions" / "captured.json")  # saved in the project
+    assert motion.positions.shape == (4, len(joints), 2)
+    moved = np.asarray(reply["positions"])[-1] - np.asarray(reply["positions"])[0]
+    assert np.median(moved[:, 0]) == pytest.approx(6, abs=1)  # the figure walked 6 px right
+    assert retargeted["type"] == "retargeted", retargeted
+    assert (retargeted["first"], retargeted["last"]) == (0, 3)
+    assert shown["type"] == "frame" and len(shown["U"]) == 2 * len(api.load_project(folder).mesh.V)
+
+
+@pytest.mark.parametrize(
+    ("url", "body", "status", "said"),
+    [
+        ("/api/footage?suffix=exe", b"x", 400, "send footage as"),
+        ("/api/footage", b"x", 400, "suffix"),
+        ("/api/footage?suffix=gif", b"not a gif at all", 400, "cannot read"),
+        ("/api/footage?suffix=mp4", b"\x00" * 2000, 400, "could not be decoded as a video"),
+    ],
+)
+def test_bad_footage_is_refused_in_one_line(editable, url, body, status, said):
+    folder, client = editable
+    reply = client.put(url, content=body, headers={"X-Toonmotion-Token": TOKEN})
+    assert reply.status_code == status and said in reply.json()["error"], reply.text
+    assert not list((folder / "footage").glob("*")) if (folder / "footage").exists() else True
+
+
+def test_footage_over_the_upload_limit_is_refused_as_it_arrives(editable):
+    from toonmotion import limits
+
+    folder, client = editable
+    with limits.using(upload_bytes=1000):
+        reply = client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif())
+    assert reply.status_code == 413 and "upload_bytes=1,000" in reply.json()["error"]
+    assert not (folder / "footage").exists() or list((folder / "footage").iterdir()) == []
+
+
+def test_tracking_and_retargeting_need_their_inputs(client):
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        track = _send(socket, {"type": "track", "joints": []})
+        retarget = _send(socket, {"type": "retarget"})
+        frame = _send(socket, {"type": "frame", "frame": 0, "source": "capture"})
+    assert "no footage yet" in track["message"]
+    assert "no tracked motion yet" in retarget["message"]
+    assert "nothing is retargeted yet" in frame["message"]

@@ -27,7 +27,7 @@ def edit(
         "--host", help="Address to bind; anything but 127.0.0.1 lets other machines in.")] = "127.0.0.1",
     open_browser: Annotated[bool, typer.Option("--open", help="Open the editor in the web browser.")] = False,
 ) -> None:
-    """Edit a project in the browser: pose, rig, regions, key-frames, exaggeration, export."""
+    """Edit a project in the browser: rig, pose, regions, key-frames, exaggerate, capture, export."""
     import uvicorn
 
     from toonmotion.web.server import create_app, new_token

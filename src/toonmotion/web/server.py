@@ -20,19 +20,25 @@ import hmac
 import json
 import logging
 import secrets
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI, Request, WebSocket, WebSocketDisconnect
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, Response
 from starlette.exceptions import HTTPException
 
+from toonmotion import api, limits
 from toonmotion.errors import ToonmotionError
+from toonmotion.io.atomic import atomic_path
+from toonmotion.io.frames import load_frames
 from toonmotion.io.image import png_bytes
 from toonmotion.web.session import (
     EXPORT_FORMATS,
     EXPORT_NAME,
     EXPORTS,
+    FOOTAGE,
     MAX_MESSAGE_BYTES,
     Editing,
     answer,
@@ -41,6 +47,7 @@ from toonmotion.web.session import (
     exaggeration_of,
     export,
     one_line,
+    track,
 )
 
 __all__ = ["MAX_MESSAGE_BYTES", "PAGE_FILES", "create_app", "new_token"]
@@ -51,7 +58,11 @@ PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "te
               "mesh_view.js": "text/javascript", "pose_panel.js": "text/javascript",
               "regions_panel.js": "text/javascript", "timeline_panel.js": "text/javascript",
               "exaggerate_panel.js": "text/javascript", "export_panel.js": "text/javascript",
-              "rig_panel.js": "text/javascript", "panel_kit.js": "text/javascript"}
+              "rig_panel.js": "text/javascript", "panel_kit.js": "text/javascript",
+              "capture_panel.js": "text/javascript"}
+
+# Footage the editor takes: what toonmotion.io.frames reads as one file.
+FOOTAGE_SUFFIXES = ("mp4", "mov", "avi", "mkv", "webm", "gif", "png", "apng", "webp")
 
 log = logging.getLogger("toonmotion.web")
 
@@ -103,6 +114,12 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     async def http_error(request: Request, error: HTTPException) -> JSONResponse:
         return JSONResponse({"error": one_line(str(error.detail))}, status_code=error.status_code)
 
+    @app.exception_handler(RequestValidationError)
+    async def bad_request(request: Request, error: RequestValidationError) -> JSONResponse:
+        first = error.errors()[0]
+        where = ".".join(str(part) for part in first.get("loc", ()))
+        return JSONResponse({"error": one_line(f"{where}: {first.get('msg', 'not valid')}")}, status_code=400)
+
     @app.exception_handler(Exception)
     async def internal_error(request: Request, error: Exception) -> JSONResponse:
         log.error("internal error on %s: %s: %s", request.url.path, type(error).__name__, error)
@@ -130,6 +147,40 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     def texture() -> Response:
         return Response(png_bytes(editing.character.texture), media_type="image/png")
 
+    @app.put("/api/footage")
+    async def footage(request: Request, suffix: str) -> dict[str, Any]:
+        """Footage to capture from, the request's body: saved in the project, read, joints suggested."""
+        if suffix.lower() not in FOOTAGE_SUFFIXES:
+            raise HTTPException(400, f"send footage as {', '.join(FOOTAGE_SUFFIXES)}, not {suffix[:10]!r}")
+        limit = limits.current().upload_bytes
+        file = editing.folder / FOOTAGE / f"clip.{suffix.lower()}"
+        received = 0
+        with atomic_path(file) as partial, open(partial, "wb") as out:
+            async for chunk in request.stream():
+                received += len(chunk)
+                if received > limit:
+                    raise HTTPException(413, f"the footage is over the limit upload_bytes={limit:,}; cut it "
+                                             "shorter or scale it down (or raise the limit with --limit)")
+                out.write(chunk)
+        try:
+            frames, fps = await asyncio.to_thread(load_frames, file)
+        except ToonmotionError:
+            file.unlink(missing_ok=True)
+            raise
+        skeleton, sizes = api.suggest_joints(frames)
+        rate = fps or 24.0
+        editing.footage, editing.capture, editing.captured = (frames, rate), None, None
+        return {"frames": len(frames), "width": frames.shape[2], "height": frames.shape[1], "fps": rate,
+                "joints": [{"name": n, "parent": None if p < 0 else skeleton.names[p],
+                            "position": skeleton.positions[i].tolist(), "size": sizes[i].tolist()}
+                           for i, (n, p) in enumerate(zip(skeleton.names, skeleton.parents, strict=True))]}
+
+    @app.get("/api/footage/{index}.png")
+    def footage_frame(index: int) -> Response:
+        if editing.footage is None or not 0 <= index < len(editing.footage[0]):
+            raise HTTPException(404, f"no footage frame {index}")
+        return Response(png_bytes(editing.footage[0][index]), media_type="image/png")
+
     @app.get("/api/exports/{name}")
     def exported(name: str) -> FileResponse:
         stem, dot, suffix = name.rpartition(".")
@@ -152,16 +203,18 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         try:
             while True:
                 text = await socket.receive_text()
-                if _is_export(text):  # long: off the event loop, with progress messages
+                slow = _slow(text)
+                if slow is not None:  # long: off the event loop, with progress messages
                     ident = json.loads(text).get("id")
 
                     def progress(index: int, count: int, ident: Any = ident) -> None:
                         said = {"id": ident, "type": "progress", "index": index, "count": count}
                         asyncio.run_coroutine_threadsafe(socket.send_text(json.dumps(said)), loop)
 
-                    with contextlib.suppress(ToonmotionError, ValueError, AttributeError):
-                        editing.animated(exaggeration_of(json.loads(text)))  # solved on the loop
-                    reply = await asyncio.to_thread(export, editing, text, progress)
+                    if slow is export:
+                        with contextlib.suppress(ToonmotionError, ValueError, AttributeError):
+                            editing.animated(exaggeration_of(json.loads(text)))  # solved on the loop
+                    reply = await asyncio.to_thread(slow, editing, text, progress)
                 else:
                     reply = answer(editing, text)
                 await socket.send_text(json.dumps(reply))
@@ -171,12 +224,14 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     return app
 
 
-def _is_export(text: str) -> bool:
-    """Whether a message asks for an export (checked cheaply; a bad message goes to ``answer``)."""
-    if len(text) > MAX_MESSAGE_BYTES or '"export"' not in text:
-        return False
+def _slow(text: str) -> Callable[..., dict[str, Any]] | None:
+    """The handler of a message that runs off the event loop (an export, a tracking), or None
+    (checked cheaply; a bad message goes to ``answer``)."""
+    if len(text) > MAX_MESSAGE_BYTES or ('"export"' not in text and '"track"' not in text):
+        return None
     try:
         message = json.loads(text)
     except (ValueError, RecursionError):
-        return False
-    return isinstance(message, dict) and message.get("type") == "export"
+        return None
+    kind = message.get("type") if isinstance(message, dict) else None
+    return {"export": export, "track": track}.get(kind) if isinstance(kind, str) else None

@@ -23,6 +23,13 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   the joints' names must stay the same (the keys name them).
 * ``{"type": "timing", "fps": 12, "ease": "in-out"}``: the key-frames' rate and easing, saved
   like a key edit. Reply: ``{"type": "keys", ...}``.
+* Capture, on footage sent with ``PUT /api/footage``: ``{"type": "track", "joints": [{"name",
+  "parent", "position", "size": [w, h]}, ...]}`` tracks them from the first frame (off the event
+  loop, with progress messages, as an export) and saves the motion in the project folder's
+  ``motions/captured.json``; reply ``{"type": "tracked", "first": n, "positions": [...],
+  "confidence": [...]}``. ``{"type": "retarget"}`` replays it on the character; reply
+  ``{"type": "retargeted", "first": n, "last": m, "fps": f}``, whose frames a ``frame`` message
+  with ``"source": "capture"`` gives.
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
   Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
 * ``{"type": "export", "format": "gif" | "mp4" | "png", "name": "walk"}``: render the key-frames'
@@ -51,7 +58,17 @@ from toonmotion import api
 from toonmotion.animate.timeline import Timeline
 from toonmotion.deform.deformer import Deformer
 from toonmotion.deform.depth import draw_order
-from toonmotion.errors import EditError, FilterError, KeyframeError, PoseError, SkeletonError, ToonmotionError
+from toonmotion.errors import (
+    EditError,
+    FilterError,
+    KeyframeError,
+    MotionError,
+    PoseError,
+    SkeletonError,
+    ToonmotionError,
+    TrackingError,
+)
+from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import load_keyframes, save_keyframes
 from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
@@ -59,6 +76,9 @@ from toonmotion.shape.curve_skeleton import joint_suggestions
 
 # The project folder's key-frames, in the format `toonmotion animate` reads.
 KEYS_FILE = "keys.json"
+# Where footage sent to the editor is kept, and the motion tracked in it, in the project folder.
+FOOTAGE = "footage"
+CAPTURED = "motions/captured.json"
 # Where the editor's exports go, in the project folder; and what an export's name may be.
 EXPORTS = "exports"
 EXPORT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
@@ -80,6 +100,9 @@ class Editing:
     _deformer: Deformer | None = None
     _animation: api.Animation | None = None
     _exaggerated: tuple[api.FilterSettings, api.Animation] | None = None
+    footage: tuple[NDArray[np.uint8], float] | None = None  # frames and their rate
+    capture: api.Capture | None = None
+    captured: api.Animation | None = None  # the capture retargeted onto the character
 
     @classmethod
     def open(cls, folder: str | Path) -> Editing:
@@ -237,6 +260,39 @@ def export(editing: Editing, text: str, progress: Callable[[int, int], None]) ->
         return {"id": ident, "type": "error", "message": bug(error)}
 
 
+def track(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:
+    """The reply to a ``track`` message (module docstring), calling ``progress(index, count)``;
+    meant to run off the server's event loop, like :func:`export`."""
+    ident: Any = None
+    try:
+        message = json.loads(text)
+        ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
+        if editing.footage is None:
+            raise TrackingError("there is no footage yet: send a video, a GIF or frames first")
+        frames, fps = editing.footage
+        joints = message.get("joints")
+        if not isinstance(joints, list) or not joints:
+            raise TrackingError("'joints' must list the joints to track, each with its rectangle's 'size'")
+        skeleton = _skeleton(joints)
+        sizes = np.array([_point(j.get("size"), f"joint {j['name']!r}'s size") for j in joints], dtype=float)
+        order = [next(i for i, j in enumerate(joints) if j["name"] == name) for name in skeleton.names]
+        capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps,
+                                    progress=lambda stage, index, total: progress(index, total))
+        save_motion(editing.folder / CAPTURED, capture.motion)
+        with editing.lock:
+            editing.capture, editing.captured = capture, None
+        confidence = capture.motion.confidence
+        assert confidence is not None  # tracking always says how sure it is
+        return {"id": ident, "type": "tracked", "first": capture.first,
+                "positions": np.round(capture.motion.positions, 2).tolist(),
+                "confidence": np.round(confidence, 3).tolist()}
+    except ToonmotionError as error:
+        return {"id": ident, "type": "error", "message": one_line(str(error))}
+    except Exception as error:  # a bug: one line to the page, the details to the log
+        log.error("internal error tracking: %s: %s", type(error).__name__, error)
+        return {"id": ident, "type": "error", "message": bug(error)}
+
+
 def bug(error: Exception) -> str:
     return f"internal error ({type(error).__name__}); this is a bug in toonmotion, please report it"
 
@@ -301,8 +357,8 @@ def _key_edit(change: Callable[[Editing, dict[str, Any]], Timeline | None]) -> H
     return handle
 
 
-def _rig(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
-    joints = message.get("joints")
+def _skeleton(joints: Any) -> Skeleton:
+    """A skeleton from ``[{"name", "parent", "position"}, ...]``."""
     if not isinstance(joints, list) or not joints:
         raise SkeletonError("'joints' must list the skeleton's joints")
     triples = []
@@ -312,7 +368,21 @@ def _rig(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
             raise SkeletonError(f"joint {n} needs a 'name', a 'parent' (a name or null) and a 'position'")
         position = _point(joint.get("position"), f"joint {n}'s position")
         triples.append((joint["name"], joint["parent"], position))
-    skeleton = Skeleton.from_joints(triples)
+    return Skeleton.from_joints(triples)
+
+
+def _retarget(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+    if editing.capture is None:
+        raise MotionError("there is no tracked motion yet: track the footage first")
+    motion = api.retarget(editing.capture.motion, editing.character.skeleton)
+    with editing.lock:
+        editing.captured = api.animate_character(editing.deformer, motion)
+    frames = [frame for frame, _ in editing.captured.meshes]
+    return {"type": "retargeted", "first": frames[0], "last": frames[-1], "fps": motion.fps}
+
+
+def _rig(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+    skeleton = _skeleton(message.get("joints"))
     with editing.lock:
         if editing.timeline is not None and set(skeleton.names) != set(editing.character.skeleton.names):
             raise SkeletonError("the key-frames name the joints: keep their names, or delete the keys first")
@@ -353,7 +423,12 @@ def exaggeration_of(message: dict[str, Any]) -> api.FilterSettings | None:
 
 
 def _frame_of_animation(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
-    animation = editing.animated(exaggeration_of(message))
+    if message.get("source") == "capture":
+        if editing.captured is None:
+            raise MotionError("nothing is retargeted yet: track footage, then retarget it")
+        animation = editing.captured
+    else:
+        animation = editing.animated(exaggeration_of(message))
     frames = [frame for frame, _ in animation.meshes]
     at = min(max(_frame(message, "frame"), frames[0]), frames[-1])
     index = frames.index(at)
@@ -377,6 +452,7 @@ _HANDLERS: dict[str, Handler] = {
     "timing": _key_edit(_timing),
     "frame": _frame_of_animation,
     "rig": _rig,
+    "retarget": _retarget,
 }
 
 

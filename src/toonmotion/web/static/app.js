@@ -8,8 +8,9 @@ import * as regionsPanel from "./regions_panel.js";
 import * as timelinePanel from "./timeline_panel.js";
 import * as exaggeratePanel from "./exaggerate_panel.js";
 import * as exportPanel from "./export_panel.js";
+import * as capturePanel from "./capture_panel.js";
 
-const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, exportPanel];
+const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, capturePanel, exportPanel];
 
 const token = new URLSearchParams(location.search).get("token") || "";
 

@@ -1,0 +1,173 @@
+// The Capture panel (thesis ch. 4, 6.2c): send a video, a GIF or an animated PNG; place the
+// character's joints on the figure in the first frame (their rectangles are what is tracked);
+// track them with a progress bar; scrub the result, each joint coloured by how sure the tracker
+// was (green sure, red unsure); then retarget the motion onto the character and play it.
+
+import { listen, nearest } from "./panel_kit.js";
+
+export const name = "capture";
+export const title = "Capture";
+
+const HANDLE = 6, SIZE = 16; // CSS pixels; a rectangle's side in footage pixels
+
+export function mount(ctx) {
+  const { project, view, live, side, status, showError } = ctx;
+  const token = new URLSearchParams(location.search).get("token") || "";
+  let footage = null, images = [], frame = 0, joints = [], tracked = null, dragging = -1, playing = false, timer = null;
+
+  side.innerHTML = `<h2>Capture</h2>
+    <p><label>Footage <input id="capture-file" type="file" accept="video/*,.gif,.png,.apng,.webp"></label></p>
+    <p id="capture-info"></p>
+    <p><input id="capture-scrub" type="range" min="0" max="0" value="0" style="width: 100%" aria-label="frame"></p>
+    <p><button id="capture-track" disabled>Track</button> <button id="capture-play" disabled>Retarget and play</button></p>
+    <p><progress id="capture-progress" max="1" value="0" hidden></progress></p>
+    <p>Drag the joints onto the figure in the first frame, then track.</p>`;
+
+  // Footage pixels -> canvas pixels, fitting the frame in the stage.
+  function fit() {
+    const o = view.overlay, scale = Math.min(o.width / footage.width, o.height / footage.height) * 0.95;
+    return { scale, x: (o.width - footage.width * scale) / 2, y: (o.height - footage.height * scale) / 2 };
+  }
+  const toCanvas = ([x, y]) => { const f = fit(); return [f.x + x * f.scale, f.y + y * f.scale]; };
+  const fromEvent = (event) => {
+    const box = view.overlay.getBoundingClientRect(), ratio = view.overlay.width / box.width, f = fit();
+    return [((event.clientX - box.left) * ratio - f.x) / f.scale, ((event.clientY - box.top) * ratio - f.y) / f.scale];
+  };
+  const positions = () => (tracked ? tracked.positions[Math.min(frame, tracked.positions.length - 1)] : joints.map((j) => j.position));
+
+  view.drawOverlay = (pen) => {
+    if (!footage) return;
+    const f = fit(), image = images[frame];
+    pen.fillStyle = "#fff";
+    pen.fillRect(f.x, f.y, footage.width * f.scale, footage.height * f.scale);
+    if (image && image.complete) pen.drawImage(image, f.x, f.y, footage.width * f.scale, footage.height * f.scale);
+    const P = positions(), ratio = window.devicePixelRatio || 1;
+    joints.forEach((joint, i) => {
+      const [x, y] = toCanvas(P[i]), half = (joint.size[0] * f.scale) / 2;
+      const sure = tracked ? tracked.confidence[Math.min(frame, tracked.confidence.length - 1)][i] : 1;
+      pen.strokeStyle = `hsl(${Math.round(120 * sure)}, 80%, 40%)`;
+      pen.lineWidth = 2 * ratio;
+      pen.strokeRect(x - half, y - half, 2 * half, 2 * half);
+      pen.beginPath();
+      pen.arc(x, y, HANDLE * ratio * 0.6, 0, 2 * Math.PI);
+      pen.fillStyle = pen.strokeStyle;
+      pen.fill();
+    });
+  };
+
+  function show(at) {
+    frame = at;
+    document.getElementById("capture-scrub").value = String(at);
+    document.getElementById("capture-info").textContent =
+      `${footage.frames} frames of ${footage.width}×${footage.height} at ${footage.fps} fps; frame ${at}`;
+    if (!images[at]) {
+      images[at] = new Image();
+      images[at].onload = () => view.draw();
+      images[at].src = `api/footage/${at}.png?token=${encodeURIComponent(token)}`;
+    }
+    view.draw();
+  }
+
+  document.getElementById("capture-file").onchange = async (event) => {
+    const file = event.target.files[0];
+    if (!file) return;
+    const suffix = file.name.split(".").pop().toLowerCase();
+    status("sending the footage…");
+    try {
+      const reply = await fetch(`api/footage?suffix=${encodeURIComponent(suffix)}`,
+                                { method: "PUT", body: file, headers: { "X-Toonmotion-Token": token } });
+      const body = await reply.json();
+      if (!reply.ok) throw new Error(body.error);
+      footage = body;
+      images = [];
+      tracked = null;
+      // The character's joints, scaled onto the footage: names that retarget by themselves.
+      const sx = footage.width / project.width, sy = footage.height / project.height;
+      joints = project.joints.map((j) => ({ name: j.name, parent: j.parent < 0 ? null : project.joints[j.parent].name,
+                                             position: [j.position[0] * sx, j.position[1] * sy], size: [SIZE, SIZE] }));
+      document.getElementById("capture-scrub").max = String(footage.frames - 1);
+      document.getElementById("capture-track").disabled = false;
+      view.canvas.style.visibility = "hidden";
+      show(0);
+      status("place the joints on the first frame");
+      showError("");
+    } catch (error) {
+      showError(error.message);
+      status("");
+    }
+  };
+
+  document.getElementById("capture-scrub").oninput = (event) => show(Number(event.target.value));
+
+  document.getElementById("capture-track").onclick = async () => {
+    const bar = document.getElementById("capture-progress");
+    bar.hidden = false;
+    status("tracking…");
+    try {
+      tracked = await live.request({ type: "track", joints }, ({ index, count }) => { bar.max = count; bar.value = index; });
+      document.getElementById("capture-play").disabled = false;
+      status("tracked: scrub to check it, then retarget");
+      showError("");
+      show(0);
+    } catch (error) {
+      showError(error.message);
+      status("");
+    } finally {
+      bar.hidden = true;
+    }
+  };
+
+  document.getElementById("capture-play").onclick = async () => {
+    if (playing) return stop();
+    try {
+      const reply = await live.request({ type: "retarget" });
+      view.canvas.style.visibility = "visible";
+      view.drawOverlay = () => {};
+      playing = true;
+      document.getElementById("capture-play").textContent = "Stop";
+      let at = reply.first;
+      const next = async () => {
+        if (!playing) return;
+        const started = performance.now();
+        const shown = await live.request({ type: "frame", frame: at, source: "capture" });
+        view.setVertices(shown.U);
+        at = at >= reply.last ? reply.first : at + 1;
+        timer = setTimeout(next, Math.max(0, 1000 / reply.fps - (performance.now() - started)));
+      };
+      next();
+      status("the character plays the captured motion");
+    } catch (error) {
+      showError(error.message);
+    }
+  };
+
+  function stop() {
+    playing = false;
+    clearTimeout(timer);
+    document.getElementById("capture-play").textContent = "Retarget and play";
+  }
+
+  const unlisten = listen(view.overlay, {
+    pointerdown: (event) => {
+      if (!footage || tracked) return;
+      dragging = nearest({ toCanvas, toDrawing: fromEvent }, joints.map((j) => j.position), event, HANDLE + 6);
+      if (dragging >= 0) view.overlay.setPointerCapture(event.pointerId);
+    },
+    pointermove: (event) => {
+      if (dragging < 0) return;
+      joints[dragging].position = fromEvent(event);
+      view.draw();
+    },
+    pointerup: () => { dragging = -1; },
+  });
+  status(footage ? "" : "send footage to capture from");
+
+  return {
+    unmount() {
+      stop();
+      unlisten();
+      view.canvas.style.visibility = "visible";
+      view.drawOverlay = () => {};
+    },
+  };
+}
