@@ -327,7 +327,18 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     assert motion.positions.shape[0] == 4
     assert np.median(motion.positions[-1, :, 0] - motion.positions[0, :, 0]) == pytest.approx(6, abs=1)
     page.evaluate("""() => { const s = document.getElementById('capture-scrub');
-        s.value = '3'; s.dispatchEvent(new Event('input')); }""")
+        s.value = '2'; s.dispatchEvent(new Event('input')); }""")
+    x, y = page.evaluate("window.toonmotion.capture.screen('head')")
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + 30, y, steps=4)
+    page.mouse.up()
+    page.click("#capture-retrack")  # track again from frame 2 with the head moved
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
+    corrected = load_motion(folder / "motions" / "captured.json")
+    head = corrected.skeleton.index("head")
+    np.testing.assert_allclose(corrected.positions[:2], motion.positions[:2])  # kept before frame 2
+    assert corrected.positions[2, head, 0] > motion.positions[2, head, 0] + 8
     page.click("#capture-play")
     page.wait_for_function("document.getElementById('status').textContent.startsWith('the character plays')")
     page.wait_for_timeout(500)

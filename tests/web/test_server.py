@@ -579,3 +579,27 @@ def test_tracking_and_retargeting_need_their_inputs(client):
     assert "no footage yet" in track["message"]
     assert "no tracked motion yet" in retarget["message"]
     assert "nothing is retargeted yet" in frame["message"]
+
+
+def test_a_correction_tracks_again_from_its_frame_and_keeps_the_frames_before(editable):
+    folder, client = editable
+    assert client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif()).status_code == 200
+    joints = [{**j, "size": [16, 16]} for j in _joints(api.load_project(folder))]
+
+    def track(socket, message):
+        socket.send_text(json.dumps(message))
+        reply = socket.receive_json()
+        while reply["type"] == "progress":
+            reply = socket.receive_json()
+        return reply
+
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        first = track(socket, {"type": "track", "joints": joints})
+        head = first["names"].index("head")
+        x, y = first["positions"][2][head]
+        again = track(socket, {"type": "track", "joints": joints, "at": 2, "set": {"head": [x + 3, y]}})
+        bad = track(socket, {"type": "track", "joints": joints, "at": 2, "set": {}})
+    assert again["type"] == "tracked", again
+    np.testing.assert_allclose(again["positions"][:2], first["positions"][:2])  # kept before the correction
+    assert again["positions"][2][head] == pytest.approx([x + 3, y])
+    assert bad["type"] == "error" and "'set' must give" in bad["message"]

@@ -26,8 +26,10 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
 * Capture, on footage sent with ``PUT /api/footage``: ``{"type": "track", "joints": [{"name",
   "parent", "position", "size": [w, h]}, ...]}`` tracks them from the first frame (off the event
   loop, with progress messages, as an export) and saves the motion in the project folder's
-  ``motions/captured.json``; reply ``{"type": "tracked", "first": n, "positions": [...],
-  "confidence": [...]}``. ``{"type": "retarget"}`` replays it on the character; reply
+  ``motions/captured.json``; with ``"at": t, "set": {name: [x, y]}`` it corrects the earlier
+  tracking instead, tracking again from frame ``t``. Reply ``{"type": "tracked", "first": n,
+  "names": [...], "positions": [...], "confidence": [...]}``, joints in ``names``' order.
+  ``{"type": "retarget"}`` replays it on the character; reply
   ``{"type": "retargeted", "first": n, "last": m, "fps": f}``, whose frames a ``frame`` message
   with ``"source": "capture"`` gives.
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
@@ -276,14 +278,23 @@ def track(editing: Editing, text: str, progress: Callable[[int, int], None]) -> 
         skeleton = _skeleton(joints)
         sizes = np.array([_point(j.get("size"), f"joint {j['name']!r}'s size") for j in joints], dtype=float)
         order = [next(i for i, j in enumerate(joints) if j["name"] == name) for name in skeleton.names]
-        capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps,
+        earlier, at, corrections = None, None, None
+        if message.get("at") is not None:  # a correction: the earlier tracking is kept before it
+            if editing.capture is None:
+                raise TrackingError("there is no earlier tracking to correct: track first")
+            earlier, at, moved = editing.capture.motion, _frame(message, "at"), message.get("set")
+            if not isinstance(moved, dict) or not moved:
+                raise TrackingError("'set' must give the corrected joints, name to [x, y]")
+            corrections = {str(name): _point(xy, f"joint {name!r}") for name, xy in moved.items()}
+        capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
+                                    corrections=corrections, at=at,
                                     progress=lambda stage, index, total: progress(index, total))
         save_motion(editing.folder / CAPTURED, capture.motion)
         with editing.lock:
             editing.capture, editing.captured = capture, None
         confidence = capture.motion.confidence
         assert confidence is not None  # tracking always says how sure it is
-        return {"id": ident, "type": "tracked", "first": capture.first,
+        return {"id": ident, "type": "tracked", "first": capture.first, "names": list(skeleton.names),
                 "positions": np.round(capture.motion.positions, 2).tolist(),
                 "confidence": np.round(confidence, 3).tolist()}
     except ToonmotionError as error:

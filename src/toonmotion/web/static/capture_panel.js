@@ -1,7 +1,8 @@
 // The Capture panel (thesis ch. 4, 6.2c): send a video, a GIF or an animated PNG; place the
 // character's joints on the figure in the first frame (their rectangles are what is tracked);
 // track them with a progress bar; scrub the result, each joint coloured by how sure the tracker
-// was (green sure, red unsure); then retarget the motion onto the character and play it.
+// was (green sure, red unsure); drag a joint that went astray at any frame and track again from
+// there (the frames before it are kept); then retarget the motion onto the character and play it.
 
 import { listen, nearest } from "./panel_kit.js";
 
@@ -14,12 +15,14 @@ export function mount(ctx) {
   const { project, view, live, side, status, showError } = ctx;
   const token = new URLSearchParams(location.search).get("token") || "";
   let footage = null, images = [], frame = 0, joints = [], tracked = null, dragging = -1, playing = false, timer = null;
+  let corrected = {}; // joint name -> [x, y] at the current frame, to track again from
 
   side.innerHTML = `<h2>Capture</h2>
     <p><label>Footage <input id="capture-file" type="file" accept="video/*,.gif,.png,.apng,.webp"></label></p>
     <p id="capture-info"></p>
     <p><input id="capture-scrub" type="range" min="0" max="0" value="0" style="width: 100%" aria-label="frame"></p>
-    <p><button id="capture-track" disabled>Track</button> <button id="capture-play" disabled>Retarget and play</button></p>
+    <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
+      <button id="capture-play" disabled>Retarget and play</button></p>
     <p><progress id="capture-progress" max="1" value="0" hidden></progress></p>
     <p>Drag the joints onto the figure in the first frame, then track.</p>`;
 
@@ -33,7 +36,10 @@ export function mount(ctx) {
     const box = view.overlay.getBoundingClientRect(), ratio = view.overlay.width / box.width, f = fit();
     return [((event.clientX - box.left) * ratio - f.x) / f.scale, ((event.clientY - box.top) * ratio - f.y) / f.scale];
   };
-  const positions = () => (tracked ? tracked.positions[Math.min(frame, tracked.positions.length - 1)] : joints.map((j) => j.position));
+  const positions = () => {
+    const P = tracked ? tracked.positions[Math.min(frame, tracked.positions.length - 1)] : joints.map((j) => j.position);
+    return P.map((p, i) => corrected[joints[i].name] || p);
+  };
 
   view.drawOverlay = (pen) => {
     if (!footage) return;
@@ -56,7 +62,9 @@ export function mount(ctx) {
   };
 
   function show(at) {
+    if (at !== frame) corrected = {};
     frame = at;
+    document.getElementById("capture-retrack").disabled = Object.keys(corrected).length === 0;
     document.getElementById("capture-scrub").value = String(at);
     document.getElementById("capture-info").textContent =
       `${footage.frames} frames of ${footage.width}×${footage.height} at ${footage.fps} fps; frame ${at}`;
@@ -99,23 +107,29 @@ export function mount(ctx) {
 
   document.getElementById("capture-scrub").oninput = (event) => show(Number(event.target.value));
 
-  document.getElementById("capture-track").onclick = async () => {
+  async function trackFrom(message) {
     const bar = document.getElementById("capture-progress");
     bar.hidden = false;
     status("tracking…");
     try {
-      tracked = await live.request({ type: "track", joints }, ({ index, count }) => { bar.max = count; bar.value = index; });
+      tracked = await live.request(message, ({ index, count }) => { bar.max = count; bar.value = index; });
+      // The motion lists the joints parents first: follow its order.
+      joints = tracked.names.map((n) => joints.find((j) => j.name === n));
+      corrected = {};
       document.getElementById("capture-play").disabled = false;
       status("tracked: scrub to check it, then retarget");
       showError("");
-      show(0);
+      show(frame);
     } catch (error) {
       showError(error.message);
       status("");
     } finally {
       bar.hidden = true;
     }
-  };
+  }
+  document.getElementById("capture-track").onclick = () => { frame = 0; trackFrom({ type: "track", joints }); };
+  document.getElementById("capture-retrack").onclick = () =>
+    trackFrom({ type: "track", joints, at: frame, set: corrected });
 
   document.getElementById("capture-play").onclick = async () => {
     if (playing) return stop();
@@ -149,17 +163,30 @@ export function mount(ctx) {
 
   const unlisten = listen(view.overlay, {
     pointerdown: (event) => {
-      if (!footage || tracked) return;
-      dragging = nearest({ toCanvas, toDrawing: fromEvent }, joints.map((j) => j.position), event, HANDLE + 6);
+      if (!footage || playing) return;
+      dragging = nearest({ toCanvas, toDrawing: fromEvent }, positions(), event, HANDLE + 6);
       if (dragging >= 0) view.overlay.setPointerCapture(event.pointerId);
     },
     pointermove: (event) => {
       if (dragging < 0) return;
-      joints[dragging].position = fromEvent(event);
+      if (tracked) {  // a correction at this frame
+        corrected[joints[dragging].name] = fromEvent(event);
+        document.getElementById("capture-retrack").disabled = false;
+      } else {
+        joints[dragging].position = fromEvent(event);
+      }
       view.draw();
     },
     pointerup: () => { dragging = -1; },
   });
+  // Where a joint is on the screen at the current frame (for the console and tests).
+  ctx.capture = {
+    screen(name) {
+      const i = joints.findIndex((j) => j.name === name), [x, y] = toCanvas(positions()[i]);
+      const box = view.overlay.getBoundingClientRect(), k = box.width / view.overlay.width;
+      return [box.left + x * k, box.top + y * k];
+    },
+  };
   status(footage ? "" : "send footage to capture from");
 
   return {
