@@ -229,6 +229,11 @@ def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
     page.wait_for_timeout(800)
     page.click("#timeline-play")
     assert page.locator("#timeline-play").text_content() == "Play"
+    left_at = page.locator("#timeline-frame").text_content()
+    page.reload()  # the editor reopens where it was left: this panel, this frame
+    page.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=30_000)
+    assert page.locator("nav button[aria-pressed=true]").get_attribute("data-panel") == "timeline"
+    assert page.locator("#timeline-frame").text_content() == left_at
     _set_frame(page, 18)
     page.click("#timeline-keys li[data-frame='0'] .copy")  # back to the rest pose at 18
     page.wait_for_function("window.toonmotion.project.keys.keys.length === 3")

@@ -101,9 +101,33 @@ async function start() {
   }
 }
 
+// The editor reopens where the user left it: the panel and the frame, kept in the browser per
+// project (the project itself, its keys and its edit history are on disk).
+function remembered(ctx) {
+  const key = `toonmotion:${ctx.project.name}:${ctx.project.width}x${ctx.project.height}`;
+  let saved = {};
+  try {
+    saved = JSON.parse(localStorage.getItem(key) || "{}");
+  } catch (error) {
+    saved = {};
+  }
+  return {
+    saved,
+    keep: (panel) => {
+      try {
+        localStorage.setItem(key, JSON.stringify({ panel, frame: ctx.frame || 0 }));
+      } catch (error) {
+        // storage full or off: reopening at the first panel is no loss
+      }
+    },
+  };
+}
+
 function mountPanels(ctx) {
   const nav = document.getElementById("panels");
-  let current = null;
+  const memory = remembered(ctx);
+  ctx.frame = Number.isInteger(memory.saved.frame) ? memory.saved.frame : 0;
+  let current = null, currentName = null;
   for (const panel of PANELS) {
     const button = document.createElement("button");
     button.textContent = panel.title;
@@ -113,10 +137,14 @@ function mountPanels(ctx) {
       for (const b of nav.children) b.setAttribute("aria-pressed", String(b === button));
       ctx.side.replaceChildren();
       current = panel.mount(ctx);
+      currentName = panel.name;
+      memory.keep(currentName);
     };
     nav.append(button);
   }
-  nav.firstChild.click();
+  window.addEventListener("pagehide", () => memory.keep(currentName));
+  const start = [...nav.children].find((b) => b.dataset.panel === memory.saved.panel) || nav.firstChild;
+  start.click();
 }
 
 start();
