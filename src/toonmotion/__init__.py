@@ -19,11 +19,11 @@ __version__ = "0.1.0"
 
 _API = (
     "Animation", "Capture", "Character", "DeformSettings", "FilterSettings", "Motion", "PosedFrame",
-    "RigSettings", "SameDepthOverlap", "TrackSettings", "animate_character", "correct_regions",
+    "RigSettings", "SameDepthOverlap", "SketchMatch", "TrackSettings", "animate_character", "correct_regions",
     "delete_key", "exaggerate", "filter_motion", "load_project", "move_key", "pose_character",
     "pose_view", "redo_edits", "render_pose", "retarget", "retime", "rig_again", "rig_image", "rotate_joint",
-    "same_depth_overlaps", "save_project", "set_depth", "set_key", "suggest_joints", "track_footage",
-    "undo_edits", "write_animation",
+    "same_depth_overlaps", "save_project", "set_depth", "set_key", "sketch_pose", "suggest_joints",
+    "track_footage", "undo_edits", "write_animation",
 )
 
 __all__ = ["ToonmotionError", "__version__", *_API]

@@ -49,6 +49,10 @@ class PoseError(ToonmotionError):
     """A pose is malformed: unknown or missing joints, non-finite positions, collapsed bones."""
 
 
+class SketchError(PoseError):
+    """A sketched skeleton cannot be read: malformed strokes, a loop, a shape the skeleton lacks."""
+
+
 class KeyframeError(ToonmotionError):
     """Key-frames are malformed: no keys, repeated or negative frame numbers, bad frame rate."""
 

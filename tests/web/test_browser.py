@@ -21,6 +21,7 @@ from PIL import Image
 
 from toonmotion import api
 from toonmotion.rig.pipeline import rig_drawing
+from toonmotion.rig.pose import Pose
 from toonmotion.samples import sample_character
 from toonmotion.web.server import create_app, new_token
 
@@ -110,6 +111,8 @@ def _joint_on_screen(page, name: str) -> tuple[float, float]:
 
 
 def _close_to_golden(picture: np.ndarray, name: str) -> None:
+    if os.environ.get("TOONMOTION_NEW_GOLDEN") == name:  # write a new golden image, then look at it
+        Image.fromarray(picture.astype(np.uint8)).save(GOLDEN / name)
     golden = np.asarray(Image.open(GOLDEN / name).convert("RGB"), dtype=float)
     assert golden.shape == picture.shape
     far = np.abs(golden - picture).max(axis=2) > 48
@@ -149,6 +152,65 @@ def test_dragging_a_joint_deforms_the_drawing_live(page, editor):
     np.testing.assert_allclose(
         np.reshape(page.evaluate("Array.from(window.toonmotion.view.vertices)"), (-1, 2)), rest, atol=1e-2
     )
+
+
+def _on_screen(page, points) -> list[tuple[float, float]]:
+    """Drawing pixels to the page's CSS pixels."""
+    return [tuple(xy) for xy in page.evaluate(
+        """(points) => {
+        const c = window.toonmotion, box = c.view.overlay.getBoundingClientRect();
+        const k = box.width / c.view.overlay.width;
+        return points.map((p) => {
+            const [x, y] = c.view.toCanvas(p);
+            return [box.left + x * k, box.top + y * k];
+        });
+    }""",
+        [list(map(float, p)) for p in points],
+    )]
+
+
+def test_sketch_a_stick_figure_and_the_drawing_takes_its_pose(page, editor):
+    from tests.rig.test_sketch import chains
+
+    character = api.load_project(editor[1])
+    skeleton = character.skeleton
+    # Both arms raised: each turned about its shoulder, the rest of the figure as it was.
+    target = api.rotate_joint(character, "right_shoulder", 1.2).positions.copy()
+    left = [skeleton.index(n) for n in ("left_elbow", "left_hand")]
+    target[left] = api.rotate_joint(character, "left_shoulder", -1.2).positions[left]
+    page.click("nav button[data-panel=pose]")
+    page.click("#pose-reset")
+    page.wait_for_timeout(300)
+    before = _stage(page)
+    page.keyboard.press("s")
+    assert page.locator("input[name=pose-mode][value=sketch]").is_checked()
+    for chain in chains(skeleton):  # the whole stick figure, one stroke per chain, as drawn
+        points = [target[a] + (target[b] - target[a]) * t for a, b in zip(chain, chain[1:], strict=False)
+                  for t in np.linspace(0, 1, 6, endpoint=False)] + [target[chain[-1]]]
+        screen = _on_screen(page, points)
+        page.mouse.move(*screen[0])
+        page.mouse.down()
+        for xy in screen[1:]:
+            page.mouse.move(*xy)
+        page.mouse.up()
+    page.wait_for_function("document.getElementById('status').textContent === 'sketch matched'",
+                           timeout=10_000)
+    matched = page.locator("#pose-matched").text_content()
+    assert "right_elbow" in matched and "left_hand" in matched
+    posed = np.array(page.evaluate("window.toonmotion.pose"))
+    size = np.hypot(*np.ptp(target, axis=0))
+    assert np.linalg.norm(posed - target, axis=1).max() < 0.03 * size  # every joint where it was drawn
+    served = np.reshape(page.evaluate("Array.from(window.toonmotion.view.vertices)"), (-1, 2))
+    expected = api.pose_character(character, Pose(posed))
+    np.testing.assert_allclose(served, expected.deformation.U, atol=1e-2)  # the mesh for that pose
+    page.keyboard.press("d")
+    page.mouse.move(0, 0)
+    after = _stage(page)
+    assert (np.abs(after - before).max(axis=2) > 48).mean() > 0.002  # the canvas shows it
+    _close_to_golden(after, "sketched.png")
+    assert page.errors == [] and page.locator("#error").is_hidden()
+    page.click("#pose-reset")
+    page.wait_for_timeout(300)
 
 
 def test_regions_click_a_region_forward_lasso_vertices_to_a_bone_and_undo(page, editor):

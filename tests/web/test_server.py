@@ -114,9 +114,29 @@ def test_a_pose_comes_back_as_the_deformed_mesh_the_library_computes(client, pro
     assert np.abs(np.reshape(reply["U"], (-1, 2)) - character.mesh.V).max() > 5  # the arm moved
 
 
+def test_a_sketched_forearm_poses_the_arm_and_the_mesh_follows(client, project):
+    character = api.load_project(project)
+    bent = np.array(_pose(character, "right_elbow", 0.9))
+    elbow, hand = (character.skeleton.index(n) for n in ("right_elbow", "right_hand"))
+    stroke = np.linspace(bent[elbow], bent[hand], 12).tolist()
+    rest = character.skeleton.positions.tolist()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        socket.send_text(json.dumps({"id": 4, "type": "sketch", "strokes": [stroke], "positions": rest}))
+        reply = socket.receive_json()
+    assert (reply["id"], reply["type"], reply["elsewhere"]) == (4, "sketched", False)
+    assert reply["bones"] == ["right_hand"]
+    np.testing.assert_allclose(reply["positions"], bent, atol=1e-6)
+    posed = api.pose_character(character, api.rotate_joint(character, "right_elbow", 0.9))
+    np.testing.assert_allclose(np.reshape(reply["U"], (-1, 2)), posed.deformation.U, atol=1e-3)
+
+
 @pytest.mark.parametrize(
     ("message", "said"),
     [
+        ('{"type": "sketch", "positions": []}', "'strokes' must be a list of strokes"),
+        ('{"type": "sketch", "strokes": [[[1, "a"]]]}', "a stroke's point must be [x, y]"),
+        ('{"type": "sketch", "strokes": [[[1, 1], [1, 1]]], "positions": ' + json.dumps([[0, 0]] * 17) + "}",
+         "is squashed"),
         ("not json", "a message must be a JSON object"),
         ("[1, 2]", "a message must be a JSON object"),
         ("[" * 100_000, "a message must be a JSON object"),

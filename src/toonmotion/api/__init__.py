@@ -24,7 +24,14 @@ from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
 from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, retime, set_key
 from toonmotion.api.capture import track_footage
-from toonmotion.api.posing import PosedFrame, pose_character, pose_view, render_pose, rotate_joint
+from toonmotion.api.posing import (
+    PosedFrame,
+    pose_character,
+    pose_view,
+    render_pose,
+    rotate_joint,
+    sketch_pose,
+)
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
 from toonmotion.capture.footage import Capture, suggest_joints
 from toonmotion.capture.retarget import retarget
@@ -33,6 +40,7 @@ from toonmotion.deform.deformer import DeformSettings
 from toonmotion.io.project import load_project, save_project
 from toonmotion.render.sequence import write_animation
 from toonmotion.rig.character import Character, RigSettings
+from toonmotion.rig.sketch import SketchMatch
 
 __all__ = [
     "Animation",
@@ -44,6 +52,7 @@ __all__ = [
     "PosedFrame",
     "RigSettings",
     "SameDepthOverlap",
+    "SketchMatch",
     "TrackSettings",
     "animate_character",
     "correct_regions",
@@ -65,6 +74,7 @@ __all__ = [
     "save_project",
     "set_depth",
     "set_key",
+    "sketch_pose",
     "suggest_joints",
     "track_footage",
     "undo_edits",

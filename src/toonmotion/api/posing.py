@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.animate.pose_filter import exaggerate_pose
 from toonmotion.deform.deformer import Deformation, Deformer, DeformSettings
@@ -15,6 +15,7 @@ from toonmotion.deform.tuning import TuningEdit, apply_tuning
 from toonmotion.render.frame import fit_view, render_frame
 from toonmotion.rig.character import Character
 from toonmotion.rig.pose import Pose, rotate_about
+from toonmotion.rig.sketch import SketchMatch, match_sketch
 
 
 @dataclass(frozen=True)
@@ -60,6 +61,46 @@ def rotate_joint(character: Character, joint: str, angle: float) -> Pose:
     """
     skeleton = character.skeleton
     return Pose(rotate_about(skeleton, skeleton.positions, joint, angle))
+
+
+def sketch_pose(
+    character: Character, strokes: Sequence[ArrayLike], *, pose: Pose | None = None
+) -> SketchMatch:
+    """The pose a sketched skeleton gives: strokes matched to the character's bones (thesis 6.2a).
+
+    Parameters
+    ----------
+    character : Character
+    strokes : sequence of (n, 2) float
+        Polylines in drawing pixels, in the order drawn: a bone, a chain of bones (its corners
+        are joints), or the strokes of a whole stick figure, over the drawing or beside it.
+    pose : Pose, optional
+        The pose being edited (the rest pose by default): joints the sketch does not reach
+        keep their place in it, or follow the sketched bone above them.
+
+    Returns
+    -------
+    SketchMatch
+        ``pose`` (for :func:`pose_character`), the ``bones`` the sketch covered, and whether a
+        piece was drawn ``elsewhere`` (beside the figure, so scaled and hung from its joint).
+
+    Raises
+    ------
+    SketchError
+        For malformed strokes, or a sketch no part of the skeleton matches.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
+    >>> bent = rotate_joint(hero, "right_elbow", 0.5).positions  # where to draw the forearm
+    >>> elbow, hand = (hero.skeleton.index(n) for n in ("right_elbow", "right_hand"))
+    >>> found = sketch_pose(hero, [[bent[elbow], bent[hand]]])
+    >>> found.bones, bool(np.allclose(found.pose.positions, bent))
+    (('right_hand',), True)
+    """
+    skeleton = character.skeleton
+    return match_sketch(skeleton, pose if pose is not None else Pose(skeleton.positions), strokes)
 
 
 def pose_character(

@@ -6,6 +6,10 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
 * ``{"type": "pose", "positions": [[x, y], ...]}``: every joint's position, in the skeleton's
   order. Reply: ``{"type": "mesh", "U": [x0, y0, x1, y1, ...]}``, the deformed vertices (the
   needle model, then the joint-area solve).
+* ``{"type": "sketch", "strokes": [[[x, y], ...], ...], "positions": [...]}``: the strokes of a
+  sketched skeleton, matched to the bones (:func:`toonmotion.api.sketch_pose`), starting from
+  ``positions``. Reply: ``{"type": "sketched", "positions": [...], "bones": [...],
+  "elsewhere": bool, "U": [...]}``, the pose, the bones covered and the deformed vertices.
 * ``{"type": "overlaps", "positions": [...]}``: the regions that overlap at the same depth in
   that pose. Reply: ``{"type": "overlaps", "pairs": [{"a": bone, "b": bone, "area": px2}]}``.
 * Edits of the regions, each saved in the project before the reply (atomic writes, as the
@@ -67,6 +71,7 @@ from toonmotion.errors import (
     MotionError,
     PoseError,
     SkeletonError,
+    SketchError,
     ToonmotionError,
     TrackingError,
 )
@@ -329,6 +334,18 @@ def _pose(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
             "positions": frame.pose.positions.tolist()}
 
 
+def _sketch(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+    strokes = message.get("strokes")
+    if not isinstance(strokes, list) or not all(isinstance(stroke, list) for stroke in strokes):
+        raise SketchError("'strokes' must be a list of strokes, each a list of [x, y] points")
+    lines = [[_point(p, "a stroke's point") for p in stroke] for stroke in strokes]
+    current = Pose(_positions(editing, message.get("positions")))
+    found = api.sketch_pose(editing.character, lines, pose=current)
+    U = api.pose_character(editing.deformer, found.pose).deformation.U
+    return {"type": "sketched", "positions": found.pose.positions.tolist(), "bones": list(found.bones),
+            "elsewhere": found.elsewhere, "U": np.round(U, 3).ravel().tolist()}
+
+
 def _overlaps(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     found = api.same_depth_overlaps(editing.character, [(0, _posed(editing, message.get("positions")))])
     pairs = [{"a": o.bone_a, "b": o.bone_b, "area": round(o.area, 1)} for o in found]
@@ -452,6 +469,7 @@ Handler = Callable[[Editing, dict[str, Any]], dict[str, Any]]
 
 _HANDLERS: dict[str, Handler] = {
     "pose": _pose,
+    "sketch": _sketch,
     "overlaps": _overlaps,
     "depth": _region_edit(_depth),
     "correct": _region_edit(_correct),

@@ -1,6 +1,7 @@
 // The Pose panel: drag a joint and the drawing follows live (needle model + joint-area solve on
-// the server). The rest bones are shown as red reference lines from each posed parent
-// (thesis fig. 6.2a). While a reply is awaited, newer drags replace the queued pose, so the
+// the server), or sketch the skeleton with strokes (mouse or pen) and the server matches them to
+// the bones (thesis 6.2a). The rest bones are shown as red reference lines from each posed
+// parent (fig. 6.2a). While a reply is awaited, newer drags replace the queued pose, so the
 // drawing keeps up with the pointer instead of falling behind it.
 
 import { listen, nearest, newest } from "./panel_kit.js";
@@ -9,6 +10,7 @@ export const name = "pose";
 export const title = "Pose";
 
 const HANDLE = 7; // joint handle radius, CSS pixels
+const SKETCH_PAUSE = 900; // ms after the last stroke before a sketch is matched
 
 export function mount(ctx) {
   const { project, view, live, side, status, showError } = ctx;
@@ -16,16 +18,29 @@ export function mount(ctx) {
   // The pose being made, shared with the other panels (the Timeline keys it).
   ctx.pose = ctx.pose || rest.map((p) => p.slice());
   const positions = ctx.pose;
-  let dragging = -1, started = 0;
+  let dragging = -1, started = 0, mode = "drag";
+  const strokes = []; // the sketch being drawn: [{points: [[x, y], ...], widths: [...]}, ...]
+  let drawing = null, pause = 0;
 
   side.innerHTML = `<h2>Pose</h2>
-    <p>Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent.</p>
+    <p role="radiogroup" aria-label="how to pose">
+      <label><input type="radio" name="pose-mode" value="drag" checked> Drag joints <kbd>D</kbd></label><br>
+      <label><input type="radio" name="pose-mode" value="sketch"> Sketch the skeleton <kbd>S</kbd></label></p>
+    <p id="pose-help">Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent.</p>
+    <p id="pose-matched"></p>
     <p><button id="pose-reset">Reset to the rest pose</button></p>
     <p id="pose-timing"></p>
     <div id="pose-overlaps"></div>`;
 
   view.drawOverlay = (pen) => {
     const ratio = window.devicePixelRatio || 1;
+    pen.lineCap = "round";
+    for (const stroke of drawing ? [...strokes, drawing] : strokes) {
+      for (let i = 1; i < stroke.points.length; i++) {
+        pen.lineWidth = stroke.widths[i] * ratio;
+        line(pen, view.toCanvas(stroke.points[i - 1]), view.toCanvas(stroke.points[i]), "rgba(30, 60, 140, 0.85)");
+      }
+    }
     pen.lineWidth = 2 * ratio;
     project.joints.forEach((joint, i) => {
       if (joint.parent < 0) return;
@@ -57,19 +72,80 @@ export function mount(ctx) {
     view.draw();
   }
 
+  // Sketching: each stroke's points in drawing pixels; a pen's pressure sets the line's width.
+  // The strokes are matched once the pen has rested SKETCH_PAUSE ms (or on Enter), so a whole
+  // stick figure can be drawn stroke by stroke.
+  function width(event) {
+    return event.pointerType === "pen" && event.pressure > 0 ? 1 + 5 * event.pressure : 3;
+  }
+  async function match() {
+    clearTimeout(pause);
+    if (!strokes.length) return;
+    const sent = strokes.splice(0).map((stroke) => stroke.points);
+    status("matching the sketch…");
+    try {
+      const reply = await live.request({ type: "sketch", strokes: sent, positions });
+      reply.positions.forEach((p, i) => { positions[i] = p; });
+      view.setVertices(reply.U);
+      document.getElementById("pose-matched").textContent =
+        `Sketched ${reply.bones.join(", ")}${reply.elsewhere ? " (drawn beside the figure: scaled to it)" : ""}.`;
+      showError("");
+      status("sketch matched");
+      overlaps();
+    } catch (error) {
+      showError(error.message);
+      status("");
+      view.draw();
+    }
+  }
+  function setMode(next) {
+    mode = next;
+    for (const input of side.querySelectorAll("input[name=pose-mode]")) input.checked = input.value === mode;
+    document.getElementById("pose-help").textContent = mode === "sketch"
+      ? "Draw bones, chains or a whole stick figure, over the drawing or beside it: a corner is a joint. " +
+        "Strokes are matched when you pause (Enter: now, Escape: drop them)."
+      : "Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent.";
+    strokes.length = 0;
+    drawing = null;
+    view.draw();
+  }
+  for (const input of side.querySelectorAll("input[name=pose-mode]")) input.onchange = () => setMode(input.value);
+
   const overlay = view.overlay;
   const down = (event) => {
+    if (mode === "sketch") {
+      clearTimeout(pause);
+      drawing = { points: [view.toDrawing(event)], widths: [width(event)] };
+      overlay.setPointerCapture(event.pointerId);
+      return;
+    }
     dragging = nearest(view, positions, event, HANDLE + 4);
     if (dragging < 0) return;
     overlay.setPointerCapture(event.pointerId);
     view.draw();
   };
   const move = (event) => {
+    if (drawing) {
+      const events = event.getCoalescedEvents ? event.getCoalescedEvents() : [event];
+      for (const e of events.length ? events : [event]) {
+        drawing.points.push(view.toDrawing(e));
+        drawing.widths.push(width(e));
+      }
+      view.draw();
+      return;
+    }
     if (dragging < 0) return;
     positions[dragging] = view.toDrawing(event);
     posed();
   };
   const up = () => {
+    if (drawing) {
+      if (drawing.points.length > 1) strokes.push(drawing);
+      drawing = null;
+      pause = setTimeout(match, SKETCH_PAUSE);
+      view.draw();
+      return;
+    }
     if (dragging < 0) return;
     dragging = -1;
     view.draw();
@@ -92,7 +168,17 @@ export function mount(ctx) {
       showError(error.message);
     }
   }
-  const unlisten = listen(overlay, { pointerdown: down, pointermove: move, pointerup: up, pointercancel: up });
+  const keys = (event) => {
+    if (event.target instanceof HTMLInputElement && event.target.type !== "radio") return;
+    if (event.ctrlKey || event.metaKey || event.altKey) return;
+    const key = event.key.toLowerCase();
+    if (key === "s") setMode("sketch");
+    else if (key === "d") setMode("drag");
+    else if (key === "enter" && mode === "sketch") match();
+    else if (key === "escape" && mode === "sketch") setMode("sketch");
+  };
+  const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up, pointercancel: up }),
+                    listen(window, { keydown: keys })];
   document.getElementById("pose-reset").onclick = () => {
     rest.forEach((p, i) => { positions[i] = p.slice(); });
     posed();
@@ -104,7 +190,8 @@ export function mount(ctx) {
   return {
     positions,
     unmount() {
-      unlisten();
+      for (const off of unlisten) off();
+      clearTimeout(pause);
       view.drawOverlay = () => {};
     },
   };
