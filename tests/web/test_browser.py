@@ -302,6 +302,22 @@ def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
     copied = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
     assert [k.frame for k in copied.keys] == [0, 12, 18]
     np.testing.assert_array_equal(copied.keys[2].pose.positions, copied.keys[0].pose.positions)
+    # Undo takes the copy back, and the rate before it; redo makes both again; after a reload too.
+    page.keyboard.press("Control+z")
+    page.wait_for_function("window.toonmotion.project.keys.keys.length === 2")
+    assert page.locator("#timeline-keys li").count() == 2
+    page.click("#undo")
+    page.wait_for_function("window.toonmotion.project.keys.fps === 12")
+    assert load_keyframes(folder / "keys.json", api.load_project(folder).skeleton).fps == 12.0
+    page.reload()
+    page.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=30_000)
+    page.keyboard.press("Control+Shift+z")
+    page.wait_for_function("window.toonmotion.project.keys.fps === 24")
+    page.click("#redo")
+    page.wait_for_function("window.toonmotion.project.keys.keys.length === 3")
+    assert page.locator("#redo").is_disabled()
+    again = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
+    assert [k.frame for k in again.keys] == [0, 12, 18]
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 

@@ -220,6 +220,55 @@ def test_region_edits_are_saved_at_once_and_undo_and_redo_survive_a_reload(edita
     assert saved.depth[saved.binding.bone[front[0]]] == 1
 
 
+def test_undo_and_redo_take_back_every_kind_of_edit_newest_first_and_survive_a_restart(editable):
+    folder, client = editable
+    character = api.load_project(folder)
+    rest = character.skeleton.positions.tolist()
+    bent = _pose(character, "right_elbow", 0.9)
+    hand = rest[character.skeleton.index("right_hand")]
+    joints = [{"name": n, "parent": p, "position": list(xy)} for n, p, xy in character.skeleton.joints()]
+    joints[character.skeleton.index("head")]["position"][1] -= 6
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        assert _send(socket, {"type": "rig", "joints": joints})["type"] == "rigged"
+        _send(socket, {"type": "depth", "at": hand, "by": 1})
+        _send(socket, {"type": "set_key", "frame": 0, "positions": rest})
+        keyed = _send(socket, {"type": "set_key", "frame": 8, "positions": bent})
+        assert keyed["history"] == {"undo": 4, "redo": 0}
+        one_key = _send(socket, {"type": "undo"})
+        assert (one_key["kind"], [k["frame"] for k in one_key["keys"]["keys"]]) == ("keys", [0])
+        assert json.loads((folder / "keys.json").read_text())["keys"][0]["frame"] == 0
+        assert len(json.loads((folder / "keys.json").read_text())["keys"]) == 1  # saved as it happened
+    restarted = TestClient(create_app(folder, token=TOKEN))  # a new server: the history is on disk
+    with restarted.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        assert _send(socket, {"type": "undo"})["keys"] is None and not (folder / "keys.json").exists()
+        region = _send(socket, {"type": "undo"})
+        assert (region["kind"], region["edits"], region["history"]) == ("regions", 0, {"undo": 1, "redo": 3})
+        rig = _send(socket, {"type": "undo"})
+        assert rig["kind"] == "rig"
+        np.testing.assert_allclose(api.load_project(folder).skeleton.positions, character.skeleton.positions)
+        assert _send(socket, {"type": "undo"})["message"] == "there are no edits to undo"
+        for kind in ("rig", "regions", "keys", "keys"):
+            redone = _send(socket, {"type": "redo"})
+            assert redone.get("kind") == kind, redone
+    final = api.load_project(folder)
+    assert (len(final.edits), final.skeleton.positions[final.skeleton.index("head")][1]) == (
+        1, character.skeleton.positions[character.skeleton.index("head")][1] - 6)
+    assert [k["frame"] for k in json.loads((folder / "keys.json").read_text())["keys"]] == [0, 8]
+
+
+def test_undo_refuses_a_history_the_project_no_longer_matches(editable):
+    folder, client = editable
+    rest = api.load_project(folder).skeleton.positions.tolist()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _send(socket, {"type": "set_key", "frame": 0, "positions": rest})
+        edited = (folder / "keys.json").read_text().replace('"fps": 12', '"fps": 24')
+        (folder / "keys.json").write_text(edited)  # changed outside the editor
+        reply = _send(socket, {"type": "undo"})
+        assert reply["type"] == "error" and "no longer matches the project" in reply["message"]
+        assert (folder / "keys.json").read_text() == edited  # nothing lost
+        assert _send(socket, {"type": "undo"})["message"] == "there are no edits to undo"
+
+
 @pytest.mark.parametrize(
     ("message", "said"),
     [
@@ -289,7 +338,8 @@ def test_keys_are_saved_in_the_project_folder_and_frames_are_the_librarys_animat
     np.testing.assert_allclose(np.reshape(middle["U"], (-1, 2)), expected.meshes[4][1], atol=1e-3)
     np.testing.assert_allclose(middle["positions"], expected.motion.positions[4], atol=1e-9)
     assert beyond["frame"] == 8  # clamped to the keys' span
-    assert last == {"id": None, "type": "keys", "keys": None} and not (folder / "keys.json").exists()
+    assert last == {"id": None, "type": "keys", "keys": None, "history": {"undo": 5, "redo": 0}}
+    assert not (folder / "keys.json").exists()
 
 
 def test_the_editor_opens_with_the_projects_keys(editable):

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -185,7 +186,7 @@ def redo_edits(character: Character, steps: int = 1) -> Character:
 
 def rig_again(character: Character, skeleton: Skeleton) -> tuple[Character, list[tuple[Edit, str]]]:
     """Rig ``character``'s drawing again with a new ``skeleton``, keeping its mask and settings,
-    and replay its region edits on the new rig.
+    and replay its region edits on the new rig (the undone ones stay, to redo).
 
     Parameters
     ----------
@@ -212,4 +213,5 @@ def rig_again(character: Character, skeleton: Skeleton) -> tuple[Character, list
     """
     fresh = rig_drawing(character.texture, mask=character.mask, skeleton=skeleton,
                         settings=character.settings)
-    return replay(fresh, character.edits)
+    again, skipped = replay(fresh, character.edits)
+    return dataclasses.replace(again, undone=character.undone), skipped  # still there to redo

@@ -15,8 +15,12 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
 * Edits of the regions, each saved in the project before the reply (atomic writes, as the
   CLI's) and recorded for undo: ``{"type": "depth", "at": [x, y], "by": 1 | -1}`` (the region
   there one layer up or down), ``{"type": "correct", "bone": name, "curve": [[x, y], ...]}``
-  (a lasso), ``{"type": "undo"}``, ``{"type": "redo"}``. Reply: ``{"type": "regions", ...}``,
-  as :func:`regions` gives them.
+  (a lasso). Reply: ``{"type": "regions", ...}``, as :func:`regions` gives them.
+* ``{"type": "undo"}``, ``{"type": "redo"}``: the newest edit of any kind (regions, keys,
+  rigging) undone or made again, from the history kept in the project folder
+  (:mod:`toonmotion.web.history`). Reply: ``{"type": "undone" | "redone", "kind": ...}`` with
+  the regions and keys as they are now. Every edit's reply carries ``"history": {"undo": n,
+  "redo": m}``.
 * Key-frames, saved in the project folder's ``keys.json`` (the key-frames format
   ``toonmotion animate`` reads) before the reply: ``{"type": "set_key", "frame": n,
   "positions": [...]}``, ``{"type": "delete_key", "frame": n}``, ``{"type": "move_key",
@@ -75,11 +79,13 @@ from toonmotion.errors import (
     ToonmotionError,
     TrackingError,
 )
+from toonmotion.io.atomic import write_text
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import load_keyframes, save_keyframes
 from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.curve_skeleton import joint_suggestions
+from toonmotion.web.history import History
 
 # The project folder's key-frames, in the format `toonmotion animate` reads.
 KEYS_FILE = "keys.json"
@@ -110,6 +116,15 @@ class Editing:
     footage: tuple[NDArray[np.uint8], float] | None = None  # frames and their rate
     capture: api.Capture | None = None
     captured: api.Animation | None = None  # the capture retargeted onto the character
+    _history: History | None = None
+
+    @property
+    def history(self) -> History:
+        """The undo history (:mod:`toonmotion.web.history`), read from the folder once."""
+        with self.lock:
+            if self._history is None:
+                self._history = History.open(self.folder)
+            return self._history
 
     @classmethod
     def open(cls, folder: str | Path) -> Editing:
@@ -153,6 +168,23 @@ class Editing:
             api.save_project(self.folder, character)
             self.character, self._deformer, self._animation, self._exaggerated = character, None, None, None
 
+    def keys_text(self) -> str | None:
+        """The key-frames file as saved, or None when there are no keys."""
+        file = self.folder / KEYS_FILE
+        return file.read_text(encoding="utf-8") if file.is_file() else None
+
+    def restore_keys(self, text: str | None) -> None:
+        """Put back the key-frames file ``text`` (None: no keys) as it was saved."""
+        with self.lock:
+            file = self.folder / KEYS_FILE
+            if text is None:
+                file.unlink(missing_ok=True)
+                timeline = None
+            else:
+                write_text(file, text)
+                timeline = load_keyframes(file, self.character.skeleton)
+            self.timeline, self._animation, self._exaggerated = timeline, None, None
+
     def keyed(self, timeline: Timeline | None) -> None:
         """Save the key-frames (none: the file goes), then make them the ones edited."""
         with self.lock:
@@ -183,6 +215,7 @@ def describe(editing: Editing) -> dict[str, Any]:
         "suggestions": joint_suggestions(character.curve_skeleton)[0].round(1).tolist(),
         **regions(character),
         "keys": keys(editing.timeline),
+        "history": editing.history.counts(),
     }
 
 
@@ -354,8 +387,10 @@ def _overlaps(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
 
 def _region_edit(change: Callable[[api.Character, dict[str, Any]], api.Character]) -> Handler:
     def handle(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
-        editing.edited(change(editing.character, message))
-        return {"type": "regions", **regions(editing.character)}
+        with editing.lock:
+            editing.edited(change(editing.character, message))
+            editing.history.record({"kind": "regions", "count": len(editing.character.edits)})
+            return {"type": "regions", **regions(editing.character), "history": editing.history.counts()}
 
     return handle
 
@@ -379,8 +414,12 @@ def _correct(character: api.Character, message: dict[str, Any]) -> api.Character
 def _key_edit(change: Callable[[Editing, dict[str, Any]], Timeline | None]) -> Handler:
     def handle(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
         with editing.lock:
+            before = editing.keys_text()
             editing.keyed(change(editing, message))
-            return {"type": "keys", "keys": keys(editing.timeline)}
+            after = editing.keys_text()
+            if after != before:  # an edit that changed nothing is no step to undo
+                editing.history.record({"kind": "keys", "before": before, "after": after})
+            return {"type": "keys", "keys": keys(editing.timeline), "history": editing.history.counts()}
 
     return handle
 
@@ -414,9 +453,62 @@ def _rig(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     with editing.lock:
         if editing.timeline is not None and set(skeleton.names) != set(editing.character.skeleton.names):
             raise SkeletonError("the key-frames name the joints: keep their names, or delete the keys first")
+        before = _joints(editing.character.skeleton)
         character, skipped = api.rig_again(editing.character, skeleton)
         editing.edited(character)
+        editing.history.record({"kind": "rig", "before": before, "after": _joints(character.skeleton)})
     return {"type": "rigged", "skipped": len(skipped)}
+
+
+def _joints(skeleton: Skeleton) -> list[list[Any]]:
+    return [[name, parent, list(xy)] for name, parent, xy in skeleton.joints()]
+
+
+def _step(editing: Editing, *, undo: bool) -> dict[str, Any]:
+    """Undo (or redo) the newest edit of any kind (:mod:`toonmotion.web.history`)."""
+    with editing.lock:
+        history = editing.history
+        stack = history.done if undo else history.undone
+        if not stack:  # region edits made outside the editor are still in the project's history
+            if not undo:
+                raise EditError("there is nothing to redo")
+            if not editing.character.edits:
+                raise EditError("there are no edits to undo")
+            editing.edited(api.undo_edits(editing.character))
+            kind = "regions"
+        else:
+            entry = stack[-1]
+            kind = entry["kind"]
+            if kind == "regions":
+                count = len(editing.character.edits)
+                if undo and count > entry["count"]:  # edits the history missed (a kill, the CLI) go first
+                    editing.edited(api.undo_edits(editing.character))
+                    return {"type": "undone", "kind": kind, **regions(editing.character),
+                            "keys": keys(editing.timeline), "history": history.counts()}
+                if count != (entry["count"] if undo else entry["count"] - 1):
+                    _stale(history)
+                step = api.undo_edits if undo else api.redo_edits
+                editing.edited(step(editing.character))
+            elif kind == "keys":
+                now, then = (entry["after"], entry["before"]) if undo else (entry["before"], entry["after"])
+                if editing.keys_text() != now:
+                    _stale(history)
+                editing.restore_keys(then)
+            else:
+                now, then = (entry["after"], entry["before"]) if undo else (entry["before"], entry["after"])
+                if _joints(editing.character.skeleton) != now:
+                    _stale(history)
+                skeleton = Skeleton.from_joints((name, parent, xy) for name, parent, xy in then)
+                editing.edited(api.rig_again(editing.character, skeleton)[0])
+            history.moved(entry, undo=undo)
+        return {"type": "undone" if undo else "redone", "kind": kind, **regions(editing.character),
+                "keys": keys(editing.timeline), "history": history.counts()}
+
+
+def _stale(history: History) -> None:
+    history.clear()
+    raise EditError("the undo history no longer matches the project (it was changed outside the "
+                    "editor), so it is cleared; the project is as it was")
 
 
 def _set_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
@@ -473,8 +565,8 @@ _HANDLERS: dict[str, Handler] = {
     "overlaps": _overlaps,
     "depth": _region_edit(_depth),
     "correct": _region_edit(_correct),
-    "undo": _region_edit(lambda character, message: api.undo_edits(character)),
-    "redo": _region_edit(lambda character, message: api.redo_edits(character)),
+    "undo": lambda editing, message: _step(editing, undo=True),
+    "redo": lambda editing, message: _step(editing, undo=False),
     "set_key": _key_edit(_set_key),
     "delete_key": _key_edit(_delete_key),
     "move_key": _key_edit(_move_key),

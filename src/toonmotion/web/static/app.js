@@ -54,6 +54,7 @@ class Live {
     });
     this.socket.onmessage = (event) => {
       const reply = JSON.parse(event.data);
+      if (reply.history && this.onHistory) this.onHistory(reply.history);
       const pending = this.waiting.get(reply.id);
       if (!pending) return;
       if (reply.type === "progress") {
@@ -94,6 +95,7 @@ async function start() {
     const ctx = { project, view, live, side: document.getElementById("side"), status, showError };
     window.toonmotion = ctx; // for tests and the console
     mountPanels(ctx);
+    history(ctx);
     status("ready");
   } catch (error) {
     status("");
@@ -123,6 +125,53 @@ function remembered(ctx) {
   };
 }
 
+// Undo and redo for every kind of edit (regions, keys, rigging), newest first: the history is
+// the server's, kept in the project folder, so it survives a reload. After a step the current
+// panel is mounted again on the project as it now is; undoing a rig reloads the page.
+function history(ctx) {
+  const undo = document.getElementById("undo"), redo = document.getElementById("redo");
+  const show = (counts) => {
+    ctx.project.history = counts;
+    undo.disabled = counts.undo === 0 && ctx.project.edits === 0;
+    redo.disabled = counts.redo === 0;
+    undo.title = `Undo (Ctrl+Z): ${counts.undo} edit${counts.undo === 1 ? "" : "s"}`;
+    redo.title = `Redo (Ctrl+Shift+Z): ${counts.redo} edit${counts.redo === 1 ? "" : "s"}`;
+  };
+  async function step(type) {
+    try {
+      const reply = await ctx.live.request({ type });
+      if (reply.kind === "rig") return location.reload();
+      Object.assign(ctx.project, { triangles: reply.triangles, vertex_bone: reply.vertex_bone, depth: reply.depth,
+                                   fallback: reply.fallback, edits: reply.edits, undone: reply.undone,
+                                   keys: reply.keys });
+      ctx.view.setTriangles(reply.triangles);
+      show(reply.history);
+      ctx.remount();
+      showError("");
+      status(`${type === "undo" ? "undid" : "redid"} a ${reply.kind === "keys" ? "key-frame" : "region"} edit`);
+    } catch (error) {
+      showError(error.message);
+    }
+  }
+  ctx.undo = () => step("undo");
+  ctx.redo = () => step("redo");
+  ctx.live.onHistory = show;
+  undo.onclick = ctx.undo;
+  redo.onclick = ctx.redo;
+  window.addEventListener("keydown", (event) => {
+    if (!(event.ctrlKey || event.metaKey) || (event.target instanceof HTMLInputElement && event.target.type === "text")) return;
+    const key = event.key.toLowerCase();
+    if (key === "z" && !event.shiftKey) {
+      event.preventDefault();
+      ctx.undo();
+    } else if (key === "y" || (key === "z" && event.shiftKey)) {
+      event.preventDefault();
+      ctx.redo();
+    }
+  });
+  show(ctx.project.history);
+}
+
 function mountPanels(ctx) {
   const nav = document.getElementById("panels");
   const memory = remembered(ctx);
@@ -131,6 +180,7 @@ function mountPanels(ctx) {
   for (const panel of PANELS) {
     const button = document.createElement("button");
     button.textContent = panel.title;
+    button.title = `${panel.title} (${PANELS.indexOf(panel) + 1})`;
     button.dataset.panel = panel.name;
     button.onclick = () => {
       if (current) current.unmount();
@@ -143,6 +193,14 @@ function mountPanels(ctx) {
     nav.append(button);
   }
   window.addEventListener("pagehide", () => memory.keep(currentName));
+  ctx.remount = () => nav.querySelector(`button[data-panel=${currentName}]`).click();
+  // Keys 1 to 9 open the panels, in the order of the bar.
+  window.addEventListener("keydown", (event) => {
+    if (event.ctrlKey || event.metaKey || event.altKey || event.target instanceof HTMLInputElement
+        || event.target instanceof HTMLSelectElement) return;
+    const button = nav.children[Number(event.key) - 1];
+    if (/^[1-9]$/.test(event.key) && button) button.click();
+  });
   const start = [...nav.children].find((b) => b.dataset.panel === memory.saved.panel) || nav.firstChild;
   start.click();
 }

@@ -1,8 +1,8 @@
 // The Regions panel (thesis 3.5, 6.3): each bone's region of the drawing in its own colour.
 // Click a region to bring it one depth layer forward (Shift-click: back); draw a lasso round
-// vertices to attach them to the chosen bone. Every edit is saved in the project at once, and
-// Undo / Redo (Ctrl+Z, Ctrl+Shift+Z or Ctrl+Y) take edits back and make them again, also after
-// a reload: the history lives in the project.
+// vertices to attach them to the chosen bone. Every edit is saved in the project at once; the
+// editor's Undo / Redo (Ctrl+Z, Ctrl+Shift+Z or Ctrl+Y) take edits back and make them again,
+// also after a reload: the history lives in the project.
 
 import { listen } from "./panel_kit.js";
 
@@ -18,7 +18,7 @@ export function mount(ctx) {
   side.innerHTML = `<h2>Regions</h2>
     <p>Click a region to bring it forward (Shift-click: back). Draw a lasso round vertices to
     attach them to <select id="regions-bone"></select></p>
-    <p><button id="regions-undo">Undo</button> <button id="regions-redo">Redo</button></p>
+
     <p id="regions-state"></p>
     <p id="regions-fallback"></p>`;
   const select = document.getElementById("regions-bone");
@@ -31,9 +31,7 @@ export function mount(ctx) {
         "check them, and lasso them to the right bone if they are wrong."
       : "";
     document.getElementById("regions-state").textContent =
-      `${project.edits} edit${project.edits === 1 ? "" : "s"}, ${project.undone} to redo`;
-    document.getElementById("regions-undo").disabled = project.edits === 0;
-    document.getElementById("regions-redo").disabled = project.undone === 0;
+      `${project.edits} region edit${project.edits === 1 ? "" : "s"} in the project (Undo, Ctrl+Z, takes the newest back)`;
   }
 
   view.drawOverlay = (pen) => {
@@ -103,19 +101,7 @@ export function mount(ctx) {
     if (moved <= CLICK && curve.length < 6) edit({ type: "depth", at: view.toDrawing(event), by: event.shiftKey ? -1 : 1 });
     else if (curve.length >= 3) edit({ type: "correct", bone: select.value, curve });
   };
-  const keys = (event) => {
-    if (!(event.ctrlKey || event.metaKey)) return;
-    const key = event.key.toLowerCase();
-    if (key === "z" && !event.shiftKey && project.edits > 0) { event.preventDefault(); edit({ type: "undo" }); }
-    else if ((key === "y" || (key === "z" && event.shiftKey)) && project.undone > 0) {
-      event.preventDefault();
-      edit({ type: "redo" });
-    }
-  };
-  const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up }),
-                    listen(window, { keydown: keys })];
-  document.getElementById("regions-undo").onclick = () => edit({ type: "undo" });
-  document.getElementById("regions-redo").onclick = () => edit({ type: "redo" });
+  const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up })];
   view.setVertices(project.vertices); // regions are edited on the rest pose
   showState();
   status("click a region or draw a lasso");
