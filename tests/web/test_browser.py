@@ -428,3 +428,53 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     page.click("#capture-play")
     assert page.evaluate("document.getElementById('mesh').style.visibility") == "visible"
     assert page.errors == [] and page.locator("#error").is_hidden()
+
+
+def test_fine_tune_drag_a_point_and_sketch_the_outline_then_key_them(page, editor):
+    from toonmotion.deform.tuning import CurveEdit, DragEdit
+    from toonmotion.io.pose_json import load_keyframes
+
+    folder = editor[1]
+    character = api.load_project(folder)
+    page.click("nav button[data-panel=pose]")
+    page.click("#pose-reset")
+    page.wait_for_timeout(300)
+    page.keyboard.press("p")
+    head = character.skeleton.positions[character.skeleton.index("head")]
+    top = character.mesh.V[np.argmin(np.where(np.abs(character.mesh.V[:, 0] - head[0]) < 6,
+                                              character.mesh.V[:, 1], np.inf))]  # the top of the hair
+    (x0, y0), (x1, y1) = _on_screen(page, [top, top + [0, -15]])
+    page.mouse.move(x0, y0)
+    page.mouse.down()
+    page.mouse.move(x1, y1, steps=5)
+    page.mouse.up()
+    page.wait_for_function("window.toonmotion.tuning.length === 1")
+    page.keyboard.press("t")
+    hand = character.skeleton.positions[character.skeleton.index("right_hand")]
+    curve = [hand + [-14, -30 + 6 * k] for k in range(11)]  # beside the arm's outer edge
+    screen = _on_screen(page, curve)
+    page.mouse.move(*screen[0])
+    page.mouse.down()
+    for xy in screen[1:]:
+        page.mouse.move(*xy)
+    page.mouse.up()
+    page.wait_for_function("window.toonmotion.tuning.length === 2")
+    page.wait_for_timeout(400)
+    assert page.locator("#error").is_hidden(), page.locator("#error").text_content()
+    edits = page.evaluate("window.toonmotion.tuning")
+    served = np.reshape(page.evaluate("Array.from(window.toonmotion.view.vertices)"), (-1, 2))
+    expected = api.pose_character(character, Pose(character.skeleton.positions), edits=[
+        DragEdit(edits[0]["from"], edits[0]["to"]), CurveEdit(edits[1]["points"])]).deformation.U
+    np.testing.assert_allclose(served, expected, atol=1e-2)  # the library's fine-tuning, drawn
+    assert served[:, 1].min() < character.mesh.V[:, 1].min() - 10  # the tuft went up
+    page.click("nav button[data-panel=timeline]")
+    _set_frame(page, 20)
+    page.evaluate("() => { const c = window.toonmotion; c.pose = c.project.joints.map((j) => j.position); }")
+    page.evaluate("() => { window.toonmotion.tuning = " + str(edits).replace("'", '"') + "; }")
+    page.click("#timeline-key")
+    page.wait_for_function("window.toonmotion.project.keys.keys.some((k) => k.frame === 20)")
+    keyed = load_keyframes(folder / "keys.json", character.skeleton)
+    assert [type(e).__name__ for e in keyed.keys[-1].edits] == ["DragEdit", "CurveEdit"]  # saved with the key
+    page.keyboard.press("Control+z")  # and undone like any key edit
+    page.wait_for_function("!(window.toonmotion.project.keys?.keys || []).some((k) => k.frame === 20)")
+    assert page.errors == [] and page.locator("#error").is_hidden()

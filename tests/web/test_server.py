@@ -256,6 +256,29 @@ def test_undo_and_redo_take_back_every_kind_of_edit_newest_first_and_survive_a_r
     assert [k["frame"] for k in json.loads((folder / "keys.json").read_text())["keys"]] == [0, 8]
 
 
+def test_fine_tuning_is_applied_to_the_pose_and_keyed_with_it(editable):
+    from toonmotion.deform.tuning import DragEdit
+    from toonmotion.io.pose_json import load_keyframes
+
+    folder, client = editable
+    character = api.load_project(folder)
+    rest = character.skeleton.positions.tolist()
+    start = character.mesh.V[0].tolist()
+    drag = {"kind": "drag", "from": [start], "to": [[start[0], start[1] - 12]]}
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        mesh = _send(socket, {"type": "pose", "positions": rest, "edits": [drag]})
+        expected = api.pose_character(character, api.rotate_joint(character, "head", 0.0),
+                                      edits=[DragEdit([start], [[start[0], start[1] - 12]])])
+        np.testing.assert_allclose(np.reshape(mesh["U"], (-1, 2)), expected.deformation.U, atol=1e-3)
+        keyed = _send(socket, {"type": "set_key", "frame": 0, "positions": rest, "edits": [drag]})
+        assert keyed["keys"]["keys"][0]["edits"] == [drag]
+        again = _send(socket, {"type": "set_key", "frame": 0, "positions": rest})  # keeps its edits
+        assert again["keys"]["keys"][0]["edits"] == [drag]
+        bad = _send(socket, {"type": "pose", "positions": rest, "edits": [{"kind": "smudge"}]})
+        assert bad["type"] == "error" and "'edits'" in bad["message"]
+    assert len(load_keyframes(folder / "keys.json", character.skeleton).keys[0].edits) == 1
+
+
 def test_undo_refuses_a_history_the_project_no_longer_matches(editable):
     folder, client = editable
     rest = api.load_project(folder).skeleton.positions.tolist()

@@ -15,6 +15,7 @@ from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
 from toonmotion.animate.timeline import Keyframe, Timeline, make_timeline
 from toonmotion.deform.deformer import Deformer, DeformSettings
+from toonmotion.deform.tuning import TuningEdit
 from toonmotion.errors import KeyframeError
 from toonmotion.rig.character import Character
 from toonmotion.rig.pose import Pose, check_pose
@@ -116,7 +117,7 @@ def filter_motion(
 
 
 def set_key(skeleton: Skeleton, timeline: Timeline | None, frame: int, pose: Pose, *,
-            fps: float = 12.0, ease: str = "in-out") -> Timeline:
+            fps: float = 12.0, ease: str = "in-out", edits: Sequence[TuningEdit] | None = None) -> Timeline:
     """``timeline`` with a key pose at ``frame`` (a new one, or replacing that frame's pose).
 
     Parameters
@@ -130,11 +131,13 @@ def set_key(skeleton: Skeleton, timeline: Timeline | None, frame: int, pose: Pos
     pose : Pose
     fps, ease : float, str
         For a first key: the animation's frame rate and easing; later keys keep the timeline's.
+    edits : sequence of TuningEdit, optional
+        The key's fine-tuning edits (sketch curves, point drags), applied after it is deformed
+        and carried through the in-betweens; by default a replaced key keeps its own.
 
     Returns
     -------
     Timeline
-        A replaced key keeps its fine-tuning edits.
 
     Examples
     --------
@@ -147,10 +150,11 @@ def set_key(skeleton: Skeleton, timeline: Timeline | None, frame: int, pose: Pos
     ([0, 12], 12.0)
     """
     old = {key.frame: key for key in timeline.keys} if timeline is not None else {}
-    edits = old[frame].edits if frame in old else ()
+    if edits is None:
+        edits = old[frame].edits if frame in old else ()
     if isinstance(frame, bool) or not isinstance(frame, int) or frame < 0:
         raise KeyframeError(f"a key's frame must be a whole number >= 0, got {frame!r}")
-    old[frame] = Keyframe(frame, check_pose(skeleton, pose, where=f"key-frame {frame}"), edits)
+    old[frame] = Keyframe(frame, check_pose(skeleton, pose, where=f"key-frame {frame}"), tuple(edits))
     if timeline is not None:
         fps, ease = timeline.fps, timeline.ease
     return make_timeline(skeleton, old.values(), fps=fps, ease=ease)

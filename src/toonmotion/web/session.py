@@ -3,8 +3,10 @@
 Messages are JSON objects; ``id``, when given, is echoed back. An error is a reply too,
 ``{"id": ..., "type": "error", "message": "..."}``, and changes nothing.
 
-* ``{"type": "pose", "positions": [[x, y], ...]}``: every joint's position, in the skeleton's
-  order. Reply: ``{"type": "mesh", "U": [x0, y0, x1, y1, ...]}``, the deformed vertices (the
+* ``{"type": "pose", "positions": [[x, y], ...], "edits": [...]}``: every joint's position, in
+  the skeleton's order, and optional fine-tuning edits (thesis 3.5) in the key-frames file's
+  form, ``{"kind": "curve", "points": [...]}`` or ``{"kind": "drag", "from": [...], "to":
+  [...]}``. Reply: ``{"type": "mesh", "U": [x0, y0, x1, y1, ...]}``, the deformed vertices (the
   needle model, then the joint-area solve).
 * ``{"type": "sketch", "strokes": [[[x, y], ...], ...], "positions": [...]}``: the strokes of a
   sketched skeleton, matched to the bones (:func:`toonmotion.api.sketch_pose`), starting from
@@ -23,8 +25,9 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   "redo": m}``.
 * Key-frames, saved in the project folder's ``keys.json`` (the key-frames format
   ``toonmotion animate`` reads) before the reply: ``{"type": "set_key", "frame": n,
-  "positions": [...]}``, ``{"type": "delete_key", "frame": n}``, ``{"type": "move_key",
-  "frame": n, "to": m}``. Reply: ``{"type": "keys", ...}``, as :func:`keys` gives them.
+  "positions": [...], "edits": [...]}`` (edits optional: a replaced key keeps its own),
+  ``{"type": "delete_key", "frame": n}``, ``{"type": "move_key", "frame": n, "to": m}``.
+  Reply: ``{"type": "keys", ...}``, as :func:`keys` gives them.
 * ``{"type": "rig", "joints": [{"name": ..., "parent": name or null, "position": [x, y]}, ...]}``:
   rig the drawing again with this skeleton, replaying the region edits; saved before the reply
   ``{"type": "rigged", "skipped": n}`` (edits that no longer apply). While there are key-frames,
@@ -68,6 +71,7 @@ from toonmotion import api
 from toonmotion.animate.timeline import Timeline
 from toonmotion.deform.deformer import Deformer
 from toonmotion.deform.depth import draw_order
+from toonmotion.deform.tuning import TuningEdit
 from toonmotion.errors import (
     EditError,
     FilterError,
@@ -81,7 +85,7 @@ from toonmotion.errors import (
 )
 from toonmotion.io.atomic import write_text
 from toonmotion.io.motion_json import save_motion
-from toonmotion.io.pose_json import load_keyframes, save_keyframes
+from toonmotion.io.pose_json import edits_from_json, edits_to_json, load_keyframes, save_keyframes
 from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.curve_skeleton import joint_suggestions
@@ -239,7 +243,8 @@ def keys(timeline: Timeline | None) -> dict[str, Any] | None:
     if timeline is None:
         return None
     return {"fps": timeline.fps, "ease": timeline.ease,
-            "keys": [{"frame": k.frame, "positions": k.pose.positions.tolist()} for k in timeline.keys]}
+            "keys": [{"frame": k.frame, "positions": k.pose.positions.tolist(),
+                      "edits": edits_to_json(k.edits)} for k in timeline.keys]}
 
 
 def answer(editing: Editing, text: str) -> dict[str, Any]:
@@ -355,7 +360,7 @@ def one_line(text: str) -> str:
 
 def _pose(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     if message.get("accel") is None:
-        U = _posed(editing, message.get("positions"))
+        U = _posed(editing, message.get("positions"), _tuning(message))
         return {"type": "mesh", "U": np.round(U, 3).ravel().tolist()}
     fixed = message.get("fixed")
     if not isinstance(fixed, list) or not all(isinstance(name, str) for name in fixed):
@@ -514,7 +519,8 @@ def _stale(history: History) -> None:
 def _set_key(editing: Editing, message: dict[str, Any]) -> Timeline | None:
     frame = _frame(message, "frame")
     pose = Pose(_positions(editing, message.get("positions")))
-    return api.set_key(editing.character.skeleton, editing.timeline, frame, pose)
+    edits = _tuning(message) if "edits" in message else None
+    return api.set_key(editing.character.skeleton, editing.timeline, frame, pose, edits=edits)
 
 
 def _timing(editing: Editing, message: dict[str, Any]) -> Timeline | None:
@@ -616,6 +622,12 @@ def _positions(editing: Editing, positions: Any) -> NDArray[np.float64]:
     return check_pose(skeleton, Pose(array)).positions
 
 
-def _posed(editing: Editing, positions: Any) -> NDArray[np.float64]:
+def _posed(editing: Editing, positions: Any, edits: tuple[TuningEdit, ...] = ()) -> NDArray[np.float64]:
     pose = Pose(_positions(editing, positions))
-    return api.pose_character(editing.deformer, pose).deformation.U
+    return api.pose_character(editing.deformer, pose, edits=edits).deformation.U
+
+
+def _tuning(message: dict[str, Any]) -> tuple[TuningEdit, ...]:
+    """A message's fine-tuning ``edits``, in the key-frames file's form (none when absent)."""
+    edits = message.get("edits")
+    return () if edits is None else edits_from_json(edits, where="'edits'")

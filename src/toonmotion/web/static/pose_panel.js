@@ -1,8 +1,13 @@
-// The Pose panel: drag a joint and the drawing follows live (needle model + joint-area solve on
-// the server), or sketch the skeleton with strokes (mouse or pen) and the server matches them to
-// the bones (thesis 6.2a). The rest bones are shown as red reference lines from each posed
-// parent (fig. 6.2a). While a reply is awaited, newer drags replace the queued pose, so the
-// drawing keeps up with the pointer instead of falling behind it.
+// The Pose panel. Four ways to pose, each a mode (and a key):
+//  D  drag a joint and the drawing follows live (needle model + joint-area solve on the server);
+//  S  sketch the skeleton with strokes (mouse or pen): the server matches them to the bones
+//     (thesis 6.2a);
+//  T  tune the outline with a sketch curve (thesis 3.5, fig. 3.11);
+//  P  drag points of the drawing itself (fig. 3.12b).
+// The rest bones are red reference lines from each posed parent (fig. 6.2a). Fine-tuning edits
+// belong to the pose being made (ctx.tuning) and are keyed with it in the Timeline. While a
+// reply is awaited, newer drags replace the queued pose, so the drawing keeps up with the
+// pointer instead of falling behind it.
 
 import { listen, nearest, newest } from "./panel_kit.js";
 
@@ -11,24 +16,35 @@ export const title = "Pose";
 
 const HANDLE = 7; // joint handle radius, CSS pixels
 const SKETCH_PAUSE = 900; // ms after the last stroke before a sketch is matched
+const MODES = {
+  drag: ["Drag joints", "d", "Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent."],
+  sketch: ["Sketch the skeleton", "s", "Draw bones, chains or a whole stick figure, over the drawing or beside it: a " +
+           "corner is a joint. Strokes are matched when you pause (Enter: now, Escape: drop them)."],
+  tune: ["Tune the outline", "t", "Draw a curve beside the outline: the stretch of outline between the points " +
+         "nearest its ends moves onto it."],
+  points: ["Drag points", "p", "Drag any point of the drawing (a face, a tuft of hair): its neighbourhood follows."],
+};
 
 export function mount(ctx) {
   const { project, view, live, side, status, showError } = ctx;
   const rest = project.joints.map((j) => j.position.slice());
-  // The pose being made, shared with the other panels (the Timeline keys it).
+  // The pose being made and its fine-tuning, shared with the other panels (the Timeline keys them).
   ctx.pose = ctx.pose || rest.map((p) => p.slice());
+  ctx.tuning = ctx.tuning || [];
   const positions = ctx.pose;
   let dragging = -1, started = 0, mode = "drag";
   const strokes = []; // the sketch being drawn: [{points: [[x, y], ...], widths: [...]}, ...]
-  let drawing = null, pause = 0;
+  let drawing = null, pause = 0, pulled = null;
 
   side.innerHTML = `<h2>Pose</h2>
-    <p role="radiogroup" aria-label="how to pose">
-      <label><input type="radio" name="pose-mode" value="drag" checked> Drag joints <kbd>D</kbd></label><br>
-      <label><input type="radio" name="pose-mode" value="sketch"> Sketch the skeleton <kbd>S</kbd></label></p>
-    <p id="pose-help">Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent.</p>
+    <p role="radiogroup" aria-label="how to pose">${Object.entries(MODES).map(([value, [label, key]]) =>
+      `<label><input type="radio" name="pose-mode" value="${value}"> ${label} <kbd>${key.toUpperCase()}</kbd></label>`)
+      .join("<br>")}</p>
+    <p id="pose-help"></p>
     <p id="pose-matched"></p>
-    <p><button id="pose-reset">Reset to the rest pose</button></p>
+    <p id="pose-tuning"></p>
+    <p><button id="pose-untune">Drop the last tuning</button>
+       <button id="pose-reset">Reset to the rest pose</button></p>
     <p id="pose-timing"></p>
     <div id="pose-overlaps"></div>`;
 
@@ -49,6 +65,7 @@ export function mount(ctx) {
       line(pen, view.toCanvas([px, py]), view.toCanvas([px + rx, py + ry]), "rgba(220, 40, 40, 0.8)");
       line(pen, view.toCanvas([px, py]), view.toCanvas(positions[i]), "rgba(20, 20, 20, 0.9)");
     });
+    if (mode !== "drag" && mode !== "sketch") return; // the handles would hide the outline
     positions.forEach((p, i) => {
       const [x, y] = view.toCanvas(p);
       pen.beginPath();
@@ -66,10 +83,20 @@ export function mount(ctx) {
     showError("");
   }, (error) => showError(error.message));
 
+  // The pose with its tuning (and a drag of points under way) sent to be deformed.
   function posed() {
     started = performance.now();
-    send({ type: "pose", positions: positions.map((p) => p.slice()) });
+    const edits = pulled ? [...ctx.tuning, pulled] : ctx.tuning;
+    send({ type: "pose", positions: positions.map((p) => p.slice()), edits });
+    showTuning();
     view.draw();
+  }
+
+  function showTuning() {
+    const count = ctx.tuning.length;
+    document.getElementById("pose-tuning").textContent = count
+      ? `${count} fine-tuning edit${count === 1 ? "" : "s"} on this pose (keyed with it).` : "";
+    document.getElementById("pose-untune").disabled = count === 0;
   }
 
   // Sketching: each stroke's points in drawing pixels; a pen's pressure sets the line's width.
@@ -91,6 +118,7 @@ export function mount(ctx) {
         `Sketched ${reply.bones.join(", ")}${reply.elsewhere ? " (drawn beside the figure: scaled to it)" : ""}.`;
       showError("");
       status("sketch matched");
+      if (ctx.tuning.length) posed();
       overlaps();
     } catch (error) {
       showError(error.message);
@@ -98,13 +126,11 @@ export function mount(ctx) {
       view.draw();
     }
   }
+
   function setMode(next) {
     mode = next;
     for (const input of side.querySelectorAll("input[name=pose-mode]")) input.checked = input.value === mode;
-    document.getElementById("pose-help").textContent = mode === "sketch"
-      ? "Draw bones, chains or a whole stick figure, over the drawing or beside it: a corner is a joint. " +
-        "Strokes are matched when you pause (Enter: now, Escape: drop them)."
-      : "Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent.";
+    document.getElementById("pose-help").textContent = MODES[mode][2];
     strokes.length = 0;
     drawing = null;
     view.draw();
@@ -113,9 +139,15 @@ export function mount(ctx) {
 
   const overlay = view.overlay;
   const down = (event) => {
-    if (mode === "sketch") {
+    if (mode === "sketch" || mode === "tune") {
       clearTimeout(pause);
       drawing = { points: [view.toDrawing(event)], widths: [width(event)] };
+      overlay.setPointerCapture(event.pointerId);
+      return;
+    }
+    if (mode === "points") {
+      const at = view.toDrawing(event);
+      pulled = { kind: "drag", from: [at], to: [at] };
       overlay.setPointerCapture(event.pointerId);
       return;
     }
@@ -134,16 +166,36 @@ export function mount(ctx) {
       view.draw();
       return;
     }
+    if (pulled) {
+      pulled.to = [view.toDrawing(event)];
+      posed();
+      return;
+    }
     if (dragging < 0) return;
     positions[dragging] = view.toDrawing(event);
     posed();
   };
   const up = () => {
     if (drawing) {
-      if (drawing.points.length > 1) strokes.push(drawing);
+      const stroke = drawing;
       drawing = null;
+      if (mode === "tune") {
+        if (stroke.points.length > 1) {
+          ctx.tuning.push({ kind: "curve", points: stroke.points });
+          posed();
+        }
+        return;
+      }
+      if (stroke.points.length > 1) strokes.push(stroke);
       pause = setTimeout(match, SKETCH_PAUSE);
       view.draw();
+      return;
+    }
+    if (pulled) {
+      const [[x0, y0]] = pulled.from, [[x1, y1]] = pulled.to;
+      if (Math.hypot(x1 - x0, y1 - y0) > 0.5) ctx.tuning.push(pulled); // a click moves nothing
+      pulled = null;
+      posed();
       return;
     }
     if (dragging < 0) return;
@@ -172,8 +224,8 @@ export function mount(ctx) {
     if (event.target instanceof HTMLInputElement && event.target.type !== "radio") return;
     if (event.ctrlKey || event.metaKey || event.altKey) return;
     const key = event.key.toLowerCase();
-    if (key === "s") setMode("sketch");
-    else if (key === "d") setMode("drag");
+    const chosen = Object.entries(MODES).find(([, [, shortcut]]) => shortcut === key);
+    if (chosen) setMode(chosen[0]);
     else if (key === "enter" && mode === "sketch") match();
     else if (key === "escape" && mode === "sketch") setMode("sketch");
   };
@@ -181,9 +233,15 @@ export function mount(ctx) {
                     listen(window, { keydown: keys })];
   document.getElementById("pose-reset").onclick = () => {
     rest.forEach((p, i) => { positions[i] = p.slice(); });
+    ctx.tuning.length = 0;
     posed();
     overlaps();
   };
+  document.getElementById("pose-untune").onclick = () => {
+    ctx.tuning.pop();
+    posed();
+  };
+  setMode("drag");
   status("drag a joint");
   posed();
 

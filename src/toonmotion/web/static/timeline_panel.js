@@ -40,7 +40,8 @@ export function mount(ctx) {
       item.querySelector("input").onchange = (event) =>
         change({ type: "move_key", frame: key.frame, to: Number(event.target.value) });
       item.querySelector(".copy").title = "Key this pose again at the current frame";
-      item.querySelector(".copy").onclick = () => change({ type: "set_key", frame: ctx.frame, positions: key.positions });
+      item.querySelector(".copy").onclick = () =>
+        change({ type: "set_key", frame: ctx.frame, positions: key.positions, edits: key.edits });
       item.querySelector(".delete").onclick = () => change({ type: "delete_key", frame: key.frame });
       list.append(item);
     }
@@ -93,7 +94,9 @@ export function mount(ctx) {
     mark(at);
     if (!project.keys) return;
     const reply = await live.request({ type: "frame", frame: at });
+    const key = project.keys.keys.find((k) => k.frame === reply.frame);
     ctx.pose = reply.positions;
+    ctx.tuning = key ? structuredClone(key.edits) : []; // a key's fine-tuning, to adjust and key again
     view.setVertices(reply.U);
   }
 
@@ -128,7 +131,7 @@ export function mount(ctx) {
   scrub.oninput = () => show(Number(scrub.value)).catch((error) => showError(error.message));
   document.getElementById("timeline-key").onclick = () => {
     const positions = ctx.pose || project.joints.map((j) => j.position);
-    change({ type: "set_key", frame: ctx.frame, positions });
+    change({ type: "set_key", frame: ctx.frame, positions, edits: ctx.tuning || [] });
   };
   document.getElementById("timeline-play").onclick = () => (playing ? stop() : play());
   const timing = () => change({ type: "timing", fps: Number(document.getElementById("timeline-fps").value),
