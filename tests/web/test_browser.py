@@ -478,3 +478,40 @@ def test_fine_tune_drag_a_point_and_sketch_the_outline_then_key_them(page, edito
     page.keyboard.press("Control+z")  # and undone like any key edit
     page.wait_for_function("!(window.toonmotion.project.keys?.keys || []).some((k) => k.frame === 20)")
     assert page.errors == [] and page.locator("#error").is_hidden()
+
+
+def test_rig_load_a_skeleton_file_open_a_redrawn_drawing_and_undo_it(page, editor, tmp_path):
+    from toonmotion.io.char_cfg import save_char_cfg
+    from toonmotion.rig.skeleton import Skeleton
+
+    folder = editor[1]
+    character = api.load_project(folder)
+    page.click("nav button[data-panel=rig]")
+    page.check("#rig-show-mask")
+    page.wait_for_timeout(300)
+    assert page.errors == [] and page.locator("#error").is_hidden()
+    # A skeleton file: the same joints with the head 5 px higher.
+    joints = [(n, p, (x, y - 5 if n == "head" else y)) for n, p, (x, y) in character.skeleton.joints()]
+    save_char_cfg(tmp_path / "char_cfg.yaml", Skeleton.from_joints(joints), character.size)
+    page.set_input_files("#rig-skeleton-file", str(tmp_path / "char_cfg.yaml"))
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('loaded')")
+    head = page.evaluate("window.toonmotion.draft.find((j) => j.name === 'head').position")
+    assert head == pytest.approx(joints[character.skeleton.index("head")][2], abs=1e-3)  # as the file has it
+    # The artist redrew the character (here: recoloured): open it, keeping the skeleton and keys.
+    page.evaluate("""() => { const c = window.toonmotion, rest = c.project.joints.map((j) => j.position);
+        return c.live.request({ type: "set_key", frame: 0, positions: rest }); }""")
+    redrawn = character.texture.copy()
+    redrawn[..., :3] = 255 - redrawn[..., :3]
+    Image.fromarray(redrawn).save(tmp_path / "redrawn.png")
+    page.set_input_files("#rig-drawing", str(tmp_path / "redrawn.png"))
+    page.wait_for_function("!document.getElementById('rig-open').disabled")
+    page.click("#rig-open")
+    page.wait_for_load_state("load")
+    page.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=60_000)
+    opened = api.load_project(folder)
+    np.testing.assert_array_equal(opened.texture[..., :3], redrawn[..., :3])
+    assert (folder / "keys.json").exists()  # the key-frames still name these joints
+    page.keyboard.press("Control+z")  # the old drawing comes back
+    page.wait_for_function("window.toonmotion.project.history.redo === 1", timeout=30_000)
+    np.testing.assert_array_equal(api.load_project(folder).texture, character.texture)
+    assert page.errors == [] and page.locator("#error").is_hidden()

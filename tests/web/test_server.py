@@ -696,3 +696,77 @@ def test_a_correction_tracks_again_from_its_frame_and_keeps_the_frames_before(ed
     np.testing.assert_allclose(again["positions"][:2], first["positions"][:2])  # kept before the correction
     assert again["positions"][2][head] == pytest.approx([x + 3, y])
     assert bad["type"] == "error" and "'set' must give" in bad["message"]
+
+
+def _png(array) -> bytes:
+    buffer = io.BytesIO()
+    Image.fromarray(array).save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+def _opened(socket, message):
+    socket.send_text(json.dumps(message))
+    reply = socket.receive_json()
+    steps = 0
+    while reply["type"] == "progress":
+        steps += 1
+        reply = socket.receive_json()
+    return reply, steps
+
+
+def test_a_new_drawing_is_rigged_into_the_project_and_undo_brings_the_old_one_back(editable, drawings_root):
+    folder, client = editable
+    old = api.load_project(folder)
+    drawing = np.asarray(Image.open(drawings_root / "char4" / "texture.png").convert("RGB"))
+    mask = np.asarray(Image.open(drawings_root / "char4" / "mask.png").convert("L"))
+    headers = {"X-Toonmotion-Token": TOKEN}
+    sent = client.put("/api/uploads/drawing", content=_png(drawing), headers=headers)
+    assert sent.json() == {"width": drawing.shape[1], "height": drawing.shape[0]}
+    assert client.put("/api/uploads/mask", content=_png(mask), headers=headers).status_code == 200
+    skeleton = client.put("/api/uploads/skeleton?format=yaml", headers=headers,
+                          content=(drawings_root / "char4" / "char_cfg.yaml").read_bytes()).json()
+    assert [j["name"] for j in skeleton["joints"]][:2] == ["root", "hip"]
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        refused, _ = _opened(socket, {"type": "open_drawing", "skeleton": "keep", "mask": True})
+        assert "lie off the new figure" in refused["message"], refused  # the sample's joints
+        opened, steps = _opened(socket, {"type": "open_drawing", "skeleton": "new", "mask": True})
+        assert opened["type"] == "opened" and steps > 0, opened
+        new = api.load_project(folder)  # saved
+        assert new.size == (drawing.shape[1], drawing.shape[0])
+        np.testing.assert_array_equal(new.mask, mask >= 128)
+        assert _get(client, "/api/project").json()["width"] == drawing.shape[1]
+        back = _send(socket, {"type": "undo"})
+        assert back["kind"] == "drawing"
+        again = api.load_project(folder)
+        assert again.size == old.size
+        np.testing.assert_array_equal(again.texture, old.texture)
+        assert _send(socket, {"type": "redo"})["kind"] == "drawing"
+        assert api.load_project(folder).size == new.size
+
+
+@pytest.mark.parametrize(
+    ("url", "body", "status", "said"),
+    [
+        ("/api/uploads/drawing", b"not an image", 400, "image"),
+        ("/api/uploads/passwd", b"x", 404, "uploads are drawing, mask, skeleton"),
+        ("/api/uploads/..%2Fproject.json", b"x", 404, ""),
+        ("/api/uploads/skeleton", b"x: 1", 400, "format"),
+        ("/api/uploads/skeleton?format=yaml", b"- [unclosed", 400, "skeleton"),
+        ("/api/uploads/skeleton?format=json", b"{}", 400, "skeleton"),
+    ],
+)
+def test_bad_uploads_are_refused_in_one_line_and_change_nothing(editable, url, body, status, said):
+    folder, client = editable
+    before = (folder / "project.json").read_bytes()
+    reply = client.put(url, content=body, headers={"X-Toonmotion-Token": TOKEN})
+    assert reply.status_code == status and said in reply.json()["error"], reply.text
+    assert "\n" not in reply.json()["error"]
+    assert (folder / "project.json").read_bytes() == before
+    assert not (folder / "uploads").exists() or list((folder / "uploads").iterdir()) == []
+
+
+def test_opening_a_drawing_needs_one_sent_first(editable):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        reply, _ = _opened(socket, {"type": "open_drawing", "skeleton": "new"})
+    assert "no drawing to open yet" in reply["message"]

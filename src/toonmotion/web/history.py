@@ -10,6 +10,8 @@ reload and a restart.
   before and after a key edit (set, move, delete, timing, fine-tuning), ``null`` for none.
 * ``{"kind": "rig", "before": joints, "after": joints}``: the skeleton before and after
   rigging again, each ``[[name, parent or null, [x, y]], ...]``.
+* ``{"kind": "drawing", "before": folder, "after": folder}``: a new drawing opened into the
+  project; the projects before and after it are kept whole in ``history/<folder>``.
 
 This module keeps the stacks; :mod:`toonmotion.web.session` applies an entry. Each change is
 written atomically after the edit it records is saved, so a server killed in between leaves a
@@ -97,6 +99,6 @@ def _is_entry(entry: Any) -> bool:
     kind = entry.get("kind")
     if kind == "regions":
         return isinstance(entry.get("count"), int)
-    if kind in ("keys", "rig"):
+    if kind in ("keys", "rig", "drawing"):
         return "before" in entry and "after" in entry
     return False

@@ -24,6 +24,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from fastapi import FastAPI, Request, WebSocket, WebSocketDisconnect
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, Response
@@ -33,13 +34,16 @@ from toonmotion import api, limits
 from toonmotion.errors import ToonmotionError
 from toonmotion.io.atomic import atomic_path
 from toonmotion.io.frames import load_frames
-from toonmotion.io.image import png_bytes
+from toonmotion.io.image import load_image, png_bytes
+from toonmotion.io.skeleton_json import load_skeleton_file
 from toonmotion.web.session import (
     EXPORT_FORMATS,
     EXPORT_NAME,
     EXPORTS,
     FOOTAGE,
     MAX_MESSAGE_BYTES,
+    UPLOAD_PARTS,
+    UPLOADS,
     Editing,
     answer,
     bug,
@@ -47,6 +51,7 @@ from toonmotion.web.session import (
     exaggeration_of,
     export,
     one_line,
+    open_drawing,
     track,
 )
 
@@ -152,16 +157,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         """Footage to capture from, the request's body: saved in the project, read, joints suggested."""
         if suffix.lower() not in FOOTAGE_SUFFIXES:
             raise HTTPException(400, f"send footage as {', '.join(FOOTAGE_SUFFIXES)}, not {suffix[:10]!r}")
-        limit = limits.current().upload_bytes
         file = editing.folder / FOOTAGE / f"clip.{suffix.lower()}"
-        received = 0
-        with atomic_path(file) as partial, open(partial, "wb") as out:
-            async for chunk in request.stream():
-                received += len(chunk)
-                if received > limit:
-                    raise HTTPException(413, f"the footage is over the limit upload_bytes={limit:,}; cut it "
-                                             "shorter or scale it down (or raise the limit with --limit)")
-                out.write(chunk)
+        await _receive(request, file, "the footage")
         try:
             frames, fps = await asyncio.to_thread(load_frames, file)
         except ToonmotionError:
@@ -174,6 +171,37 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                 "joints": [{"name": n, "parent": None if p < 0 else skeleton.names[p],
                             "position": skeleton.positions[i].tolist(), "size": sizes[i].tolist()}
                            for i, (n, p) in enumerate(zip(skeleton.names, skeleton.parents, strict=True))]}
+
+    @app.put("/api/uploads/{part}")
+    async def upload(request: Request, part: str, format: str = "") -> dict[str, Any]:
+        """A drawing, its mask, or a skeleton file, the request's body, kept in the project's
+        upload area (``uploads/``) and read at once: a drawing or mask must be an image, a
+        skeleton a char_cfg YAML or toonmotion JSON (``format=yaml|json``), whose joints come back."""
+        if part not in UPLOAD_PARTS:
+            raise HTTPException(404, f"uploads are {', '.join(UPLOAD_PARTS)}, not {part[:20]!r}")
+        if part == "skeleton" and format not in ("yaml", "json"):
+            raise HTTPException(400, "say the skeleton file's format: ?format=yaml (a char_cfg) "
+                                     "or ?format=json")
+        file = editing.folder / UPLOADS / (f"skeleton.{format}" if part == "skeleton" else part)
+        await _receive(request, file, "the file")
+        try:
+            if part == "skeleton":
+                skeleton = await asyncio.to_thread(load_skeleton_file, file)
+                return {"joints": [{"name": n, "parent": p, "position": list(xy)}
+                                   for n, p, xy in skeleton.joints()]}
+            picture = await asyncio.to_thread(load_image, file)
+        except ToonmotionError:
+            file.unlink(missing_ok=True)
+            raise
+        return {"width": picture.shape[1], "height": picture.shape[0]}
+
+    @app.get("/api/mask.png")
+    def mask() -> Response:
+        """The figure's mask to lay over the drawing: blue where the figure is, clear elsewhere."""
+        figure = editing.character.mask
+        rgba = np.zeros((*figure.shape, 4), dtype=np.uint8)
+        rgba[figure] = (49, 130, 206, 255)
+        return Response(png_bytes(rgba), media_type="image/png")
 
     @app.get("/api/footage/{index}.png")
     def footage_frame(index: int) -> Response:
@@ -224,14 +252,29 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     return app
 
 
+async def _receive(request: Request, file: Path, what: str) -> None:
+    """Stream the request's body into ``file`` (atomically), within the upload_bytes limit."""
+    limit = limits.current().upload_bytes
+    received = 0
+    with atomic_path(file) as partial, open(partial, "wb") as out:
+        async for chunk in request.stream():
+            received += len(chunk)
+            if received > limit:
+                raise HTTPException(413, f"{what} is over the limit upload_bytes={limit:,}; make it "
+                                         "smaller (or raise the limit with --limit)")
+            out.write(chunk)
+
+
 def _slow(text: str) -> Callable[..., dict[str, Any]] | None:
     """The handler of a message that runs off the event loop (an export, a tracking), or None
     (checked cheaply; a bad message goes to ``answer``)."""
-    if len(text) > MAX_MESSAGE_BYTES or ('"export"' not in text and '"track"' not in text):
+    slow = ("export", "track", "open_drawing")
+    if len(text) > MAX_MESSAGE_BYTES or not any(f'"{kind}"' in text for kind in slow):
         return None
     try:
         message = json.loads(text)
     except (ValueError, RecursionError):
         return None
     kind = message.get("type") if isinstance(message, dict) else None
-    return {"export": export, "track": track}.get(kind) if isinstance(kind, str) else None
+    handlers = {"export": export, "track": track, "open_drawing": open_drawing}
+    return handlers.get(kind) if isinstance(kind, str) else None

@@ -43,6 +43,12 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   ``{"type": "retarget"}`` replays it on the character; reply
   ``{"type": "retargeted", "first": n, "last": m, "fps": f}``, whose frames a ``frame`` message
   with ``"source": "capture"`` gives.
+* ``{"type": "open_drawing", "skeleton": "keep" | "new", "mask": bool}``: rig the drawing sent
+  with ``PUT /api/uploads/drawing`` (and its mask, ``PUT /api/uploads/mask``, when ``mask``)
+  into this project, keeping the skeleton or finding a new one (not while key-frames name the
+  joints), off the event loop with progress messages; the project it replaces and the new one
+  are kept under ``history/`` so undo brings the old drawing back. Reply ``{"type": "opened",
+  "width": w, "height": h, "joints": n}``.
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
   Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
 * ``{"type": "export", "format": "gif" | "mp4" | "png", "name": "walk"}``: render the key-frames'
@@ -66,6 +72,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.ndimage import distance_transform_edt
 
 from toonmotion import api
 from toonmotion.animate.timeline import Timeline
@@ -78,14 +85,17 @@ from toonmotion.errors import (
     KeyframeError,
     MotionError,
     PoseError,
+    ProjectError,
     SkeletonError,
     SketchError,
     ToonmotionError,
     TrackingError,
 )
 from toonmotion.io.atomic import write_text
+from toonmotion.io.image import load_image, load_mask
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import edits_from_json, edits_to_json, load_keyframes, save_keyframes
+from toonmotion.io.project import PROJECT_FILE
 from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.curve_skeleton import joint_suggestions
@@ -96,6 +106,11 @@ KEYS_FILE = "keys.json"
 # Where footage sent to the editor is kept, and the motion tracked in it, in the project folder.
 FOOTAGE = "footage"
 CAPTURED = "motions/captured.json"
+# The upload area in the project folder: a new drawing, its mask, a skeleton file; and where the
+# projects an opened drawing replaced are kept, to undo it.
+UPLOADS = "uploads"
+UPLOAD_PARTS = ("drawing", "mask", "skeleton")
+SNAPSHOTS = "history"
 # Where the editor's exports go, in the project folder; and what an export's name may be.
 EXPORTS = "exports"
 EXPORT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
@@ -217,6 +232,7 @@ def describe(editing: Editing) -> dict[str, Any]:
         "curve_skeleton": [path[::3].round(1).tolist() + [path[-1].tolist()]
                            for path in character.curve_skeleton.paths],
         "suggestions": joint_suggestions(character.curve_skeleton)[0].round(1).tolist(),
+        "outline": [loop.round(1).tolist() for loop in character.silhouette.loops],
         **regions(character),
         "keys": keys(editing.timeline),
         "history": editing.history.counts(),
@@ -303,6 +319,80 @@ def export(editing: Editing, text: str, progress: Callable[[int, int], None]) ->
     except Exception as error:  # a bug: one line to the page, the details to the log
         log.error("internal error exporting: %s: %s", type(error).__name__, error)
         return {"id": ident, "type": "error", "message": bug(error)}
+
+
+def open_drawing(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:
+    """The reply to an ``open_drawing`` message (module docstring), calling ``progress(index,
+    count)`` through the rigging stages; meant to run off the server's event loop."""
+    ident: Any = None
+    try:
+        message = json.loads(text)
+        ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
+        uploads = editing.folder / UPLOADS
+        if not (uploads / "drawing").is_file():
+            raise ProjectError("there is no drawing to open yet: send one first")
+        keep, with_mask = message.get("skeleton", "keep"), message.get("mask", False)
+        if keep not in ("keep", "new") or not isinstance(with_mask, bool):
+            raise SkeletonError("'skeleton' must be \"keep\" or \"new\", and 'mask' true or false")
+        if with_mask and not (uploads / "mask").is_file():
+            raise ProjectError("there is no mask to use: send the mask first, "
+                               "or open the drawing without one")
+        with editing.lock:
+            before = editing.character
+        image = load_image(uploads / "drawing")
+        skeleton = before.skeleton if keep == "keep" else None
+        if skeleton is None and editing.timeline is not None:
+            raise SkeletonError("the key-frames name the joints: keep the skeleton, or delete the keys first")
+        height, width = image.shape[:2]
+        x, y = before.skeleton.positions.T
+        if skeleton is not None and (x.min() < 0 or y.min() < 0 or x.max() > width or y.max() > height):
+            raise SkeletonError(f"this skeleton does not fit the new {width}x{height} drawing: "
+                                "find a new skeleton for it, or load one made for it")
+        character = api.rig_image(image, mask=load_mask(uploads / "mask", size=(width, height))
+                                  if with_mask else None, skeleton=skeleton, settings=before.settings,
+                                  progress=lambda stage, index, total: progress(index, total))
+        if skeleton is not None:
+            _check_on_figure(character)
+        with editing.lock:
+            snapshot = _snapshot_folder(editing)
+            api.save_project(snapshot / "before", before)
+            api.save_project(snapshot / "after", character)
+            editing.edited(character)
+            editing.history.record({"kind": "drawing", "before": f"{snapshot.name}/before",
+                                    "after": f"{snapshot.name}/after"})
+        return {"id": ident, "type": "opened", "width": character.size[0], "height": character.size[1],
+                "joints": len(character.skeleton)}
+    except ToonmotionError as error:
+        return {"id": ident, "type": "error", "message": one_line(str(error))}
+    except OSError as error:
+        return {"id": ident, "type": "error", "message": one_line(f"cannot open the drawing: {error}")}
+    except Exception as error:  # a bug: one line to the page, the details to the log
+        log.error("internal error opening a drawing: %s: %s", type(error).__name__, error)
+        return {"id": ident, "type": "error", "message": bug(error)}
+
+
+def _check_on_figure(character: api.Character) -> None:
+    """Refuse a kept skeleton whose joints lie off the new figure (beyond 3% of its size)."""
+    away = distance_transform_edt(~character.mask)
+    reach = max(4.0, 0.03 * float(np.hypot(*character.size)))
+    rows = np.clip(np.rint(character.skeleton.positions[:, 1]).astype(int), 0, character.mask.shape[0] - 1)
+    cols = np.clip(np.rint(character.skeleton.positions[:, 0]).astype(int), 0, character.mask.shape[1] - 1)
+    off = np.flatnonzero(away[rows, cols] > reach)
+    if len(off):
+        names = ", ".join(character.skeleton.names[i] for i in off[:3])
+        raise SkeletonError(f"{len(off)} of the skeleton's joints lie off the new figure ({names}"
+                            f"{', ...' if len(off) > 3 else ''}): find a new skeleton, "
+                            "or load one made for it")
+
+
+def _snapshot_folder(editing: Editing) -> Path:
+    """A new folder under the project's ``history/`` for the projects around one opened drawing."""
+    root = editing.folder / SNAPSHOTS
+    taken = {p.name for p in root.iterdir()} if root.is_dir() else set()
+    n = 1
+    while f"drawing-{n}" in taken:
+        n += 1
+    return root / f"drawing-{n}"
 
 
 def track(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:
@@ -499,6 +589,13 @@ def _step(editing: Editing, *, undo: bool) -> dict[str, Any]:
                 if editing.keys_text() != now:
                     _stale(history)
                 editing.restore_keys(then)
+            elif kind == "drawing":
+                now, then = (entry["after"], entry["before"]) if undo else (entry["before"], entry["after"])
+                snapshots = editing.folder / SNAPSHOTS
+                saved = (editing.folder / PROJECT_FILE).read_text(encoding="utf-8")
+                if saved != (snapshots / now / PROJECT_FILE).read_text(encoding="utf-8"):
+                    _stale(history)
+                editing.edited(api.load_project(snapshots / then))
             else:
                 now, then = (entry["after"], entry["before"]) if undo else (entry["before"], entry["after"])
                 if _joints(editing.character.skeleton) != now:

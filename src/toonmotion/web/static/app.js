@@ -92,7 +92,7 @@ async function start() {
     const live = new Live(wsURL);
     await live.opened;
     const view = new MeshView(document.getElementById("mesh"), document.getElementById("overlay"), project, texture);
-    const ctx = { project, view, live, side: document.getElementById("side"), status, showError };
+    const ctx = { project, view, live, token, side: document.getElementById("side"), status, showError };
     window.toonmotion = ctx; // for tests and the console
     mountPanels(ctx);
     history(ctx);
@@ -140,7 +140,7 @@ function history(ctx) {
   async function step(type) {
     try {
       const reply = await ctx.live.request({ type });
-      if (reply.kind === "rig") return location.reload();
+      if (reply.kind === "rig" || reply.kind === "drawing") return location.reload(); // a new rig
       Object.assign(ctx.project, { triangles: reply.triangles, vertex_bone: reply.vertex_bone, depth: reply.depth,
                                    fallback: reply.fallback, edits: reply.edits, undone: reply.undone,
                                    keys: reply.keys });

@@ -1,10 +1,23 @@
-// The Rig panel (thesis 6.1): the curve skeleton (grey) and the joints it suggests (orange dots)
-// guide the animation skeleton. Drag a joint to move it (it snaps to a suggestion nearby); click
-// an empty spot to add a joint, a child of the selected one; rename, re-parent or delete the
-// selected joint in the side panel. "Rig with this skeleton" rigs the drawing again (region
-// edits are replayed) and saves the project; the page then reloads on the new rig.
+// The Rig panel (thesis 6.1): the silhouette (blue), the curve skeleton (grey) and the joints it
+// suggests (orange dots) guide the animation skeleton. Drag a joint to move it (it snaps to a
+// suggestion nearby, else to the curve skeleton); click an empty spot to add a joint, a child
+// of the selected one; rename, re-parent or delete the selected joint in the side panel, or load
+// a char_cfg.yaml / skeleton .json. "Rig with this skeleton" rigs the drawing again (region
+// edits are replayed) and saves the project; the page then reloads on the new rig. A new
+// drawing (PNG or JPEG, with or without a mask) can be opened or dropped on the stage: it is
+// rigged into this project, and Undo brings the old one back.
 
 import { listen, nearest } from "./panel_kit.js";
+
+// A file the user chose, sent to the project's upload area; resolves with the server's reply.
+async function upload(ctx, part, file, query = "") {
+  const reply = await fetch(`api/uploads/${part}${query}`, {
+    method: "PUT", body: file, headers: { "X-Toonmotion-Token": ctx.token },
+  });
+  const body = await reply.json().catch(() => ({ error: `${reply.status} ${reply.statusText}` }));
+  if (!reply.ok) throw new Error(body.error);
+  return body;
+}
 
 export const name = "rig";
 export const title = "Rig";
@@ -15,14 +28,24 @@ export function mount(ctx) {
   const { project, view, live, side, status, showError } = ctx;
   const draft = project.joints.map((j) => ({ name: j.name, parent: j.parent < 0 ? null : project.joints[j.parent].name,
                                              position: j.position.slice() }));
+  ctx.draft = draft; // for tests and the console
   let selected = -1, dragging = false, moved = false;
 
   side.innerHTML = `<h2>Rig</h2>
-    <p>Drag joints (they snap to the orange suggestions); click an empty spot to add a joint under
-    the selected one.</p>
+    <p>Drag joints (they snap to the orange suggestions, then to the grey curve skeleton); click an
+    empty spot to add a joint under the selected one.</p>
     <div id="rig-joint"></div>
+    <p><label>Load a skeleton <input type="file" id="rig-skeleton-file" accept=".yaml,.yml,.json"></label></p>
     <p><button id="rig-go">Rig with this skeleton</button></p>
-    <p id="rig-note"></p>`;
+    <p><label><input type="checkbox" id="rig-show-mask"> Show the mask</label></p>
+    <p id="rig-note"></p>
+    <h3>A new drawing</h3>
+    <p>Open one, or drop it on the stage (PNG or JPEG; a transparent background is its mask).</p>
+    <p><label>Drawing <input type="file" id="rig-drawing" accept="image/png,image/jpeg"></label></p>
+    <p><label>Mask (optional) <input type="file" id="rig-mask" accept="image/png,image/jpeg"></label></p>
+    <p><label><input type="radio" name="rig-skeleton" value="keep" checked> keep this skeleton</label><br>
+       <label><input type="radio" name="rig-skeleton" value="new"> find a new one</label></p>
+    <p><button id="rig-open" disabled>Rig the new drawing</button> <progress id="rig-progress" hidden></progress></p>`;
   if (project.keys) {
     document.getElementById("rig-note").textContent =
       "The key-frames name the joints: move them, but keep their names (or delete the keys).";
@@ -59,9 +82,24 @@ export function mount(ctx) {
     view.draw();
   }
 
+  let maskImage = null;
   view.drawOverlay = (pen) => {
     const ratio = window.devicePixelRatio || 1;
+    if (maskImage && document.getElementById("rig-show-mask").checked) {
+      const [x, y] = view.toCanvas([0, 0]);
+      pen.globalAlpha = 0.35;
+      pen.drawImage(maskImage, x, y, project.width * view.scale, project.height * view.scale);
+      pen.globalAlpha = 1;
+    }
     pen.lineWidth = 1.5 * ratio;
+    pen.strokeStyle = "rgba(49, 130, 206, 0.9)";
+    for (const loop of project.outline) {
+      pen.beginPath();
+      pen.moveTo(...view.toCanvas(loop[0]));
+      for (const p of loop.slice(1)) pen.lineTo(...view.toCanvas(p));
+      pen.closePath();
+      pen.stroke();
+    }
     pen.strokeStyle = "rgba(90, 90, 90, 0.8)";
     for (const path of project.curve_skeleton) {
       pen.beginPath();
@@ -95,9 +133,12 @@ export function mount(ctx) {
     });
   };
 
+  const skeletonPoints = project.curve_skeleton.flat();
   function snapped(event) {
     const s = nearest(view, project.suggestions, event, SNAP);
-    return s >= 0 ? project.suggestions[s].slice() : view.toDrawing(event);
+    if (s >= 0) return project.suggestions[s].slice();
+    const c = nearest(view, skeletonPoints, event, SNAP);
+    return c >= 0 ? skeletonPoints[c].slice() : view.toDrawing(event);
   }
 
   const overlay = view.overlay;
@@ -145,6 +186,77 @@ export function mount(ctx) {
       button.disabled = false;
     }
   };
+  document.getElementById("rig-show-mask").onchange = async () => {
+    if (!maskImage) {
+      maskImage = new Image();
+      maskImage.src = `api/mask.png?token=${encodeURIComponent(ctx.token)}`;
+      await maskImage.decode().catch(() => showError("the mask could not be loaded"));
+    }
+    view.draw();
+  };
+
+  document.getElementById("rig-skeleton-file").onchange = async (event) => {
+    const file = event.target.files[0];
+    if (!file) return;
+    try {
+      const format = /\.json$/i.test(file.name) ? "json" : "yaml";
+      const reply = await upload(ctx, "skeleton", file, `?format=${format}`);
+      draft.splice(0, draft.length, ...reply.joints.map((j) => ({ ...j, position: j.position.slice() })));
+      selected = -1;
+      showJoint();
+      view.draw();
+      showError("");
+      status(`loaded ${reply.joints.length} joints: check them, then rig with this skeleton`);
+    } catch (error) {
+      showError(error.message);
+    }
+  };
+
+  // A new drawing: sent to the upload area as soon as it is chosen (or dropped), rigged on "Rig".
+  let haveDrawing = false, haveMask = false;
+  async function choose(part, file) {
+    if (!file) return;
+    try {
+      const reply = await upload(ctx, part, file);
+      if (part === "drawing") haveDrawing = true; else haveMask = true;
+      document.getElementById("rig-open").disabled = !haveDrawing;
+      showError("");
+      status(`${part} ${reply.width}×${reply.height} ready: rig it`);
+    } catch (error) {
+      showError(error.message);
+    }
+  }
+  document.getElementById("rig-drawing").onchange = (event) => choose("drawing", event.target.files[0]);
+  document.getElementById("rig-mask").onchange = (event) => choose("mask", event.target.files[0]);
+  const stage = document.getElementById("stage");
+  const over = (event) => { event.preventDefault(); };
+  const dropped = (event) => {
+    event.preventDefault();
+    const file = [...event.dataTransfer.files].find((f) => /^image\/(png|jpeg)$/.test(f.type));
+    if (file) choose("drawing", file);
+    else showError("drop a PNG or JPEG drawing");
+  };
+  unlisten.push(listen(stage, { dragover: over, drop: dropped }));
+  document.getElementById("rig-open").onclick = async () => {
+    const button = document.getElementById("rig-open"), bar = document.getElementById("rig-progress");
+    const skeleton = side.querySelector("input[name=rig-skeleton]:checked").value;
+    button.disabled = true;
+    bar.hidden = false;
+    status("rigging the new drawing…");
+    try {
+      await live.request({ type: "open_drawing", skeleton, mask: haveMask }, (p) => {
+        bar.max = p.count;
+        bar.value = p.index + 1;
+      });
+      location.reload();
+    } catch (error) {
+      showError(error.message);
+      status("");
+      button.disabled = false;
+      bar.hidden = true;
+    }
+  };
+
   view.setVertices(project.vertices);
   status("place the joints");
 
