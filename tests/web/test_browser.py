@@ -318,6 +318,24 @@ def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
     assert page.locator("#redo").is_disabled()
     again = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
     assert [k.frame for k in again.keys] == [0, 12, 18]
+    # On the ruler: drag the key at 12 to 10, click to go to frame 6, step with the arrow keys.
+    at = """(frame) => { const r = document.getElementById('timeline-ruler').getBoundingClientRect();
+        const span = Number(document.getElementById('timeline-scrub').max);
+        return [r.left + 14 + frame / span * (r.width - 28), r.top + 32]; }"""
+    page.mouse.move(*page.evaluate(at, 12))
+    page.mouse.down()
+    page.mouse.move(*page.evaluate(at, 10), steps=5)
+    page.mouse.up()
+    page.wait_for_function("window.toonmotion.project.keys.keys.some((k) => k.frame === 10)")
+    moved = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton)
+    assert [k.frame for k in moved.keys] == [0, 10, 18]
+    np.testing.assert_array_equal(moved.keys[1].pose.positions, again.keys[1].pose.positions)
+    page.mouse.click(*page.evaluate(at, 6))
+    page.wait_for_function("document.getElementById('timeline-frame').textContent === '6'")
+    page.keyboard.press("ArrowRight")
+    page.wait_for_function("document.getElementById('timeline-frame').textContent === '7'")
+    page.keyboard.press("Control+z")  # the move undone: keys at 0, 12, 18 again
+    page.wait_for_function("window.toonmotion.project.keys.keys.some((k) => k.frame === 12)")
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 

@@ -1,9 +1,15 @@
-// The Timeline panel: key-frames on a frame ruler. "Key this frame" keys the pose made in the
-// Pose panel at the current frame; keys can be moved, copied to the current frame (a hold, or a
-// return to a pose) and deleted; the slider scrubs through the
-// in-betweens and Play plays them at the animation's frame rate. Every change is saved in the
-// project folder's keys.json at once (the file `toonmotion animate PROJECT PROJECT/keys.json`
-// reads). Scrubbing to a frame also makes its pose the Pose panel's, to adjust and key again.
+// The Timeline panel: key-frames on a frame ruler along the bottom of the stage. "Key this
+// frame" (K) keys the pose made in the Pose panel at the current frame; keys are moved by
+// dragging their diamonds on the ruler (or typing a frame), copied to the current frame (a hold,
+// or a return to a pose) and deleted; clicking or dragging on the ruler scrubs through the
+// in-betweens (← and → step), and Play (Space) plays them at the animation's frame rate. Every
+// change is saved in the project folder's keys.json at once (the file `toonmotion animate
+// PROJECT PROJECT/keys.json` reads). Scrubbing to a frame also makes its pose the Pose panel's,
+// to adjust and key again.
+
+import { listen } from "./panel_kit.js";
+
+const RULER = 44; // the ruler's height, CSS pixels
 
 export const name = "timeline";
 export const title = "Timeline";
@@ -21,8 +27,16 @@ export function mount(ctx) {
       fps</label> <label>Easing <select id="timeline-ease"><option>linear</option><option>in-out</option>
       <option>in</option><option>out</option></select></label></p>
     <ol id="timeline-keys"></ol>
-    <p>Make the pose in the Pose panel, then key it here.</p>`;
+    <p>Make the pose in the Pose panel, then key it here. On the ruler below the drawing, drag a
+    key's diamond to move it, click to go to a frame.</p>
+    <p><kbd>K</kbd> key this frame, <kbd>←</kbd> <kbd>→</kbd> step, <kbd>Space</kbd> play,
+    <kbd>Delete</kbd> delete this frame's key.</p>`;
   const scrub = document.getElementById("timeline-scrub");
+  const ruler = document.createElement("canvas");
+  ruler.id = "timeline-ruler";
+  ruler.className = "ruler";
+  ruler.setAttribute("aria-label", "frame ruler: drag a key to move it, click to go to a frame");
+  document.getElementById("stage").append(ruler);
 
   function lastFrame() {
     const keys = project.keys ? project.keys.keys : [];
@@ -46,6 +60,7 @@ export function mount(ctx) {
       list.append(item);
     }
     scrub.max = String(Math.max(24, lastFrame() + 12));
+    drawRuler();
     if (project.keys) {
       document.getElementById("timeline-fps").value = project.keys.fps;
       document.getElementById("timeline-ease").value = project.keys.ease;
@@ -88,7 +103,100 @@ export function mount(ctx) {
     ctx.frame = at;
     scrub.value = String(at);
     document.getElementById("timeline-frame").textContent = String(at);
+    drawRuler();
   }
+
+  // The ruler: a tick per frame (labelled every 6th), a diamond per key, the current frame's
+  // line; a key being dragged is drawn where it would land.
+  let held = null; // {from, to}: a key being dragged
+  function frameX(frame) {
+    const span = Number(scrub.max), inset = 14;
+    return inset + (frame / span) * (ruler.clientWidth - 2 * inset);
+  }
+  function frameAt(event) {
+    const box = ruler.getBoundingClientRect(), span = Number(scrub.max), inset = 14;
+    return Math.max(0, Math.min(span, Math.round(((event.clientX - box.left - inset) / (box.width - 2 * inset)) * span)));
+  }
+  function drawRuler() {
+    const ratio = window.devicePixelRatio || 1;
+    ruler.width = Math.round(ruler.clientWidth * ratio);
+    ruler.height = Math.round(RULER * ratio);
+    const pen = ruler.getContext("2d");
+    pen.scale(ratio, ratio);
+    pen.fillStyle = "rgba(255, 255, 255, 0.92)";
+    pen.fillRect(0, 0, ruler.clientWidth, RULER);
+    pen.strokeStyle = "#999";
+    pen.fillStyle = "#555";
+    pen.font = "10px system-ui, sans-serif";
+    for (let f = 0; f <= Number(scrub.max); f++) {
+      const x = frameX(f), labelled = f % 6 === 0;
+      pen.beginPath();
+      pen.moveTo(x, 0);
+      pen.lineTo(x, labelled ? 10 : 5);
+      pen.stroke();
+      if (labelled) pen.fillText(String(f), x - 3, 21);
+    }
+    for (const key of project.keys ? project.keys.keys : []) {
+      const frame = held && held.from === key.frame ? held.to : key.frame;
+      diamond(pen, frameX(frame), 32, held && held.from === key.frame ? "#dd6b20" : "#2b6cb0");
+    }
+    pen.strokeStyle = "#c53030";
+    pen.lineWidth = 2;
+    pen.beginPath();
+    pen.moveTo(frameX(ctx.frame), 0);
+    pen.lineTo(frameX(ctx.frame), RULER);
+    pen.stroke();
+  }
+  const rulerDown = (event) => {
+    const at = frameAt(event);
+    const key = (project.keys ? project.keys.keys : []).find((k) => Math.abs(frameX(k.frame) - frameX(at)) < 6
+                                                            && event.offsetY > 22);
+    ruler.setPointerCapture(event.pointerId);
+    if (key) {
+      held = { from: key.frame, to: key.frame };
+      drawRuler();
+    } else {
+      held = null;
+      show(at).catch((error) => showError(error.message));
+    }
+    ruler.dataset.down = "1";
+  };
+  const rulerMove = (event) => {
+    if (!ruler.dataset.down) return;
+    if (held) {
+      held.to = frameAt(event);
+      drawRuler();
+    } else if (frameAt(event) !== ctx.frame) {
+      show(frameAt(event)).catch((error) => showError(error.message));
+    }
+  };
+  const rulerUp = () => {
+    delete ruler.dataset.down;
+    if (!held) return;
+    const { from, to } = held;
+    held = null;
+    if (to !== from) change({ type: "move_key", frame: from, to });
+    else drawRuler();
+  };
+  const keyboard = (event) => {
+    if (event.ctrlKey || event.metaKey || event.altKey || event.target instanceof HTMLInputElement
+        || event.target instanceof HTMLSelectElement) return;
+    if (event.key === "ArrowLeft" || event.key === "ArrowRight") {
+      event.preventDefault();
+      const next = Math.max(0, Math.min(Number(scrub.max), ctx.frame + (event.key === "ArrowLeft" ? -1 : 1)));
+      show(next).catch((error) => showError(error.message));
+    } else if (event.key.toLowerCase() === "k") {
+      document.getElementById("timeline-key").click();
+    } else if (event.key === " " && !(event.target instanceof HTMLButtonElement)) { // a button takes its own
+      event.preventDefault();
+      document.getElementById("timeline-play").click();
+    } else if (event.key === "Delete" && project.keys && project.keys.keys.some((k) => k.frame === ctx.frame)) {
+      change({ type: "delete_key", frame: ctx.frame });
+    }
+  };
+  const unlisten = [listen(ruler, { pointerdown: rulerDown, pointermove: rulerMove, pointerup: rulerUp,
+                                    pointercancel: rulerUp }),
+                    listen(window, { keydown: keyboard, resize: drawRuler })];
 
   async function show(at) {
     mark(at);
@@ -145,7 +253,20 @@ export function mount(ctx) {
   return {
     unmount() {
       stop();
+      for (const off of unlisten) off();
+      ruler.remove();
       view.drawOverlay = () => {};
     },
   };
+}
+
+function diamond(pen, x, y, colour) {
+  pen.beginPath();
+  pen.moveTo(x, y - 7);
+  pen.lineTo(x + 6, y);
+  pen.lineTo(x, y + 7);
+  pen.lineTo(x - 6, y);
+  pen.closePath();
+  pen.fillStyle = colour;
+  pen.fill();
 }
