@@ -353,6 +353,22 @@ def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
     link = page.locator("#export-result a")
     assert link.get_attribute("download") == "walk.gif"
     assert page.locator("#export-progress").is_hidden() and page.errors == []
+    page.wait_for_function("document.getElementById('export-preview').complete")
+    assert page.locator("#export-preview").is_visible()  # the GIF plays in the page
+    # The options: a size, a black background and the skeleton drawn over the drawing.
+    page.fill("#export-name", "framed")
+    page.fill("#export-width", "120")
+    page.fill("#export-height", "160")
+    page.select_option("#export-background", "#000000")
+    page.check("input[name=export-overlay][value=skeleton]")
+    page.click("#export-go")
+    page.wait_for_function(
+        "document.getElementById('export-result').textContent.includes('exports/framed.gif')"
+    )
+    with Image.open(folder / "exports" / "framed.gif") as gif:
+        assert gif.size == (120, 160)
+        corner = np.asarray(gif.convert("RGB"))[0, 0]
+    assert corner.tolist() == [0, 0, 0]
     assert page.locator("#error").is_hidden()
 
 

@@ -432,9 +432,33 @@ def test_an_export_reports_progress_and_writes_the_animation_into_the_project(ed
     assert download.status_code == 200 and download.content == (folder / "exports" / "wave.gif").read_bytes()
 
 
+def test_an_export_takes_the_size_background_and_overlays_the_cli_takes(editable):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _keyed(folder, socket)
+        socket.send_text(json.dumps({"type": "export", "format": "png", "name": "framed", "size": [64, 80],
+                                     "background": [0, 128, 255], "overlays": ["skeleton"]}))
+        done = socket.receive_json()
+        while done["type"] == "progress":
+            done = socket.receive_json()
+    assert done["size"] == [64, 80] and done["file"] == "exports/framed", done
+    frames = sorted((folder / "exports" / "framed").glob("*.png"))
+    assert len(frames) == 7
+    first = np.asarray(Image.open(frames[0]).convert("RGBA"))
+    assert first.shape == (80, 64, 4)
+    assert tuple(first[0, 0]) == (0, 128, 255, 255)  # the background, opaque
+
+
 @pytest.mark.parametrize(
     ("message", "said"),
     [
+        ({"format": "gif", "name": "ok", "size": [0, 10]}, "'size' must be [width, height]"),
+        ({"format": "gif", "name": "ok", "size": [20_000, 10]}, "from 1 to 16,384"),
+        ({"format": "gif", "name": "ok", "size": "big"}, "'size' must be"),
+        ({"format": "gif", "name": "ok", "background": [0, 0, 300]}, "'background' must be"),
+        ({"format": "gif", "name": "ok", "background": "red"}, "'background' must be"),
+        ({"format": "gif", "name": "ok", "overlays": ["x-ray"]}, "unknown overlay 'x-ray'"),
+        ({"format": "gif", "name": "ok", "overlays": "skeleton"}, "'overlays' must list"),
         ({"format": "gif", "name": "../../evil"}, "'name' must be"),
         ({"format": "gif", "name": ""}, "'name' must be"),
         ({"format": "gif", "name": ".hidden"}, "'name' must be"),

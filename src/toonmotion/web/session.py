@@ -51,7 +51,9 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   "width": w, "height": h, "joints": n}``.
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
   Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
-* ``{"type": "export", "format": "gif" | "mp4" | "png", "name": "walk"}``: render the key-frames'
+* ``{"type": "export", "format": "gif" | "mp4" | "png", "name": "walk", "size": [w, h] | null,
+  "background": [r, g, b] | null, "overlays": ["mesh", "skeleton", "rest"]}`` (the last three
+  optional, as the CLI's ``--size``, ``--background`` and ``--overlay``): render the key-frames'
   animation into the project folder's ``exports/`` (``walk.gif``, ``walk.mp4`` or the folder
   ``walk/`` of PNG frames), through the CLI's atomic writes. While it runs, progress messages
   ``{"type": "progress", "index": i, "count": n}`` carry the request's id; the reply is
@@ -74,13 +76,14 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
 
-from toonmotion import api
+from toonmotion import api, limits
 from toonmotion.animate.timeline import Timeline
 from toonmotion.deform.deformer import Deformer
 from toonmotion.deform.depth import draw_order
 from toonmotion.deform.tuning import TuningEdit
 from toonmotion.errors import (
     EditError,
+    ExportError,
     FilterError,
     KeyframeError,
     MotionError,
@@ -96,6 +99,7 @@ from toonmotion.io.image import load_image, load_mask
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import edits_from_json, edits_to_json, load_keyframes, save_keyframes
 from toonmotion.io.project import PROJECT_FILE
+from toonmotion.render.frame import check_overlays
 from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.curve_skeleton import joint_suggestions
@@ -310,6 +314,9 @@ def export(editing: Editing, text: str, progress: Callable[[int, int], None]) ->
             character, animation = editing.character, editing.animated(exaggeration_of(message))
         relative = f"{EXPORTS}/{name}{EXPORT_FORMATS[kind]}"
         count, size = api.write_animation(editing.folder / relative, character, animation,
+                                          size=_export_size(message.get("size")),
+                                          background=_export_background(message.get("background")),
+                                          overlays=check_overlays(_names(message.get("overlays", []))),
                                           progress=lambda stage, index, total: progress(index, total))
         return {"id": ident, "type": "exported", "file": relative, "frames": count, "size": list(size)}
     except ToonmotionError as error:
@@ -393,6 +400,34 @@ def _snapshot_folder(editing: Editing) -> Path:
     while f"drawing-{n}" in taken:
         n += 1
     return root / f"drawing-{n}"
+
+
+def _export_size(value: Any) -> tuple[int, int] | None:
+    """An export's ``size``: null (the view at 1:1) or ``[width, height]`` in pixels."""
+    if value is None:
+        return None
+    side = limits.current().canvas_side
+    if not (isinstance(value, list) and len(value) == 2
+            and all(isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= side for v in value)):
+        raise ExportError(f"'size' must be [width, height], whole pixels from 1 to {side:,}; "
+                          f"got {str(value)[:40]}")
+    return value[0], value[1]
+
+
+def _export_background(value: Any) -> tuple[int, int, int] | None:
+    """An export's ``background``: null (transparent; white behind a GIF or an MP4) or ``[r, g, b]``."""
+    if value is None:
+        return None
+    if not (isinstance(value, list) and len(value) == 3
+            and all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in value)):
+        raise ExportError(f"'background' must be null or [r, g, b], each 0 to 255; got {str(value)[:40]}")
+    return value[0], value[1], value[2]
+
+
+def _names(value: Any) -> list[str]:
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise ExportError("'overlays' must list overlay names")
+    return value
 
 
 def track(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:

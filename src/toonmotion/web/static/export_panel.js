@@ -15,9 +15,21 @@ export function mount(ctx) {
     </select></label></p>
     <p><label><input id="export-exaggerated" type="checkbox"> exaggerated (the Exaggerate panel's
       strength and width, or 1.5 and 3)</label></p>
+    <p><label>Size <input id="export-width" type="number" min="1" max="16384" placeholder="auto" style="width: 5em"></label>
+      × <input id="export-height" type="number" min="1" max="16384" placeholder="auto" style="width: 5em"
+      aria-label="height"> px</p>
+    <p><label>Background <select id="export-background"><option value="">transparent (white for GIF, MP4)</option>
+      <option value="#ffffff">white</option><option value="#000000">black</option><option value="custom">colour…</option>
+      </select></label> <input id="export-colour" type="color" value="#88aacc" hidden aria-label="background colour"></p>
+    <p>Draw over it: <label><input type="checkbox" name="export-overlay" value="skeleton"> skeleton</label>
+      <label><input type="checkbox" name="export-overlay" value="mesh"> mesh</label>
+      <label><input type="checkbox" name="export-overlay" value="rest"> rest bones</label></p>
     <p><button id="export-go">Export</button></p>
     <p><progress id="export-progress" max="1" value="0" hidden></progress></p>
-    <p id="export-result"></p>`;
+    <p id="export-result"></p>
+    <img id="export-preview" alt="the exported animation" hidden style="max-width: 100%">`;
+  const colourChoice = document.getElementById("export-background");
+  colourChoice.onchange = () => { document.getElementById("export-colour").hidden = colourChoice.value !== "custom"; };
   const button = document.getElementById("export-go");
   const bar = document.getElementById("export-progress");
   const result = document.getElementById("export-result");
@@ -25,6 +37,11 @@ export function mount(ctx) {
   button.onclick = async () => {
     const format = document.getElementById("export-format").value;
     const message = { type: "export", format, name: document.getElementById("export-name").value };
+    const width = document.getElementById("export-width").value, height = document.getElementById("export-height").value;
+    if (width || height) message.size = [Number(width), Number(height)];
+    const hex = colourChoice.value === "custom" ? document.getElementById("export-colour").value : colourChoice.value;
+    if (hex) message.background = [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
+    message.overlays = [...side.querySelectorAll("input[name=export-overlay]:checked")].map((box) => box.value);
     if (document.getElementById("export-exaggerated").checked) {
       Object.assign(message, ctx.exaggeration || { strength: 1.5, sigma: 3 });
     }
@@ -47,6 +64,11 @@ export function mount(ctx) {
         link.textContent = "download";
         link.download = reply.file.split("/").pop();
         result.append(link);
+        if (format === "gif") {
+          const preview = document.getElementById("export-preview");
+          preview.src = `${link.href}&t=${Date.now()}`;
+          preview.hidden = false;
+        }
       }
       status("exported");
       showError("");
