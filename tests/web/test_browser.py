@@ -438,6 +438,16 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     page.set_input_files("#capture-file", str(tmp_path / "walk.gif"))
     page.wait_for_function("document.getElementById('status').textContent.startsWith('place the joints')")
     assert "4 frames of 210×300" in page.locator("#capture-info").text_content()
+    # Size the head's rectangle by its corner: 10 footage px to the right and down of the centre.
+    side = page.evaluate("window.toonmotion.capture.joints().find((j) => j.name === 'head').size[0]")
+    hx, hy = page.evaluate("window.toonmotion.capture.screen('head')")
+    scale = page.evaluate("""() => { const o = window.toonmotion.view.overlay, b = o.getBoundingClientRect();
+        return Math.min(o.width / 210, o.height / 300) * 0.95 * b.width / o.width; }""")
+    page.mouse.move(hx + side / 2 * scale, hy + side / 2 * scale)
+    page.mouse.down()
+    page.mouse.move(hx + 10 * scale, hy + 14 * scale, steps=4)
+    page.mouse.up()
+    assert page.evaluate("window.toonmotion.capture.joints().find((j) => j.name === 'head').size") == [20, 28]
     page.click("#capture-track")
     page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
     motion = load_motion(folder / "motions" / "captured.json")

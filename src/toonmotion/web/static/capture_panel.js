@@ -1,5 +1,7 @@
 // The Capture panel (thesis ch. 4, 6.2c): send a video, a GIF or an animated PNG; place the
-// character's joints on the figure in the first frame (their rectangles are what is tracked);
+// character's joints on the figure in the first frame, where the joints suggested from the
+// footage's curve skeleton (orange dots) draw them, and size their rectangles by dragging a
+// corner (the rectangles are what is tracked; they start at the suggestions' size);
 // track them with a progress bar; scrub the result, each joint coloured by how sure the tracker
 // was (green sure, red unsure); drag a joint that went astray at any frame and track again from
 // there (the frames before it are kept); then retarget the motion onto the character and play it.
@@ -9,12 +11,13 @@ import { listen, nearest } from "./panel_kit.js";
 export const name = "capture";
 export const title = "Capture";
 
-const HANDLE = 6, SIZE = 16; // CSS pixels; a rectangle's side in footage pixels
+const HANDLE = 6, SNAP = 10, SIZE = 16; // CSS pixels; a rectangle's side in footage pixels
 
 export function mount(ctx) {
   const { project, view, live, side, status, showError } = ctx;
   const token = new URLSearchParams(location.search).get("token") || "";
   let footage = null, images = [], frame = 0, joints = [], tracked = null, dragging = -1, playing = false, timer = null;
+  let resizing = -1; // the joint whose rectangle's corner is being dragged
   let corrected = {}; // joint name -> [x, y] at the current frame, to track again from
 
   side.innerHTML = `<h2>Capture</h2>
@@ -24,7 +27,8 @@ export function mount(ctx) {
     <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
       <button id="capture-play" disabled>Retarget and play</button></p>
     <p><progress id="capture-progress" max="1" value="0" hidden></progress></p>
-    <p>Drag the joints onto the figure in the first frame, then track.</p>`;
+    <p>Drag the joints onto the figure in the first frame (they snap to the orange suggestions),
+    drag a rectangle's corner to size it, then track.</p>`;
 
   // Footage pixels -> canvas pixels, fitting the frame in the stage.
   function fit() {
@@ -48,12 +52,24 @@ export function mount(ctx) {
     pen.fillRect(f.x, f.y, footage.width * f.scale, footage.height * f.scale);
     if (image && image.complete) pen.drawImage(image, f.x, f.y, footage.width * f.scale, footage.height * f.scale);
     const P = positions(), ratio = window.devicePixelRatio || 1;
+    if (!tracked) {
+      pen.fillStyle = "#dd6b20";
+      for (const s of footage.joints) {
+        pen.beginPath();
+        pen.arc(...toCanvas(s.position), 3 * ratio, 0, 2 * Math.PI);
+        pen.fill();
+      }
+    }
     joints.forEach((joint, i) => {
-      const [x, y] = toCanvas(P[i]), half = (joint.size[0] * f.scale) / 2;
+      const [x, y] = toCanvas(P[i]), [hw, hh] = [joint.size[0] * f.scale / 2, joint.size[1] * f.scale / 2];
       const sure = tracked ? tracked.confidence[Math.min(frame, tracked.confidence.length - 1)][i] : 1;
       pen.strokeStyle = `hsl(${Math.round(120 * sure)}, 80%, 40%)`;
       pen.lineWidth = 2 * ratio;
-      pen.strokeRect(x - half, y - half, 2 * half, 2 * half);
+      pen.strokeRect(x - hw, y - hh, 2 * hw, 2 * hh);
+      if (!tracked) {
+        pen.fillStyle = pen.strokeStyle;
+        pen.fillRect(x + hw - 3 * ratio, y + hh - 3 * ratio, 6 * ratio, 6 * ratio); // the corner to size it by
+      }
       pen.beginPath();
       pen.arc(x, y, HANDLE * ratio * 0.6, 0, 2 * Math.PI);
       pen.fillStyle = pen.strokeStyle;
@@ -89,10 +105,13 @@ export function mount(ctx) {
       footage = body;
       images = [];
       tracked = null;
-      // The character's joints, scaled onto the footage: names that retarget by themselves.
+      // The character's joints, scaled onto the footage: names that retarget by themselves; their
+      // rectangles start at the suggested joints' typical size.
       const sx = footage.width / project.width, sy = footage.height / project.height;
+      const sides = footage.joints.map((j) => j.size[0]).sort((a, b) => a - b);
+      const side = sides.length ? Math.round(sides[Math.floor(sides.length / 2)]) : SIZE;
       joints = project.joints.map((j) => ({ name: j.name, parent: j.parent < 0 ? null : project.joints[j.parent].name,
-                                             position: [j.position[0] * sx, j.position[1] * sy], size: [SIZE, SIZE] }));
+                                             position: [j.position[0] * sx, j.position[1] * sy], size: [side, side] }));
       document.getElementById("capture-scrub").max = String(footage.frames - 1);
       document.getElementById("capture-track").disabled = false;
       view.canvas.style.visibility = "hidden";
@@ -164,23 +183,39 @@ export function mount(ctx) {
   const unlisten = listen(view.overlay, {
     pointerdown: (event) => {
       if (!footage || playing) return;
-      dragging = nearest({ toCanvas, toDrawing: fromEvent }, positions(), event, HANDLE + 6);
+      const place = { toCanvas, toDrawing: fromEvent };
+      if (!tracked) {
+        const corners = joints.map((j, i) => [positions()[i][0] + j.size[0] / 2, positions()[i][1] + j.size[1] / 2]);
+        resizing = nearest(place, corners, event, HANDLE);
+        if (resizing >= 0) return view.overlay.setPointerCapture(event.pointerId);
+      }
+      dragging = nearest(place, positions(), event, HANDLE + 6);
       if (dragging >= 0) view.overlay.setPointerCapture(event.pointerId);
     },
     pointermove: (event) => {
+      if (resizing >= 0) {
+        const [x, y] = fromEvent(event), [cx, cy] = joints[resizing].position;
+        const most = Math.min(footage.width, footage.height);
+        joints[resizing].size = [Math.min(most, Math.max(4, Math.round(2 * Math.abs(x - cx)))),
+                                 Math.min(most, Math.max(4, Math.round(2 * Math.abs(y - cy))))];
+        view.draw();
+        return;
+      }
       if (dragging < 0) return;
       if (tracked) {  // a correction at this frame
         corrected[joints[dragging].name] = fromEvent(event);
         document.getElementById("capture-retrack").disabled = false;
-      } else {
-        joints[dragging].position = fromEvent(event);
+      } else {  // placing: snap to a suggested joint nearby
+        const s = nearest({ toCanvas, toDrawing: fromEvent }, footage.joints.map((j) => j.position), event, SNAP);
+        joints[dragging].position = s >= 0 ? footage.joints[s].position.slice() : fromEvent(event);
       }
       view.draw();
     },
-    pointerup: () => { dragging = -1; },
+    pointerup: () => { dragging = -1; resizing = -1; },
   });
   // Where a joint is on the screen at the current frame (for the console and tests).
   ctx.capture = {
+    joints: () => joints,
     screen(name) {
       const i = joints.findIndex((j) => j.name === name), [x, y] = toCanvas(positions()[i]);
       const box = view.overlay.getBoundingClientRect(), k = box.width / view.overlay.width;
