@@ -213,6 +213,33 @@ def test_sketch_a_stick_figure_and_the_drawing_takes_its_pose(page, editor):
     page.wait_for_timeout(300)
 
 
+def test_a_pen_sketches_with_pressure_and_tilt(page, editor):
+    character = api.load_project(editor[1])
+    bent = api.rotate_joint(character, "left_elbow", -0.9).positions
+    elbow, hand = (character.skeleton.index(n) for n in ("left_elbow", "left_hand"))
+    page.click("nav button[data-panel=pose]")
+    page.click("#pose-reset")
+    page.keyboard.press("s")
+    screen = _on_screen(page, [bent[elbow] + (bent[hand] - bent[elbow]) * t for t in np.linspace(0, 1, 12)])
+    pen = {"pointerType": "pen", "pointerId": 7, "isPrimary": True, "pressure": 0.5, "tiltX": 30, "tiltY": 0,
+           "buttons": 1, "bubbles": True}
+    page.dispatch_event("#overlay", "pointerdown", {**pen, "clientX": screen[0][0], "clientY": screen[0][1]})
+    for x, y in screen[1:]:
+        page.dispatch_event("#overlay", "pointermove", {**pen, "clientX": x, "clientY": y})
+    page.dispatch_event("#overlay", "pointerup", {**pen, "pressure": 0, "clientX": screen[-1][0],
+                                                  "clientY": screen[-1][1]})
+    page.keyboard.press("Enter")
+    page.wait_for_function("document.getElementById('status').textContent === 'sketch matched'")
+    widths = page.evaluate("window.toonmotion.lastStroke.widths")
+    assert widths[1:] == pytest.approx([(1 + 5 * 0.5) * (1 + 30 / 90)] * (len(widths) - 1))
+    assert page.locator("#pose-matched").text_content() == "Sketched left_hand."
+    posed = np.array(page.evaluate("window.toonmotion.pose"))
+    assert np.linalg.norm(posed[hand] - bent[hand]) < 2.0
+    page.keyboard.press("d")
+    page.click("#pose-reset")
+    assert page.errors == [] and page.locator("#error").is_hidden()
+
+
 def test_regions_click_a_region_forward_lasso_vertices_to_a_bone_and_undo(page, editor):
     folder = editor[1]
     page.click("nav button[data-panel=regions]")

@@ -46,3 +46,13 @@ export function newest(live, onReply, onError) {
     next();
   };
 }
+
+// Keep the pointer's events coming to target while it is pressed (a synthetic or already
+// released pointer cannot be captured, and need not be).
+export function capture(target, event) {
+  try {
+    target.setPointerCapture(event.pointerId);
+  } catch (error) {
+    // not an active pointer: its events still reach the target while over it
+  }
+}

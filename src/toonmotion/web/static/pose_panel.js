@@ -9,7 +9,7 @@
 // reply is awaited, newer drags replace the queued pose, so the drawing keeps up with the
 // pointer instead of falling behind it.
 
-import { listen, nearest, newest } from "./panel_kit.js";
+import { capture, listen, nearest, newest } from "./panel_kit.js";
 
 export const name = "pose";
 export const title = "Pose";
@@ -99,11 +99,14 @@ export function mount(ctx) {
     document.getElementById("pose-untune").disabled = count === 0;
   }
 
-  // Sketching: each stroke's points in drawing pixels; a pen's pressure sets the line's width.
-  // The strokes are matched once the pen has rested SKETCH_PAUSE ms (or on Enter), so a whole
-  // stick figure can be drawn stroke by stroke.
+  // Sketching: each stroke's points in drawing pixels; a pen's pressure sets the line's width,
+  // and its tilt widens it as a pencil laid on its side does. The strokes are matched once the
+  // pen has rested SKETCH_PAUSE ms (or on Enter), so a whole stick figure can be drawn stroke by
+  // stroke.
   function width(event) {
-    return event.pointerType === "pen" && event.pressure > 0 ? 1 + 5 * event.pressure : 3;
+    if (event.pointerType !== "pen" || !(event.pressure > 0)) return 3;
+    const tilt = Math.min(1, Math.hypot(event.tiltX || 0, event.tiltY || 0) / 90);
+    return (1 + 5 * event.pressure) * (1 + tilt);
   }
   async function match() {
     clearTimeout(pause);
@@ -142,18 +145,18 @@ export function mount(ctx) {
     if (mode === "sketch" || mode === "tune") {
       clearTimeout(pause);
       drawing = { points: [view.toDrawing(event)], widths: [width(event)] };
-      overlay.setPointerCapture(event.pointerId);
+      capture(overlay, event);
       return;
     }
     if (mode === "points") {
       const at = view.toDrawing(event);
       pulled = { kind: "drag", from: [at], to: [at] };
-      overlay.setPointerCapture(event.pointerId);
+      capture(overlay, event);
       return;
     }
     dragging = nearest(view, positions, event, HANDLE + 4);
     if (dragging < 0) return;
-    overlay.setPointerCapture(event.pointerId);
+    capture(overlay, event);
     view.draw();
   };
   const move = (event) => {
@@ -187,6 +190,7 @@ export function mount(ctx) {
         return;
       }
       if (stroke.points.length > 1) strokes.push(stroke);
+      ctx.lastStroke = stroke; // for tests and the console
       pause = setTimeout(match, SKETCH_PAUSE);
       view.draw();
       return;
