@@ -498,6 +498,17 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     page.wait_for_timeout(500)
     page.click("#capture-play")
     assert page.evaluate("document.getElementById('mesh').style.visibility") == "visible"
+    # A folder of frames, named as cameras and renderers number them (f_2 before f_10).
+    shots = tmp_path / "shots"
+    shots.mkdir()
+    for t in (1, 2, 10):
+        Image.fromarray(np.roll(picture, t, axis=1)).save(shots / f"f_{t}.png")
+    page.set_input_files("#capture-frames", str(shots))
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('place the joints')")
+    assert "3 frames of 210×300" in page.locator("#capture-info").text_content()
+    last = np.asarray(Image.open(io.BytesIO(page.request.get(
+        editor[0].replace("/?", "/api/footage/2.png?")).body())).convert("RGB"))
+    np.testing.assert_array_equal(last, np.asarray(Image.open(shots / "f_10.png").convert("RGB")))
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 

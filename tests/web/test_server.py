@@ -688,6 +688,38 @@ def test_footage_over_the_upload_limit_is_refused_as_it_arrives(editable):
     assert not (folder / "footage").exists() or list((folder / "footage").iterdir()) == []
 
 
+def test_a_folder_of_frames_is_sent_one_by_one_and_read_in_order(editable):
+    from toonmotion.samples import sample_character_on
+
+    folder, client = editable
+    picture = sample_character_on("white", scale=0.5)[0]
+    url = "/api/footage/frames/{}?count=3&suffix=png&token=" + TOKEN
+    replies = [client.put(url.format(i), content=_png(np.roll(picture, 3 * i, axis=1))) for i in range(3)]
+    assert [r.status_code for r in replies] == [200, 200, 200]
+    assert replies[0].json() == {"received": 1, "count": 3}
+    footage = replies[-1].json()
+    assert (footage["frames"], footage["width"], footage["height"]) == (3, 210, 300)
+    third = np.asarray(Image.open(io.BytesIO(_get(client, "/api/footage/2.png").content)).convert("RGB"))
+    np.testing.assert_array_equal(third, np.roll(picture, 6, axis=1)[..., :3])  # in the order sent
+    again = client.put(url.format(0).replace("count=3", "count=1"), content=_png(picture))
+    assert again.json()["frames"] == 1  # a new folder replaces the last one
+
+
+@pytest.mark.parametrize(
+    ("url", "said"),
+    [
+        ("/api/footage/frames/0?count=2&suffix=exe", "send frames as png"),
+        ("/api/footage/frames/2?count=2&suffix=png", "numbered 0 to count - 1"),
+        ("/api/footage/frames/0?count=999999&suffix=png", "footage_frames"),
+        ("/api/footage/frames/-1?count=2&suffix=png", "numbered"),
+    ],
+)
+def test_bad_frames_are_refused_in_one_line(editable, url, said):
+    folder, client = editable
+    reply = client.put(url, content=b"x", headers={"X-Toonmotion-Token": TOKEN})
+    assert reply.status_code == 400 and said in reply.json()["error"], reply.text
+
+
 def test_tracking_and_retargeting_need_their_inputs(client):
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         track = _send(socket, {"type": "track", "joints": []})

@@ -66,6 +66,8 @@ PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "te
               "rig_panel.js": "text/javascript", "panel_kit.js": "text/javascript",
               "capture_panel.js": "text/javascript"}
 
+# Images a folder of frames may hold (sent one by one).
+FRAME_SUFFIXES = ("png", "jpg", "jpeg", "webp")
 # Footage the editor takes: what toonmotion.io.frames reads as one file.
 FOOTAGE_SUFFIXES = ("mp4", "mov", "avi", "mkv", "webm", "gif", "png", "apng", "webp")
 
@@ -159,10 +161,35 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
             raise HTTPException(400, f"send footage as {', '.join(FOOTAGE_SUFFIXES)}, not {suffix[:10]!r}")
         file = editing.folder / FOOTAGE / f"clip.{suffix.lower()}"
         await _receive(request, file, "the footage")
+        return await footage_read(file)
+
+    @app.put("/api/footage/frames/{index}")
+    async def footage_frame_file(request: Request, index: int, count: int, suffix: str) -> dict[str, Any]:
+        """One image of a folder of frames (frame ``index`` of ``count``, sent in order); the
+        last one read with the rest, as a folder of numbered images (``io.frames``)."""
+        if suffix.lower() not in FRAME_SUFFIXES:
+            raise HTTPException(400, f"send frames as {', '.join(FRAME_SUFFIXES)}, not {suffix[:10]!r}")
+        most = limits.current().footage_frames
+        if not 1 <= count <= most or not 0 <= index < count:
+            raise HTTPException(400, f"frames are numbered 0 to count - 1, count 1 to {most:,} "
+                                     "(the footage_frames limit)")
+        folder = editing.folder / FOOTAGE / "frames"
+        if index == 0 and folder.is_dir():  # a new folder of frames replaces the last one
+            for old in folder.iterdir():
+                old.unlink()
+        sent = sum(f.stat().st_size for f in folder.iterdir()) if folder.is_dir() else 0
+        await _receive(request, folder / f"{index:06d}.{suffix.lower()}", "the frames together", already=sent)
+        if index < count - 1:
+            return {"received": index + 1, "count": count}
+        return await footage_read(folder)
+
+    async def footage_read(source: Path) -> dict[str, Any]:
+        """Footage saved in the project, read; the joints it suggests, to track."""
         try:
-            frames, fps = await asyncio.to_thread(load_frames, file)
+            frames, fps = await asyncio.to_thread(load_frames, source)
         except ToonmotionError:
-            file.unlink(missing_ok=True)
+            if source.is_file():
+                source.unlink(missing_ok=True)
             raise
         skeleton, sizes = api.suggest_joints(frames)
         rate = fps or 24.0
@@ -252,10 +279,11 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     return app
 
 
-async def _receive(request: Request, file: Path, what: str) -> None:
-    """Stream the request's body into ``file`` (atomically), within the upload_bytes limit."""
+async def _receive(request: Request, file: Path, what: str, *, already: int = 0) -> None:
+    """Stream the request's body into ``file`` (atomically), within the upload_bytes limit
+    (``already``: bytes sent before it that count too)."""
     limit = limits.current().upload_bytes
-    received = 0
+    received = already
     with atomic_path(file) as partial, open(partial, "wb") as out:
         async for chunk in request.stream():
             received += len(chunk)

@@ -22,6 +22,7 @@ export function mount(ctx) {
 
   side.innerHTML = `<h2>Capture</h2>
     <p><label>Footage <input id="capture-file" type="file" accept="video/*,.gif,.png,.apng,.webp"></label></p>
+    <p><label>or a folder of frames <input id="capture-frames" type="file" webkitdirectory multiple></label></p>
     <p id="capture-info"></p>
     <p><input id="capture-scrub" type="range" min="0" max="0" value="0" style="width: 100%" aria-label="frame"></p>
     <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
@@ -92,37 +93,67 @@ export function mount(ctx) {
     view.draw();
   }
 
+  async function put(url, file) {
+    const reply = await fetch(url, { method: "PUT", body: file, headers: { "X-Toonmotion-Token": token } });
+    const body = await reply.json().catch(() => ({ error: `${reply.status} ${reply.statusText}` }));
+    if (!reply.ok) throw new Error(body.error);
+    return body;
+  }
   document.getElementById("capture-file").onchange = async (event) => {
     const file = event.target.files[0];
     if (!file) return;
     const suffix = file.name.split(".").pop().toLowerCase();
     status("sending the footage…");
     try {
-      const reply = await fetch(`api/footage?suffix=${encodeURIComponent(suffix)}`,
-                                { method: "PUT", body: file, headers: { "X-Toonmotion-Token": token } });
-      const body = await reply.json();
-      if (!reply.ok) throw new Error(body.error);
-      footage = body;
-      images = [];
-      tracked = null;
-      // The character's joints, scaled onto the footage: names that retarget by themselves; their
-      // rectangles start at the suggested joints' typical size.
-      const sx = footage.width / project.width, sy = footage.height / project.height;
-      const sides = footage.joints.map((j) => j.size[0]).sort((a, b) => a - b);
-      const side = sides.length ? Math.round(sides[Math.floor(sides.length / 2)]) : SIZE;
-      joints = project.joints.map((j) => ({ name: j.name, parent: j.parent < 0 ? null : project.joints[j.parent].name,
-                                             position: [j.position[0] * sx, j.position[1] * sy], size: [side, side] }));
-      document.getElementById("capture-scrub").max = String(footage.frames - 1);
-      document.getElementById("capture-track").disabled = false;
-      view.canvas.style.visibility = "hidden";
-      show(0);
-      status("place the joints on the first frame");
-      showError("");
+      loaded(await put(`api/footage?suffix=${encodeURIComponent(suffix)}`, file));
     } catch (error) {
       showError(error.message);
       status("");
     }
   };
+  // A folder of frames: its images in name order (frame_2 before frame_10), sent one by one.
+  document.getElementById("capture-frames").onchange = async (event) => {
+    const files = [...event.target.files].filter((f) => /\.(png|jpe?g|webp)$/i.test(f.name))
+      .sort((a, b) => a.name.localeCompare(b.name, undefined, { numeric: true }));
+    if (!files.length) return showError("the folder holds no PNG, JPEG or WebP frames");
+    const bar = document.getElementById("capture-progress");
+    bar.hidden = false;
+    bar.max = files.length;
+    try {
+      let reply = null;
+      for (const [index, file] of files.entries()) {
+        status(`sending frame ${index + 1} of ${files.length}…`);
+        const suffix = file.name.split(".").pop().toLowerCase();
+        reply = await put(`api/footage/frames/${index}?count=${files.length}&suffix=${suffix}`, file);
+        bar.value = index + 1;
+      }
+      loaded(reply);
+    } catch (error) {
+      showError(error.message);
+      status("");
+    } finally {
+      bar.hidden = true;
+    }
+  };
+
+  function loaded(body) {
+    footage = body;
+    images = [];
+    tracked = null;
+    // The character's joints, scaled onto the footage: names that retarget by themselves; their
+    // rectangles start at the suggested joints' typical size.
+    const sx = footage.width / project.width, sy = footage.height / project.height;
+    const sides = footage.joints.map((j) => j.size[0]).sort((a, b) => a - b);
+    const side = sides.length ? Math.round(sides[Math.floor(sides.length / 2)]) : SIZE;
+    joints = project.joints.map((j) => ({ name: j.name, parent: j.parent < 0 ? null : project.joints[j.parent].name,
+                                           position: [j.position[0] * sx, j.position[1] * sy], size: [side, side] }));
+    document.getElementById("capture-scrub").max = String(footage.frames - 1);
+    document.getElementById("capture-track").disabled = false;
+    view.canvas.style.visibility = "hidden";
+    show(0);
+    status("place the joints on the first frame");
+    showError("");
+  }
 
   document.getElementById("capture-scrub").oninput = (event) => show(Number(event.target.value));
 
