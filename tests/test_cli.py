@@ -134,8 +134,8 @@ def _options(command):
     return {opt for param in command.params for opt in (*param.opts, *param.secondary_opts)}
 
 
-COMMANDS = ("rig", "show", "sample", "pose", "animate", "filter", "depth", "correct", "undo", "redo", "track",
-            "retarget", "edits", "remesh", "tune", "edit")
+COMMANDS = ("rig", "show", "sample", "pose", "sketch", "animate", "filter", "depth", "correct", "undo",
+            "redo", "track", "retarget", "edits", "remesh", "tune", "edit")
 
 
 def test_every_command_is_in_the_readme_command_reference():
@@ -369,6 +369,43 @@ def test_pose_writes_a_frame_of_the_asked_size(posable, tmp_path, capsys):
     image = Image.open(out)
     assert image.size == (200, 300) and image.mode == "RGBA"
     assert "stage two" in capsys.readouterr().out
+
+
+def test_sketch_writes_the_pose_its_strokes_draw(posable, tmp_path, capsys):
+    from toonmotion.io.pose_json import load_pose
+    from toonmotion.io.sketch_json import save_sketch
+
+    skeleton = load_project(posable / "hero").skeleton
+    bent = load_pose(posable / "pose.json", skeleton).positions  # the forearm turned by 1 rad
+    elbow, hand = skeleton.index("right_elbow"), skeleton.index("right_hand")
+    save_sketch(tmp_path / "arm.json", [np.linspace(bent[elbow], bent[hand], 10)])
+    assert _run("sketch", posable / "hero", tmp_path / "arm.json", "-o", tmp_path / "arm_pose.json") == 0
+    assert "sketched right_hand ->" in capsys.readouterr().out
+    np.testing.assert_allclose(load_pose(tmp_path / "arm_pose.json", skeleton).positions, bent, atol=1e-3)
+    assert _run("pose", posable / "hero", tmp_path / "arm_pose.json", "-o", tmp_path / "arm.png") == 0
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ('{"format": "toonmotion.sketch", "version": 1, "strokes": []}', "at least one stroke"),
+        ('{"format": "toonmotion.sketch", "version": 1, "strokes": [[[1, 2]]]}', "at least 2"),
+        ('{"format": "toonmotion.sketch", "version": 2, "strokes": [[[1, 2], [3, 4]]]}', "version 2"),
+        ('{"format": "toonmotion.pose", "version": 1, "joints": {}}', "not a toonmotion sketch file"),
+        ('{"format": "toonmotion.sketch", "version": 1, "strokes": [[[0, 0], [9, 0]], [[9, 0], [5, 8]], '
+         '[[5, 8], [0, 0]], [[0, 0], [4, 3]], [[40, 40], [41, 60]], [[80, 0], [80, 30]], '
+         '[[0, 90], [30, 90]], [[60, 90], [90, 90]], [[0, 130], [30, 130]], [[60, 130], [90, 130]], '
+         '[[0, 170], [30, 170]], [[60, 170], [90, 170]], [[0, 210], [30, 210]], [[60, 210], [90, 210]], '
+         '[[0, 250], [30, 250]], [[60, 250], [90, 250]], [[0, 290], [30, 290]], [[60, 290], [90, 290]]]}',
+         "more than the skeleton's"),
+    ],
+)
+def test_a_bad_sketch_file_is_one_line(posable, tmp_path, capsys, content, message):
+    (tmp_path / "bad.json").write_text(content)
+    code = _run("sketch", posable / "hero", tmp_path / "bad.json", "-o", tmp_path / "out.json")
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out.json").exists()
 
 
 def test_animate_writes_every_frame_of_the_timeline(posable, tmp_path):

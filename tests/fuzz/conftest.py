@@ -23,6 +23,7 @@ from toonmotion.io.char_cfg import save_char_cfg
 from toonmotion.io.image import save_png
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import save_keyframes, save_pose
+from toonmotion.io.sketch_json import save_sketch
 from toonmotion.io.skeleton_json import save_skeleton_json
 from toonmotion.io.track_json import save_joints
 from toonmotion.rig.pose import Pose, rotate_about
@@ -58,6 +59,8 @@ def valid(tmp_path_factory):
     api.save_project(folder / "P", hero)
     bent = Pose(rotate_about(skeleton, skeleton.positions, skeleton.names[-1], 0.4))
     save_pose(folder / "pose.json", skeleton, bent)
+    stick = [bent.positions[[i, j]] for i, j in skeleton.bones if np.ptp(bent.positions[[i, j]], axis=0).any()]
+    save_sketch(folder / "sketch.json", [np.linspace(a, b, 5) for a, b in stick[-3:]])
     timeline = make_timeline(skeleton, [Keyframe(0, Pose(skeleton.positions)), Keyframe(2, bent)], fps=12.0)
     save_keyframes(folder / "keys.json", skeleton, timeline)
     save_motion(folder / "motion.json", api.animate_character(hero, timeline).motion)

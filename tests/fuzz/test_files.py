@@ -30,6 +30,7 @@ def _workspace(valid: Path) -> Path:
         "hero.json",
         "P",
         "pose.json",
+        "sketch.json",
         "keys.json",
         "motion.json",
         "frames",
@@ -91,6 +92,18 @@ def test_pose_json(valid, data):
         ["pose", "P", "pose.json", "-o", "out.png"],
         ["out.png"],
         _png_ok,
+    )
+
+
+@given(data=st.data())
+def test_sketch_json(valid, data):
+    _json_case(
+        valid,
+        data,
+        "sketch json",
+        "sketch.json",
+        ["sketch", "P", "sketch.json", "-o", "out.json"],
+        ["out.json"],
     )
 
 

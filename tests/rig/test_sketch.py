@@ -148,6 +148,7 @@ def test_strokes_that_meet_make_one_figure():
     ([], "list of strokes"),
     ([[(0, 0)]], "at least 2"),
     ([[(0, 0), (np.nan, 1)]], "finite"),
+    ([[(0, 0), (1e308, 1)]], "beyond 10,000,000 px"),  # once hung shapely's simplify
     ([[(5, 5), (5, 5)]], "empty"),
     ([[(30 * i, 0), (30 * i, 20)] for i in range(40)], "more than the skeleton"),
     ([[(x, 200 * (x // 50 % 2)) for x in range(0, 650, 50)]], "shape"),

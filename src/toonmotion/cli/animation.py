@@ -1,4 +1,4 @@
-"""Posing and animation commands: ``pose``, ``animate``, ``filter``."""
+"""Posing and animation commands: ``pose``, ``sketch``, ``animate``, ``filter``."""
 
 from __future__ import annotations
 
@@ -17,7 +17,8 @@ from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
 from toonmotion.io.image import save_png
 from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion
-from toonmotion.io.pose_json import load_keyframes, load_pose, load_pose_edits
+from toonmotion.io.pose_json import load_keyframes, load_pose, load_pose_edits, save_pose
+from toonmotion.io.sketch_json import load_sketch
 from toonmotion.io.video import animation_format
 from toonmotion.rig.character import Character
 
@@ -72,6 +73,30 @@ def pose(
         + f" -> {output}"
     )
     report_overlaps(character, [(0, result.U)])
+
+
+@app.command()
+def sketch(
+    project: options.Project,
+    sketch_file: Annotated[Path, typer.Argument(
+        metavar="SKETCH.json", help="Strokes in drawing pixels: a toonmotion sketch file.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Pose file to write (.json).")],
+    start: Annotated[Path | None, typer.Option(
+        "--from", help=r"The pose the sketch edits (a pose file) \[default: the rest pose].")] = None,
+) -> None:
+    """Read a sketched skeleton: match its strokes to the bones and write the pose.
+
+    A stroke is a bone, a chain of bones (its corners are joints) or part of a stick figure,
+    drawn over the drawing or beside it. Pose the drawing with 'toonmotion pose PROJECT
+    POSE.json', or key it in a key-frames file.
+    """
+    options.suffix(output, ".json", "an output", why="a pose file is JSON; ")
+    character = api.load_project(project)
+    pose = None if start is None else load_pose(start, character.skeleton)
+    found = api.sketch_pose(character, load_sketch(sketch_file), pose=pose)
+    save_pose(output, character.skeleton, found.pose)
+    typer.echo(f"sketched {', '.join(found.bones)}"
+               + (" (drawn beside the figure: scaled to it)" if found.elsewhere else "") + f" -> {output}")
 
 
 @app.command()

@@ -39,6 +39,7 @@ from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
 from toonmotion.errors import SketchError
+from toonmotion.geometry.arrays import MAX_COORDINATE
 from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
 
@@ -52,7 +53,7 @@ POSITION_WEIGHT, TOP_WEIGHT = 0.25, 400.0
 EXTRA_BONE_COST = 0.05
 LENGTH_WEIGHT = 3.0  # a bone drawn 1.5 times its length costs as much as one turned 90 degrees
 # Embeddings tried per piece before the sketch is called ambiguous.
-MAX_STEPS = 200_000
+MAX_STEPS = 20_000
 # The most strokes and points a sketch may have.
 MAX_STROKES, MAX_POINTS = 200, 20_000
 
@@ -467,6 +468,8 @@ def _checked(strokes: Sequence[ArrayLike]) -> list[NDArray[np.float64]]:
             raise SketchError(f"stroke {n} must be at least 2 [x, y] points")
         if not np.isfinite(line).all():
             raise SketchError(f"stroke {n} has a point that is not a finite number")
+        if np.abs(line).max() > MAX_COORDINATE:
+            raise SketchError(f"stroke {n} has a point beyond {MAX_COORDINATE:,.0f} px from the origin")
         total += len(line)
         if total > MAX_POINTS:
             raise SketchError(f"a sketch may have {MAX_POINTS:,} points at most")
