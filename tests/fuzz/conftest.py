@@ -23,8 +23,8 @@ from toonmotion.io.char_cfg import save_char_cfg
 from toonmotion.io.image import save_png
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import save_keyframes, save_pose
-from toonmotion.io.sketch_json import save_sketch
 from toonmotion.io.skeleton_json import save_skeleton_json
+from toonmotion.io.sketch_json import save_sketch
 from toonmotion.io.track_json import save_joints
 from toonmotion.rig.pose import Pose, rotate_about
 from toonmotion.samples import sample_character, sample_character_on
