@@ -59,8 +59,9 @@ def valid(tmp_path_factory):
     api.save_project(folder / "P", hero)
     bent = Pose(rotate_about(skeleton, skeleton.positions, skeleton.names[-1], 0.4))
     save_pose(folder / "pose.json", skeleton, bent)
-    stick = [bent.positions[[i, j]] for i, j in skeleton.bones if np.ptp(bent.positions[[i, j]], axis=0).any()]
-    save_sketch(folder / "sketch.json", [np.linspace(a, b, 5) for a, b in stick[-3:]])
+    bones = [bent.positions[[i, j]] for i, j in skeleton.bones]
+    stick = [np.linspace(a, b, 5) for a, b in bones if np.ptp([a, b], axis=0).any()]
+    save_sketch(folder / "sketch.json", stick[-3:])  # the last three bones of some length
     timeline = make_timeline(skeleton, [Keyframe(0, Pose(skeleton.positions)), Keyframe(2, bent)], fps=12.0)
     save_keyframes(folder / "keys.json", skeleton, timeline)
     save_motion(folder / "motion.json", api.animate_character(hero, timeline).motion)
