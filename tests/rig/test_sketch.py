@@ -10,8 +10,9 @@ from toonmotion.io.char_cfg import load_char_cfg
 from toonmotion.rig.kinematics import bone_angles
 from toonmotion.rig.pose import Pose, rotate_about
 from toonmotion.rig.skeleton import Skeleton
-from toonmotion.rig.sketch import _SkeletonTree, match_sketch, sketch_graph
+from toonmotion.rig.sketch import match_sketch, sketch_graph, stroke_chains
 from toonmotion.samples import sample_character
+from toonmotion.testing.sketching import figure_size, strokes_through, turned
 
 
 @pytest.fixture(params=[*drawing_names(), SAMPLE])
@@ -29,49 +30,15 @@ def drawings_root_or_none(request):
 
 
 def chains(skeleton):
-    """The skeleton's chains of bones between branching joints and ends, as joint indices (the
-    strokes an animator would draw for a stick figure)."""
-    tree = _SkeletonTree(skeleton, skeleton.positions)
-    out, seen = [], set()
-    for c in range(len(tree.members)):
-        if len(tree.neighbours[c]) == 2:
-            continue
-        for n in tree.neighbours[c]:
-            path = [c, n]
-            while len(tree.neighbours[path[-1]]) == 2:
-                path.append(next(x for x in tree.neighbours[path[-1]] if x != path[-2]))
-            key = frozenset(frozenset(p) for p in zip(path, path[1:], strict=False))
-            if key not in seen:
-                seen.add(key)
-                out.append([int(tree.members[p][0]) for p in path])
-    return out
-
-
-def strokes_through(positions, joint_chains, rng, *, noise=0.8):
-    """A hand-drawn stroke along each chain: points every 4 px, jittered, some drawn backwards,
-    in shuffled order."""
-    strokes = []
-    for chain in joint_chains:
-        corners = positions[chain]
-        dense = [a + (b - a) * np.linspace(0, 1, max(2, int(np.hypot(*(b - a)) / 4)), endpoint=False)[:, None]
-                 for a, b in zip(corners, corners[1:], strict=False)]
-        line = np.concatenate([*dense, corners[-1:]]) + rng.normal(0, noise, (sum(map(len, dense)) + 1, 2))
-        strokes.append(line[::-1] if rng.random() < 0.5 else line)
-    rng.shuffle(strokes)
-    return strokes
+    return stroke_chains(skeleton)
 
 
 def bent(skeleton, rng, *, turns=2, most=0.6):
-    """A pose: ``turns`` non-root joints each turned up to ``most`` radians."""
-    positions = skeleton.positions.copy()
-    for _ in range(turns):
-        joint = skeleton.names[rng.integers(1, len(skeleton))]
-        positions = rotate_about(skeleton, positions, joint, rng.uniform(-most, most))
-    return positions
+    return turned(skeleton, rng, turns=turns, most=most)
 
 
 def size(positions):
-    return float(np.hypot(*np.ptp(positions, axis=0)))
+    return figure_size(positions)
 
 
 def test_a_stick_figure_drawn_over_the_drawing_gives_its_pose(skeleton):

@@ -170,7 +170,7 @@ def _on_screen(page, points) -> list[tuple[float, float]]:
 
 
 def test_sketch_a_stick_figure_and_the_drawing_takes_its_pose(page, editor):
-    from tests.rig.test_sketch import chains
+    from toonmotion.rig.sketch import stroke_chains as chains
 
     character = api.load_project(editor[1])
     skeleton = character.skeleton

@@ -156,6 +156,35 @@ def match_sketch(
                        bones=bones, elsewhere=elsewhere)
 
 
+def stroke_chains(skeleton: Skeleton) -> list[list[int]]:
+    """The strokes that draw ``skeleton`` as a stick figure: its chains of bones from one
+    branching joint or end to the next, as joint indices (joints joined by a bone of no length
+    count as one).
+
+    Examples
+    --------
+    >>> s = Skeleton.from_joints([("hip", None, (0, 0)), ("knee", "hip", (0, 10)),
+    ...                           ("foot", "knee", (0, 20)), ("neck", "hip", (0, -20)),
+    ...                           ("other_knee", "hip", (5, 10))])
+    >>> [[s.names[j] for j in chain] for chain in stroke_chains(s)]
+    [['hip', 'knee', 'foot'], ['hip', 'neck'], ['hip', 'other_knee']]
+    """
+    tree = _SkeletonTree(skeleton, skeleton.positions)
+    out, seen = [], set()
+    for c in range(len(tree.members)):
+        if len(tree.neighbours[c]) == 2:
+            continue
+        for n in tree.neighbours[c]:
+            path = [c, n]
+            while len(tree.neighbours[path[-1]]) == 2:
+                path.append(next(x for x in tree.neighbours[path[-1]] if x != path[-2]))
+            key = frozenset(frozenset(p) for p in zip(path, path[1:], strict=False))
+            if key not in seen:
+                seen.add(key)
+                out.append([int(tree.members[p][0]) for p in path])
+    return out
+
+
 def sketch_graph(strokes: Sequence[NDArray[np.float64]], *, snap: float
                  ) -> tuple[NDArray[np.float64], list[tuple[int, int]]]:
     """The stick figure of simplified ``strokes``: its joints ``(n, 2)`` and segments (index pairs).
