@@ -14,8 +14,7 @@ export const title = "Capture";
 const HANDLE = 6, SNAP = 10, SIZE = 16; // CSS pixels; a rectangle's side in footage pixels
 
 export function mount(ctx) {
-  const { project, view, live, side, status, showError } = ctx;
-  const token = new URLSearchParams(location.search).get("token") || "";
+  const { project, view, live, side, status, showError, token } = ctx;
   let footage = null, images = [], frame = 0, joints = [], tracked = null, dragging = -1, playing = false, timer = null;
   let resizing = -1; // the joint whose rectangle's corner is being dragged
   let corrected = {}; // joint name -> [x, y] at the current frame, to track again from

@@ -5,7 +5,7 @@ export const name = "export";
 export const title = "Export";
 
 export function mount(ctx) {
-  const { live, side, status, showError } = ctx;
+  const { live, side, status, showError, token } = ctx;
   side.innerHTML = `<h2>Export</h2>
     <p>The animation of the key-frames (Timeline panel), into the project's <code>exports/</code>.</p>
     <p><label>Name <input id="export-name" value="animation" pattern="[A-Za-z0-9][A-Za-z0-9_-]*"
@@ -58,7 +58,6 @@ export function mount(ctx) {
       const [w, h] = reply.size;
       result.textContent = `${reply.frames} frames, ${w}×${h} → ${reply.file} `;
       if (format !== "png") {
-        const token = new URLSearchParams(location.search).get("token") || "";
         const link = document.createElement("a");
         link.href = `api/exports/${reply.file.split("/").pop()}?token=${encodeURIComponent(token)}`;
         link.textContent = "download";
