@@ -16,7 +16,7 @@ LAYERS = (
     {"cli", "web"},
     {"api"},
     {"io", "render", "testing", "samples", "sample_animation"},
-    {"capture"},
+    {"capture", "keyshape"},
     {"animate"},
     {"deform"},
     {"rig"},

@@ -83,3 +83,8 @@ class TrackingError(ToonmotionError):
 
 class VideoReadError(ToonmotionError):
     """An image sequence cannot be read: a video that cannot be decoded, an empty folder."""
+
+
+class KeyShapeError(ToonmotionError):
+    """Key-shapes or contours cannot be used: different point counts, too few points, collinear
+    or non-finite points, a model or contour file that does not read."""

@@ -24,6 +24,7 @@ from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
 from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, retime, set_key
 from toonmotion.api.capture import track_footage
+from toonmotion.api.keyshapes import capture_contours, keyshape_space
 from toonmotion.api.posing import (
     PosedFrame,
     pose_character,
@@ -38,6 +39,8 @@ from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
 from toonmotion.deform.deformer import DeformSettings
 from toonmotion.io.project import load_project, save_project
+from toonmotion.keyshape.contour import ContourCapture
+from toonmotion.keyshape.space import KeyShapeSpace
 from toonmotion.render.sequence import write_animation
 from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.sketch import SketchMatch
@@ -46,19 +49,23 @@ __all__ = [
     "Animation",
     "Capture",
     "Character",
+    "ContourCapture",
     "DeformSettings",
     "FilterSettings",
     "Motion",
     "PosedFrame",
+    "KeyShapeSpace",
     "RigSettings",
     "SameDepthOverlap",
     "SketchMatch",
     "TrackSettings",
     "animate_character",
+    "capture_contours",
     "correct_regions",
     "delete_key",
     "exaggerate",
     "filter_motion",
+    "keyshape_space",
     "load_project",
     "move_key",
     "pose_character",
