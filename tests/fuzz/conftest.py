@@ -21,6 +21,7 @@ from toonmotion.animate.timeline import Keyframe, make_timeline
 from toonmotion.capture.footage import suggest_joints
 from toonmotion.io.char_cfg import save_char_cfg
 from toonmotion.io.image import save_png
+from toonmotion.io.keyshape_json import save_contours, save_model
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import save_keyframes, save_pose
 from toonmotion.io.skeleton_json import save_skeleton_json
@@ -62,6 +63,12 @@ def valid(tmp_path_factory):
     bones = [bent.positions[[i, j]] for i, j in skeleton.bones]
     stick = [np.linspace(a, b, 5) for a, b in bones if np.ptp([a, b], axis=0).any()]
     save_sketch(folder / "sketch.json", stick[-3:])  # the last three bones of some length
+    outline = hero.mesh.V[hero.mesh.boundary[0][::8]]
+    base = np.array([outline[:, 0].mean(), outline[:, 1].max()])
+    bulge = 1 + 0.3 * np.sin(np.pi * (base[1] - outline[:, 1]) / np.ptp(outline[:, 1]))
+    keys = np.stack([outline, base + (outline - base) * np.stack([bulge, np.full(len(bulge), 0.8)], axis=1)])
+    save_contours(folder / "contours.json", keys)
+    save_model(folder / "model.json", api.keyshape_space(keys, inbetweens=2))
     timeline = make_timeline(skeleton, [Keyframe(0, Pose(skeleton.positions)), Keyframe(2, bent)], fps=12.0)
     save_keyframes(folder / "keys.json", skeleton, timeline)
     save_motion(folder / "motion.json", api.animate_character(hero, timeline).motion)

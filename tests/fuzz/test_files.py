@@ -31,6 +31,8 @@ def _workspace(valid: Path) -> Path:
         "P",
         "pose.json",
         "sketch.json",
+        "contours.json",
+        "model.json",
         "keys.json",
         "motion.json",
         "frames",
@@ -102,7 +104,33 @@ def test_sketch_json(valid, data):
         data,
         "sketch json",
         "sketch.json",
+        "contours.json",
+        "model.json",
         ["sketch", "P", "sketch.json", "-o", "out.json"],
+        ["out.json"],
+    )
+
+
+@given(data=st.data())
+def test_contours_json(valid, data):
+    _json_case(
+        valid,
+        data,
+        "contours json",
+        "contours.json",
+        ["keyshapes", "contours.json", "-o", "out.json"],
+        ["out.json"],
+    )
+
+
+@given(data=st.data())
+def test_keyshape_model_json(valid, data):
+    _json_case(
+        valid,
+        data,
+        "key-shape model json",
+        "model.json",
+        ["capture-contours", "model.json", "contours.json", "-o", "out.json"],
         ["out.json"],
     )
 

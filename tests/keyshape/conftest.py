@@ -33,9 +33,11 @@ def _lean(P, angle):
 
 @pytest.fixture(scope="session")
 def smooth_keys(outlines):
-    """Three key-shapes that fold no triangle of the rest outline's triangulation: the rest
-    outline, leaning (a bend growing with height, 0.6 rad at the top), and squashed to 70% height
-    and 1/0.7 width about the feet, as a cartoon squash keeps area."""
+    """Three key-shapes that fold no triangle of the rest outline's triangulation, none an affine
+    map of another: the rest outline, leaning (a bend growing with height, 0.6 rad at the top),
+    and squashed to 80% height about the feet with the middle bulging 30% wider."""
     rest = outlines[0]
     base = np.array([rest[:, 0].mean(), rest[:, 1].max()])
-    return np.stack([rest, _lean(rest, 0.6), base + (rest - base) * [1 / 0.7, 0.7]])
+    d = rest - base
+    bulge = 1 + 0.3 * np.sin(np.pi * -d[:, 1] / np.ptp(rest[:, 1]))
+    return np.stack([rest, _lean(rest, 0.6), base + d * np.stack([bulge, np.full(len(d), 0.8)], axis=1)])

@@ -24,7 +24,7 @@ from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
 from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, retime, set_key
 from toonmotion.api.capture import track_footage
-from toonmotion.api.keyshapes import capture_contours, keyshape_space
+from toonmotion.api.keyshapes import capture_contours, keyshape_sheet, keyshape_space
 from toonmotion.api.posing import (
     PosedFrame,
     pose_character,
@@ -65,6 +65,7 @@ __all__ = [
     "delete_key",
     "exaggerate",
     "filter_motion",
+    "keyshape_sheet",
     "keyshape_space",
     "load_project",
     "move_key",

@@ -4,11 +4,13 @@ contour capture (docs/keyshapes.md)."""
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.keyshape.arap import ArapPair, triangulate_shape
 from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.keyshape.contour import capture_contours as _capture
 from toonmotion.keyshape.space import KeyShapeSpace, build_space
+from toonmotion.render.keyshape_sheet import inbetween_sheet
 
 # The bounds on the eigen-shapes' weights in an extended space: half as much again as any
 # example (docs/keyshapes.md).
@@ -91,3 +93,35 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike | KeyShapeSpace, *, 
         high = np.append(np.full(L, EIGEN_BOUND), np.inf)
         return _capture(contours, shapes.extended, lower=low, upper=high)
     return _capture(contours, shapes, lower=lower, upper=upper, support=support)
+
+
+def keyshape_sheet(space: KeyShapeSpace) -> NDArray[np.uint8]:
+    """A preview sheet of the space's keys and their in-betweens, one row per pair of keys.
+
+    Parameters
+    ----------
+    space : KeyShapeSpace
+        From :func:`keyshape_space`; its ``inbetweens`` per pair are drawn (at least 3).
+
+    Returns
+    -------
+    (h, w, 3) uint8
+        Outlines on white: keys dark, in-betweens blue.
+
+    Examples
+    --------
+    >>> ball = np.stack([(np.cos(a), np.sin(a)) for a in np.linspace(0, 2 * np.pi, 24, endpoint=False)]) * 20
+    >>> keyshape_sheet(keyshape_space([ball, ball * [1.4, 0.7]], inbetweens=3)).shape
+    (160, 800, 3)
+    """
+    keys = space.keys
+    triangles = triangulate_shape(keys[0], closed=space.closed)
+    rows = []
+    for i in range(len(keys)):
+        for j in range(i + 1, len(keys)):
+            pair = ArapPair(keys[i], keys[j], closed=space.closed, triangles=triangles)
+            between = pair.inbetweens(max(3, space.inbetweens))
+            rows.append(np.concatenate([keys[i][None], between, keys[j][None]]))
+    if not rows:  # one key: itself
+        rows.append(keys[:1])
+    return inbetween_sheet(rows, closed=space.closed)

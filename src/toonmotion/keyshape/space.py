@@ -60,9 +60,11 @@ class KeyShapeSpace:
         keys = check_shapes(self.keys)
         object.__setattr__(self, "keys", frozen_array(keys, dtype=np.float64, name="key-shapes",
                                                       error=KeyShapeError))
-        for name in ("mean", "eigen"):
-            object.__setattr__(self, name, frozen_array(getattr(self, name), dtype=np.float64,
-                                                        name=name, error=KeyShapeError))
+        N = keys.shape[1]
+        for name, shape in (("mean", (N, 2)), ("eigen", (None, N, 2))):
+            object.__setattr__(self, name, frozen_array(getattr(self, name), dtype=np.float64, shape=shape,
+                                                        name=f"the space's {name}", error=KeyShapeError,
+                                                        coordinates=True))
 
     @property
     def extended(self) -> FloatArray:

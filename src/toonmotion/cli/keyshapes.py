@@ -1,0 +1,71 @@
+"""Key-shape commands (Bregler et al. capture): ``keyshapes``, ``capture-contours``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from toonmotion import api
+from toonmotion.cli import options
+from toonmotion.cli.app import app
+from toonmotion.io.image import save_png
+from toonmotion.io.keyshape_json import load_contours, load_model, save_keymotion, save_model
+
+
+@app.command()
+def keyshapes(
+    keys_file: Annotated[Path, typer.Argument(
+        metavar="KEYS.json|KEYS.csv", help="The key-shapes: a contours file, points in correspondence.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="The key-shape model to write (.json).")],
+    inbetweens: Annotated[int, typer.Option("--inbetweens", min=0, max=1000,
+                                            help="ARAP in-betweens per pair of keys.")] = 5,
+    tolerance: Annotated[float, typer.Option("--tolerance", min=0.001,
+                                             help="Largest reconstruction error of any example, px.")] = 0.5,
+    sheet: Annotated[Path | None, typer.Option(
+        "--sheet", help="Also write a preview sheet of the keys and their in-betweens (.png).")] = None,
+) -> None:
+    """Build a key-shape model: in-betweens of every pair of keys, then PCA (the extended space).
+
+    The keys are contours in correspondence (the same number of points, in the same order);
+    see docs/keyshapes.md.
+    """
+    options.suffix(output, ".json", "an output", why="a key-shape model is JSON; ")
+    if sheet is not None:
+        options.suffix(sheet, ".png", "a sheet", why="the sheet is a PNG; ")
+    keys, _, closed = load_contours(keys_file)
+    space = api.keyshape_space(keys, closed=closed, inbetweens=inbetweens, tolerance=tolerance)
+    picture = api.keyshape_sheet(space) if sheet is not None else None
+    save_model(output, space)
+    if sheet is not None and picture is not None:
+        save_png(sheet, picture)
+    typer.echo(f"{len(keys)} keys of {keys.shape[1]} points: {len(space.eigen)} eigen-shapes, every example "
+               f"within {space.error:.3g} px -> {output}" + (f" (sheet {sheet})" if sheet else ""))
+
+
+@app.command("capture-contours")
+def capture_contours(
+    model: Annotated[Path, typer.Argument(metavar="MODEL.json", help="A key-shape model ('keyshapes').")],
+    contours_file: Annotated[Path, typer.Argument(
+        metavar="CONTOURS.json|CONTOURS.csv",
+        help="The contours to capture, in correspondence with the keys.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="The captured motion to write (.json).")],
+    keys_only: Annotated[bool, typer.Option(
+        "--keys", help="Capture with the hand-picked keys, not the extended space.")] = False,
+    lower: Annotated[float, typer.Option("--lower", help="With --keys: each weight's lower bound.")] = -0.5,
+    upper: Annotated[float, typer.Option("--upper", help="With --keys: each weight's upper bound.")] = 1.5,
+    support: Annotated[int | None, typer.Option(
+        "--support", min=1, help="With --keys: at most this many non-zero weights.")] = None,
+) -> None:
+    """Capture contours: each frame's affine motion and key-shape weights (Bregler et al. 3.2)."""
+    options.suffix(output, ".json", "an output", why="a key-shape motion is JSON; ")
+    space = load_model(model)
+    contours, fps, _ = load_contours(contours_file)
+    if keys_only:
+        found = api.capture_contours(contours, space.keys, lower=lower, upper=upper, support=support)
+    else:
+        found = api.capture_contours(contours, space)
+    save_keymotion(output, found, fps=fps, space="keys" if keys_only else "extended")
+    typer.echo(f"captured {len(contours)} frames: rms error {found.error.mean():.3g} px (largest "
+               f"{found.error.max():.3g}), {found.rounds.mean():.1f} rounds a frame -> {output}")

@@ -1,0 +1,175 @@
+"""Key-shape files (Bregler et al. capture): contour sequences, key-shape models and captured
+key-shape motion. JSON, versioned; numbers written in full precision, so a save and a load give
+back the same arrays.
+
+Contours (the key-shapes themselves, or the frames to capture), points in correspondence::
+
+    {"format": "toonmotion.contours", "version": 1, "fps": 12, "closed": true,
+     "contours": [[[x, y], ...], ...]}
+
+or a CSV table ``contour, point, x, y`` (a header row first; contours and points numbered from
+0, in order). A model (:func:`toonmotion.api.keyshape_space`)::
+
+    {"format": "toonmotion.keyshapes", "version": 1, "closed": true, "inbetweens": 5,
+     "tolerance": 0.5, "error": 0.31, "keys": [...], "mean": [...], "eigen": [[...], ...]}
+
+Captured motion (:func:`toonmotion.api.capture_contours`)::
+
+    {"format": "toonmotion.keymotion", "version": 1, "fps": 12, "space": "extended" | "keys",
+     "affine": [[[a1, a2, dx], [a3, a4, dy]], ...], "weights": [[w1, ...], ...],
+     "error": [...], "rounds": [...]}
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+from typing import Annotated, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from pydantic import Field
+
+from toonmotion.errors import KeyShapeError
+from toonmotion.io.atomic import write_text
+from toonmotion.io.schema import Float, Int, JsonFormat, Model, Point, explained, read_versioned
+from toonmotion.keyshape.contour import ContourCapture
+from toonmotion.keyshape.model import check_shapes
+from toonmotion.keyshape.space import KeyShapeSpace
+
+CONTOURS, MODEL, MOTION = "toonmotion.contours", "toonmotion.keyshapes", "toonmotion.keymotion"
+VERSION = 1
+
+_Shape = Annotated[list[Point], Field(min_length=3),
+                   explained("a contour must be a list of at least 3 [x, y] points")]
+_Fps = Annotated[Float, Field(gt=0, le=1000),
+                 explained("fps must be a number of frames per second, 0 to 1,000")]
+
+
+class ContoursFile(Model):
+    format: Literal["toonmotion.contours"]
+    version: Literal[1]
+    fps: _Fps = 12.0
+    closed: bool = True
+    contours: Annotated[list[_Shape], Field(min_length=1),
+                        explained("'contours' must list at least one contour")]
+
+
+class ModelFile(Model):
+    format: Literal["toonmotion.keyshapes"]
+    version: Literal[1]
+    closed: bool
+    inbetweens: Int
+    tolerance: Float
+    error: Float
+    keys: list[_Shape]
+    mean: _Shape
+    eigen: list[_Shape]
+
+
+class MotionFile(Model):
+    format: Literal["toonmotion.keymotion"]
+    version: Literal[1]
+    fps: _Fps
+    space: Literal["extended", "keys"]
+    affine: list[tuple[tuple[Float, Float, Float], tuple[Float, Float, Float]]]
+    weights: list[list[Float]]
+    error: list[Float]
+    rounds: list[Int]
+
+
+def _format(model: type[Model], name: str, title: str) -> JsonFormat:
+    return JsonFormat(models={name: model}, version=VERSION, error=KeyShapeError, title=title,
+                      label=f"{title} format")
+
+
+CONTOURS_FORMAT = _format(ContoursFile, CONTOURS, "contours file")
+MODEL_FORMAT = _format(ModelFile, MODEL, "key-shape model")
+MOTION_FORMAT = _format(MotionFile, MOTION, "key-shape motion")
+
+
+def load_contours(path: str | Path) -> tuple[NDArray[np.float64], float, bool]:
+    """The contours ``(T, N, 2)``, their fps and whether they are closed, from JSON or CSV."""
+    path = Path(path)
+    if path.suffix.lower() == ".csv":
+        return _contours_csv(path), 12.0, True
+    model = read_versioned(path, CONTOURS_FORMAT)
+    return check_shapes(model.contours, what=f"{path.name}: the contours"), float(model.fps), model.closed
+
+
+def save_contours(path: str | Path, contours: ArrayLike, *, fps: float = 12.0, closed: bool = True) -> None:
+    data = {"format": CONTOURS, "version": VERSION, "fps": fps, "closed": closed,
+            "contours": np.asarray(contours, dtype=float).tolist()}
+    write_text(path, json.dumps(data) + "\n")
+
+
+def load_model(path: str | Path) -> KeyShapeSpace:
+    """A key-shape model saved by :func:`save_model`."""
+    path = Path(path)
+    model = read_versioned(path, MODEL_FORMAT)
+    keys = check_shapes(model.keys, what=f"{path.name}: the keys")
+    mean = np.array(model.mean, dtype=float)
+    eigen = np.array(model.eigen, dtype=float).reshape(len(model.eigen), -1, 2)
+    if mean.shape != keys.shape[1:] or eigen.shape[1:] != keys.shape[1:]:
+        raise KeyShapeError(f"{path.name}: the mean and eigen-shapes must have the keys' "
+                            f"{keys.shape[1]} points")
+    return KeyShapeSpace(keys=keys, closed=model.closed, inbetweens=model.inbetweens,
+                         tolerance=model.tolerance, mean=mean, eigen=eigen, error=model.error)
+
+
+def save_model(path: str | Path, space: KeyShapeSpace) -> None:
+    data = {"format": MODEL, "version": VERSION, "closed": space.closed, "inbetweens": space.inbetweens,
+            "tolerance": space.tolerance, "error": space.error, "keys": space.keys.tolist(),
+            "mean": space.mean.tolist(), "eigen": space.eigen.tolist()}
+    write_text(path, json.dumps(data) + "\n")
+
+
+def save_keymotion(path: str | Path, capture: ContourCapture, *, fps: float, space: str) -> None:
+    data = {"format": MOTION, "version": VERSION, "fps": fps, "space": space,
+            "affine": capture.affine.tolist(), "weights": capture.weights.tolist(),
+            "error": capture.error.tolist(), "rounds": capture.rounds.tolist()}
+    write_text(path, json.dumps(data) + "\n")
+
+
+def load_keymotion(path: str | Path) -> tuple[ContourCapture, float, str]:
+    model = read_versioned(Path(path), MOTION_FORMAT)
+    T = len(model.affine)
+    if not (len(model.weights) == len(model.error) == len(model.rounds) == T) or T == 0:
+        raise KeyShapeError(f"{Path(path).name}: affine, weights, error and rounds need one row per frame")
+    weights = np.array(model.weights, dtype=float)
+    if weights.ndim != 2:
+        raise KeyShapeError(f"{Path(path).name}: every frame needs the same number of weights")
+    return (ContourCapture(affine=np.array(model.affine, dtype=float), weights=weights,
+                           error=np.array(model.error, dtype=float), rounds=np.array(model.rounds)),
+            float(model.fps), model.space)
+
+
+def _contours_csv(path: Path) -> NDArray[np.float64]:
+    try:
+        with path.open(newline="", encoding="utf-8") as file:
+            rows = list(csv.reader(file))
+    except (OSError, UnicodeDecodeError) as error:
+        raise KeyShapeError(f"cannot read {path}: {error}") from None
+    if not rows or [c.strip().lower() for c in rows[0]] != ["contour", "point", "x", "y"]:
+        raise KeyShapeError(f"{path.name}: the first row must be the header contour, point, x, y")
+    table: dict[int, dict[int, tuple[float, float]]] = {}
+    for n, row in enumerate(rows[1:], start=2):
+        try:
+            contour, point, x, y = int(row[0]), int(row[1]), float(row[2]), float(row[3])
+        except (ValueError, IndexError):
+            raise KeyShapeError(f"{path.name}: row {n} must be contour, point (whole numbers), "
+                                "x, y") from None
+        table.setdefault(contour, {})[point] = (x, y)
+    if sorted(table) != list(range(len(table))):
+        raise KeyShapeError(f"{path.name}: contours must be numbered 0, 1, 2, ... with none missing")
+    shapes = []
+    for contour in range(len(table)):
+        points = table[contour]
+        if sorted(points) != list(range(len(points))):
+            raise KeyShapeError(f"{path.name}: contour {contour}'s points must be numbered 0, 1, 2, "
+                                "...")
+        shapes.append([points[i] for i in range(len(points))])
+    if len({len(s) for s in shapes}) != 1:
+        raise KeyShapeError(f"{path.name}: every contour must have the same number of points")
+    return check_shapes(shapes, what=f"{path.name}: the contours")
