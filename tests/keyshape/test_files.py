@@ -95,3 +95,48 @@ def test_a_csv_with_a_gap_is_refused(tmp_path):
     (tmp_path / "k.csv").write_text("contour,point,x,y\n0,0,0,0\n0,2,1,1\n")
     with pytest.raises(KeyShapeError, match="numbered 0, 1, 2"):
         load_contours(tmp_path / "k.csv")
+
+
+def test_contours_captured_with_keys_retarget_onto_other_keys_and_onto_a_rigged_character(
+        tmp_path, outlines, capsys):
+    from toonmotion.io.keyshape_json import load_contours
+    from toonmotion.io.motion_json import load_motion
+    from toonmotion.io.pose_json import save_keyframes
+    from toonmotion.rig.pose import Pose
+    from toonmotion.samples import sample_rig
+
+    save_contours(tmp_path / "keys.json", outlines)
+    weights = [[1, 0, 0], [0.5, 0.5, 0], [0, 1, 0], [0, 0.5, 0.5], [0, 0, 1]]
+    clip = [warp([[1, 0, 8 * t], [0, 1, 0]], w, outlines) for t, w in enumerate(weights)]
+    save_contours(tmp_path / "clip.json", clip, fps=8)
+    assert _run("keyshapes", tmp_path / "keys.json", "-o", tmp_path / "model.json") == 0
+    assert _run("capture-contours", tmp_path / "model.json", tmp_path / "clip.json", "--keys",
+                "-o", tmp_path / "motion.json") == 0
+    save_contours(tmp_path / "other.json", outlines * 0.5)
+    assert _run("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+                "--onto", tmp_path / "other.json", "-o", tmp_path / "out.json") == 0
+    shapes, fps, _ = load_contours(tmp_path / "out.json")
+    assert fps == 8
+    np.testing.assert_allclose(shapes, np.array(clip) * 0.5, atol=1e-5)  # the keys at half size
+    hero = sample_rig()
+    from toonmotion import api as toon
+
+    poses = [hero.skeleton.positions, toon.rotate_joint(hero, "right_elbow", -1.2).positions,
+             toon.rotate_joint(hero, "left_shoulder", 0.9).positions]
+    timeline = toon.set_key(hero.skeleton, None, 0, Pose(poses[0]))
+    for frame, pose in enumerate(poses[1:], start=1):
+        timeline = toon.set_key(hero.skeleton, timeline, frame, Pose(pose))
+    save_keyframes(tmp_path / "poses.json", hero.skeleton, timeline)
+    toon.save_project(tmp_path / "hero", hero)
+    assert _run("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+                "--project", tmp_path / "hero", "--poses", tmp_path / "poses.json",
+                "-o", tmp_path / "hero.json") == 0
+    motion = load_motion(tmp_path / "hero.json")
+    assert motion.positions.shape == (5, len(hero.skeleton), 2) and motion.fps == 8
+    # Key 2's pose, moved as the input moved (16 px; the outline it is measured by is the input's
+    # own, every 4th point of the same outline: the scale is 1 to within a pixel's worth).
+    size = np.hypot(*np.ptp(hero.mesh.V[hero.mesh.boundary[0]], axis=0))
+    shift = 16 * size / np.hypot(*np.ptp(outlines[0], axis=0))
+    np.testing.assert_allclose(motion.positions[2] - [shift, 0], poses[1], atol=1e-4)
+    assert _run("animate", tmp_path / "hero", tmp_path / "hero.json", "-o", tmp_path / "hero.gif") == 0
+    assert "retargeted" in capsys.readouterr().out

@@ -24,7 +24,13 @@ from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
 from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, retime, set_key
 from toonmotion.api.capture import track_footage
-from toonmotion.api.keyshapes import capture_contours, keyshape_sheet, keyshape_space
+from toonmotion.api.keyshapes import (
+    capture_contours,
+    keyshape_sheet,
+    keyshape_space,
+    retarget_keyposes,
+    retarget_keyshapes,
+)
 from toonmotion.api.posing import (
     PosedFrame,
     pose_character,
@@ -74,6 +80,8 @@ __all__ = [
     "redo_edits",
     "render_pose",
     "retarget",
+    "retarget_keyposes",
+    "retarget_keyshapes",
     "retime",
     "rig_again",
     "rig_image",

@@ -6,11 +6,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.animate.motion import Motion
+from toonmotion.animate.timeline import Timeline
 from toonmotion.keyshape.arap import ArapPair, triangulate_shape
 from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.keyshape.contour import capture_contours as _capture
+from toonmotion.keyshape.retarget import retarget_poses, retarget_shapes
 from toonmotion.keyshape.space import KeyShapeSpace, build_space
 from toonmotion.render.keyshape_sheet import inbetween_sheet
+from toonmotion.rig.skeleton import Skeleton
 
 # The bounds on the eigen-shapes' weights in an extended space: half as much again as any
 # example (docs/keyshapes.md).
@@ -125,3 +129,91 @@ def keyshape_sheet(space: KeyShapeSpace) -> NDArray[np.uint8]:
     if not rows:  # one key: itself
         rows.append(keys[:1])
     return inbetween_sheet(rows, closed=space.closed)
+
+
+def retarget_keyshapes(capture: ContourCapture, input_keys: ArrayLike, output_keys: ArrayLike
+                       ) -> NDArray[np.float64]:
+    """Replay captured key-shape motion on another character's key-shapes (Bregler et al. 3.4).
+
+    Parameters
+    ----------
+    capture : ContourCapture
+        Captured with the hand-picked keys (``capture_contours(contours, keys)``).
+    input_keys : (K, N, 2) float
+        Those keys.
+    output_keys : (K, M, 2) float
+        An output key-shape per input key (any number of points, the same in each).
+
+    Returns
+    -------
+    (T, M, 2) float
+        The output shapes, moving as the input moved (docs/keyshapes.md).
+
+    Raises
+    ------
+    KeyShapeError
+        When the keys do not pair up, or the motion was captured with other keys.
+
+    Examples
+    --------
+    >>> from toonmotion.keyshape.model import warp
+    >>> keys = np.array([[(0.0, 0), (4, 0), (4, 4), (2, 5), (0, 4)],
+    ...                  [(0.0, 0), (4, 0), (4, 4), (2, 8), (0, 4)]])
+    >>> found = capture_contours([warp([[1, 0, 2], [0, 1, 0]], [0.5, 0.5], keys)], keys)
+    >>> retarget_keyshapes(found, keys, keys * 2).shape  # the same keys, twice the size
+    (1, 5, 2)
+    """
+    return retarget_shapes(capture, input_keys, output_keys)
+
+
+def retarget_keyposes(capture: ContourCapture, input_keys: ArrayLike, skeleton: Skeleton,
+                      key_poses: Timeline, *, fps: float = 12.0,
+                      reference: ArrayLike | None = None) -> Motion:
+    """Replay captured key-shape motion on a rigged character's key poses, blending every bone's
+    angle and length with the captured weights (the paper's articulated figures).
+
+    Parameters
+    ----------
+    capture : ContourCapture
+        Captured with the hand-picked keys.
+    input_keys : (K, N, 2) float
+        Those keys.
+    skeleton : Skeleton
+        The character's.
+    key_poses : Timeline
+        Its keys, in frame order, are one pose per input key.
+    fps : float
+        The motion's frame rate.
+    reference : (n, 2) float, optional
+        The character's outline in its first key pose: its size and place carry the input's
+        motion over (by default the first pose's joints, which span less than the drawing).
+
+    Returns
+    -------
+    Motion
+        For :func:`animate_character`.
+
+    Raises
+    ------
+    KeyShapeError
+        When there is not one pose per key.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> from toonmotion.rig.pose import Pose
+    >>> from toonmotion.api.animation import set_key
+    >>> from toonmotion.api.posing import rotate_joint
+    >>> from toonmotion.keyshape.model import warp
+    >>> hero = sample_rig()
+    >>> keys = np.array([[(0.0, 0), (4, 0), (4, 4), (2, 5), (0, 4)],
+    ...                  [(0.0, 0), (4, 0), (4, 4), (2, 8), (0, 4)]])
+    >>> poses = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
+    >>> poses = set_key(hero.skeleton, poses, 1, rotate_joint(hero, "right_elbow", -1.0))
+    >>> found = capture_contours([warp(np.eye(2, 3), w, keys) for w in ([1, 0], [0.5, 0.5], [0, 1])], keys)
+    >>> retarget_keyposes(found, keys, hero.skeleton, poses).positions.shape
+    (3, 17, 2)
+    """
+    poses = np.stack([key.pose.positions for key in key_poses.keys])
+    positions = retarget_poses(capture, input_keys, skeleton, poses, reference=reference)
+    return Motion(skeleton=skeleton, positions=positions, fps=fps)

@@ -1,4 +1,5 @@
-"""Key-shape commands (Bregler et al. capture): ``keyshapes``, ``capture-contours``."""
+"""Key-shape commands (Bregler et al. capture): ``keyshapes``, ``capture-contours``,
+``retarget-keyshapes``."""
 
 from __future__ import annotations
 
@@ -10,8 +11,18 @@ import typer
 from toonmotion import api
 from toonmotion.cli import options
 from toonmotion.cli.app import app
+from toonmotion.errors import SettingsError
 from toonmotion.io.image import save_png
-from toonmotion.io.keyshape_json import load_contours, load_model, save_keymotion, save_model
+from toonmotion.io.keyshape_json import (
+    load_contours,
+    load_keymotion,
+    load_model,
+    save_contours,
+    save_keymotion,
+    save_model,
+)
+from toonmotion.io.motion_json import save_motion
+from toonmotion.io.pose_json import load_keyframes
 
 
 @app.command()
@@ -69,3 +80,47 @@ def capture_contours(
     save_keymotion(output, found, fps=fps, space="keys" if keys_only else "extended")
     typer.echo(f"captured {len(contours)} frames: rms error {found.error.mean():.3g} px (largest "
                f"{found.error.max():.3g}), {found.rounds.mean():.1f} rounds a frame -> {output}")
+
+
+@app.command("retarget-keyshapes")
+def retarget_keyshapes(
+    motion_file: Annotated[Path, typer.Argument(
+        metavar="MOTION.json", help="Key-shape motion captured with --keys ('capture-contours --keys').")],
+    model: Annotated[Path, typer.Argument(
+        metavar="MODEL.json", help="The key-shape model it was captured with.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Contours or a motion to write (.json).")],
+    onto: Annotated[Path | None, typer.Option(
+        "--onto", help="Output key-shapes, one per input key (a contours file): writes contours.")] = None,
+    project: Annotated[Path | None, typer.Option(
+        "--project", help="A rigged character, with --poses: writes its motion.")] = None,
+    poses: Annotated[Path | None, typer.Option(
+        "--poses", help="Key-frames of the project's skeleton, one key per input key, in order.")
+    ] = None,
+) -> None:
+    """Replay captured key-shape motion on another character's key-shapes or key poses.
+
+    With --project and --poses the result is a motion: render it with 'toonmotion animate
+    PROJECT OUT.json -o OUT.gif'.
+    """
+    options.suffix(output, ".json", "an output", why="contours and motions are JSON; ")
+    if (onto is None) == (project is None or poses is None):
+        raise SettingsError("give either --onto OUTKEYS.json, or --project PROJECT and --poses KEYS.json")
+    captured, fps, space = load_keymotion(motion_file)
+    if space != "keys":
+        raise SettingsError(f"{motion_file.name} was captured in the extended space: capture with --keys "
+                            "to retarget (the weights must be the hand-picked keys')")
+    keys = load_model(model).keys
+    if onto is not None:
+        outputs, _, closed = load_contours(onto)
+        shapes = api.retarget_keyshapes(captured, keys, outputs)
+        save_contours(output, shapes, fps=fps, closed=closed)
+        typer.echo(f"retargeted {len(shapes)} frames onto {len(outputs)} key-shapes -> {output}")
+        return
+    assert project is not None and poses is not None  # checked above
+    character = api.load_project(project)
+    timeline = load_keyframes(poses, character.skeleton)
+    outline = character.mesh.V[character.mesh.boundary[0]]  # the drawing's extent, at rest
+    motion = api.retarget_keyposes(captured, keys, character.skeleton, timeline, fps=fps, reference=outline)
+    save_motion(output, motion)
+    typer.echo(f"retargeted {motion.frame_count} frames onto {project.name}'s {len(timeline.keys)} key poses "
+               f"-> {output}")
