@@ -85,7 +85,8 @@ def capture_contours(
 @app.command("retarget-keyshapes")
 def retarget_keyshapes(
     motion_file: Annotated[Path, typer.Argument(
-        metavar="MOTION.json", help="Key-shape motion captured with --keys ('capture-contours --keys').")],
+        metavar="MOTION.json",
+        help="Key-shape motion captured with the hand-picked keys ('capture-contours').")],
     model: Annotated[Path, typer.Argument(
         metavar="MODEL.json", help="The key-shape model it was captured with.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="Contours or a motion to write (.json).")],
@@ -107,8 +108,8 @@ def retarget_keyshapes(
         raise SettingsError("give either --onto OUTKEYS.json, or --project PROJECT and --poses KEYS.json")
     captured, fps, space = load_keymotion(motion_file)
     if space != "keys":
-        raise SettingsError(f"{motion_file.name} was captured in the extended space: capture with --keys "
-                            "to retarget (the weights must be the hand-picked keys')")
+        raise SettingsError(f"{motion_file.name} was captured in the extended space: capture it with the "
+                            "hand-picked keys ('capture-contours' with its keys option) to retarget it")
     keys = load_model(model).keys
     if onto is not None:
         outputs, _, closed = load_contours(onto)
