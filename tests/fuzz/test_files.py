@@ -104,8 +104,6 @@ def test_sketch_json(valid, data):
         data,
         "sketch json",
         "sketch.json",
-        "contours.json",
-        "model.json",
         ["sketch", "P", "sketch.json", "-o", "out.json"],
         ["out.json"],
     )
