@@ -63,6 +63,7 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
 
 from __future__ import annotations
 
+import functools
 import json
 import logging
 import re
@@ -294,88 +295,99 @@ def answer(editing: Editing, text: str) -> dict[str, Any]:
         return {"id": ident, "type": "error", "message": bug(error)}
 
 
-def export(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:
+SlowHandler = Callable[[Editing, dict[str, Any], Callable[[int, int], None]], dict[str, Any]]
+SlowReply = Callable[[Editing, str, Callable[[int, int], None]], dict[str, Any]]
+
+
+def _off_loop(verb: str) -> Callable[[SlowHandler], SlowReply]:
+    """A handler run off the event loop, given the message's text: its reply carries the id,
+    and every failure is a one-line error reply (a file that cannot be written: "cannot
+    {verb}: ..."; a bug: one line to the page, the details to the log)."""
+    def wrap(handler: SlowHandler) -> SlowReply:
+        @functools.wraps(handler)
+        def run(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:
+            ident: Any = None
+            try:
+                message = json.loads(text)
+                ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
+                return {"id": ident, **handler(editing, message, progress)}
+            except ToonmotionError as error:
+                return {"id": ident, "type": "error", "message": one_line(str(error))}
+            except OSError as error:
+                return {"id": ident, "type": "error", "message": one_line(f"cannot {verb}: {error}")}
+            except Exception as error:  # a bug
+                log.error("internal error (%s): %s: %s", verb, type(error).__name__, error)
+                return {"id": ident, "type": "error", "message": bug(error)}
+
+        return run
+
+    return wrap
+
+
+@_off_loop("write the export")
+def export(editing: Editing, message: dict[str, Any],
+           progress: Callable[[int, int], None]) -> dict[str, Any]:
     """The reply to an export message (module docstring), calling ``progress(index, count)``.
 
     Meant to run off the server's event loop, once the loop has computed the animation
     (:attr:`Editing.animation`): this takes it and the character, which are immutable, and only
     renders and writes.
     """
-    ident: Any = None
-    try:
-        message = json.loads(text)
-        ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
-        kind, name = message.get("format"), message.get("name")
-        if kind not in EXPORT_FORMATS:
-            raise KeyframeError(f"'format' must be {', '.join(EXPORT_FORMATS)}; got {str(kind)[:20]!r}")
-        if not isinstance(name, str) or not EXPORT_NAME.fullmatch(name):
-            raise KeyframeError("'name' must be 1 to 64 letters, digits, - or _, not starting with - or _")
-        with editing.lock:
-            character, animation = editing.character, editing.animated(exaggeration_of(message))
-        relative = f"{EXPORTS}/{name}{EXPORT_FORMATS[kind]}"
-        count, size = api.write_animation(editing.folder / relative, character, animation,
-                                          size=_export_size(message.get("size")),
-                                          background=_export_background(message.get("background")),
-                                          overlays=check_overlays(_names(message.get("overlays", []))),
-                                          progress=lambda stage, index, total: progress(index, total))
-        return {"id": ident, "type": "exported", "file": relative, "frames": count, "size": list(size)}
-    except ToonmotionError as error:
-        return {"id": ident, "type": "error", "message": one_line(str(error))}
-    except OSError as error:
-        return {"id": ident, "type": "error", "message": one_line(f"cannot write the export: {error}")}
-    except Exception as error:  # a bug: one line to the page, the details to the log
-        log.error("internal error exporting: %s: %s", type(error).__name__, error)
-        return {"id": ident, "type": "error", "message": bug(error)}
+    kind, name = message.get("format"), message.get("name")
+    if kind not in EXPORT_FORMATS:
+        raise KeyframeError(f"'format' must be {', '.join(EXPORT_FORMATS)}; got {str(kind)[:20]!r}")
+    if not isinstance(name, str) or not EXPORT_NAME.fullmatch(name):
+        raise KeyframeError("'name' must be 1 to 64 letters, digits, - or _, not starting with - or _")
+    with editing.lock:
+        character, animation = editing.character, editing.animated(exaggeration_of(message))
+    relative = f"{EXPORTS}/{name}{EXPORT_FORMATS[kind]}"
+    count, size = api.write_animation(editing.folder / relative, character, animation,
+                                      size=_export_size(message.get("size")),
+                                      background=_export_background(message.get("background")),
+                                      overlays=check_overlays(_names(message.get("overlays", []))),
+                                      progress=lambda stage, index, total: progress(index, total))
+    return {"type": "exported", "file": relative, "frames": count, "size": list(size)}
 
 
-def open_drawing(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:
+@_off_loop("open the drawing")
+def open_drawing(editing: Editing, message: dict[str, Any],
+                 progress: Callable[[int, int], None]) -> dict[str, Any]:
     """The reply to an ``open_drawing`` message (module docstring), calling ``progress(index,
     count)`` through the rigging stages; meant to run off the server's event loop."""
-    ident: Any = None
-    try:
-        message = json.loads(text)
-        ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
-        uploads = editing.folder / UPLOADS
-        if not (uploads / "drawing").is_file():
-            raise ProjectError("there is no drawing to open yet: send one first")
-        keep, with_mask = message.get("skeleton", "keep"), message.get("mask", False)
-        if keep not in ("keep", "new") or not isinstance(with_mask, bool):
-            raise SkeletonError("'skeleton' must be \"keep\" or \"new\", and 'mask' true or false")
-        if with_mask and not (uploads / "mask").is_file():
-            raise ProjectError("there is no mask to use: send the mask first, "
-                               "or open the drawing without one")
-        with editing.lock:
-            before = editing.character
-        image = load_image(uploads / "drawing")
-        skeleton = before.skeleton if keep == "keep" else None
-        if skeleton is None and editing.timeline is not None:
-            raise SkeletonError("the key-frames name the joints: keep the skeleton, or delete the keys first")
-        height, width = image.shape[:2]
-        x, y = before.skeleton.positions.T
-        if skeleton is not None and (x.min() < 0 or y.min() < 0 or x.max() > width or y.max() > height):
-            raise SkeletonError(f"this skeleton does not fit the new {width}x{height} drawing: "
-                                "find a new skeleton for it, or load one made for it")
-        character = api.rig_image(image, mask=load_mask(uploads / "mask", size=(width, height))
-                                  if with_mask else None, skeleton=skeleton, settings=before.settings,
-                                  progress=lambda stage, index, total: progress(index, total))
-        if skeleton is not None:
-            _check_on_figure(character)
-        with editing.lock:
-            snapshot = _snapshot_folder(editing)
-            api.save_project(snapshot / "before", before)
-            api.save_project(snapshot / "after", character)
-            editing.edited(character)
-            editing.history.record({"kind": "drawing", "before": f"{snapshot.name}/before",
-                                    "after": f"{snapshot.name}/after"})
-        return {"id": ident, "type": "opened", "width": character.size[0], "height": character.size[1],
-                "joints": len(character.skeleton)}
-    except ToonmotionError as error:
-        return {"id": ident, "type": "error", "message": one_line(str(error))}
-    except OSError as error:
-        return {"id": ident, "type": "error", "message": one_line(f"cannot open the drawing: {error}")}
-    except Exception as error:  # a bug: one line to the page, the details to the log
-        log.error("internal error opening a drawing: %s: %s", type(error).__name__, error)
-        return {"id": ident, "type": "error", "message": bug(error)}
+    uploads = editing.folder / UPLOADS
+    if not (uploads / "drawing").is_file():
+        raise ProjectError("there is no drawing to open yet: send one first")
+    keep, with_mask = message.get("skeleton", "keep"), message.get("mask", False)
+    if keep not in ("keep", "new") or not isinstance(with_mask, bool):
+        raise SkeletonError("'skeleton' must be \"keep\" or \"new\", and 'mask' true or false")
+    if with_mask and not (uploads / "mask").is_file():
+        raise ProjectError("there is no mask to use: send the mask first, "
+                           "or open the drawing without one")
+    with editing.lock:
+        before = editing.character
+    image = load_image(uploads / "drawing")
+    skeleton = before.skeleton if keep == "keep" else None
+    if skeleton is None and editing.timeline is not None:
+        raise SkeletonError("the key-frames name the joints: keep the skeleton, or delete the keys first")
+    height, width = image.shape[:2]
+    x, y = before.skeleton.positions.T
+    if skeleton is not None and (x.min() < 0 or y.min() < 0 or x.max() > width or y.max() > height):
+        raise SkeletonError(f"this skeleton does not fit the new {width}x{height} drawing: "
+                            "find a new skeleton for it, or load one made for it")
+    character = api.rig_image(image, mask=load_mask(uploads / "mask", size=(width, height))
+                              if with_mask else None, skeleton=skeleton, settings=before.settings,
+                              progress=lambda stage, index, total: progress(index, total))
+    if skeleton is not None:
+        _check_on_figure(character)
+    with editing.lock:
+        snapshot = _snapshot_folder(editing)
+        api.save_project(snapshot / "before", before)
+        api.save_project(snapshot / "after", character)
+        editing.edited(character)
+        editing.history.record({"kind": "drawing", "before": f"{snapshot.name}/before",
+                                "after": f"{snapshot.name}/after"})
+    return {"type": "opened", "width": character.size[0], "height": character.size[1],
+            "joints": len(character.skeleton)}
 
 
 def _check_on_figure(character: api.Character) -> None:
@@ -430,46 +442,39 @@ def _names(value: Any) -> list[str]:
     return value
 
 
-def track(editing: Editing, text: str, progress: Callable[[int, int], None]) -> dict[str, Any]:
+@_off_loop("track the footage")
+def track(editing: Editing, message: dict[str, Any],
+          progress: Callable[[int, int], None]) -> dict[str, Any]:
     """The reply to a ``track`` message (module docstring), calling ``progress(index, count)``;
     meant to run off the server's event loop, like :func:`export`."""
-    ident: Any = None
-    try:
-        message = json.loads(text)
-        ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
-        if editing.footage is None:
-            raise TrackingError("there is no footage yet: send a video, a GIF or frames first")
-        frames, fps = editing.footage
-        joints = message.get("joints")
-        if not isinstance(joints, list) or not joints:
-            raise TrackingError("'joints' must list the joints to track, each with its rectangle's 'size'")
-        skeleton = _skeleton(joints)
-        sizes = np.array([_point(j.get("size"), f"joint {j['name']!r}'s size") for j in joints], dtype=float)
-        order = [next(i for i, j in enumerate(joints) if j["name"] == name) for name in skeleton.names]
-        earlier, at, corrections = None, None, None
-        if message.get("at") is not None:  # a correction: the earlier tracking is kept before it
-            if editing.capture is None:
-                raise TrackingError("there is no earlier tracking to correct: track first")
-            earlier, at, moved = editing.capture.motion, _frame(message, "at"), message.get("set")
-            if not isinstance(moved, dict) or not moved:
-                raise TrackingError("'set' must give the corrected joints, name to [x, y]")
-            corrections = {str(name): _point(xy, f"joint {name!r}") for name, xy in moved.items()}
-        capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
-                                    corrections=corrections, at=at,
-                                    progress=lambda stage, index, total: progress(index, total))
-        save_motion(editing.folder / CAPTURED, capture.motion)
-        with editing.lock:
-            editing.capture, editing.captured = capture, None
-        confidence = capture.motion.confidence
-        assert confidence is not None  # tracking always says how sure it is
-        return {"id": ident, "type": "tracked", "first": capture.first, "names": list(skeleton.names),
-                "positions": np.round(capture.motion.positions, 2).tolist(),
-                "confidence": np.round(confidence, 3).tolist()}
-    except ToonmotionError as error:
-        return {"id": ident, "type": "error", "message": one_line(str(error))}
-    except Exception as error:  # a bug: one line to the page, the details to the log
-        log.error("internal error tracking: %s: %s", type(error).__name__, error)
-        return {"id": ident, "type": "error", "message": bug(error)}
+    if editing.footage is None:
+        raise TrackingError("there is no footage yet: send a video, a GIF or frames first")
+    frames, fps = editing.footage
+    joints = message.get("joints")
+    if not isinstance(joints, list) or not joints:
+        raise TrackingError("'joints' must list the joints to track, each with its rectangle's 'size'")
+    skeleton = _skeleton(joints)
+    sizes = np.array([_point(j.get("size"), f"joint {j['name']!r}'s size") for j in joints], dtype=float)
+    order = [next(i for i, j in enumerate(joints) if j["name"] == name) for name in skeleton.names]
+    earlier, at, corrections = None, None, None
+    if message.get("at") is not None:  # a correction: the earlier tracking is kept before it
+        if editing.capture is None:
+            raise TrackingError("there is no earlier tracking to correct: track first")
+        earlier, at, moved = editing.capture.motion, _frame(message, "at"), message.get("set")
+        if not isinstance(moved, dict) or not moved:
+            raise TrackingError("'set' must give the corrected joints, name to [x, y]")
+        corrections = {str(name): _point(xy, f"joint {name!r}") for name, xy in moved.items()}
+    capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
+                                corrections=corrections, at=at,
+                                progress=lambda stage, index, total: progress(index, total))
+    save_motion(editing.folder / CAPTURED, capture.motion)
+    with editing.lock:
+        editing.capture, editing.captured = capture, None
+    confidence = capture.motion.confidence
+    assert confidence is not None  # tracking always says how sure it is
+    return {"type": "tracked", "first": capture.first, "names": list(skeleton.names),
+            "positions": np.round(capture.motion.positions, 2).tolist(),
+            "confidence": np.round(confidence, 3).tolist()}
 
 
 def bug(error: Exception) -> str:
