@@ -140,3 +140,23 @@ def test_contours_captured_with_keys_retarget_onto_other_keys_and_onto_a_rigged_
     np.testing.assert_allclose(motion.positions[2] - [shift, 0], poses[1], atol=1e-4)
     assert _run("animate", tmp_path / "hero", tmp_path / "hero.json", "-o", tmp_path / "hero.gif") == 0
     assert "retargeted" in capsys.readouterr().out
+
+
+def test_contours_of_any_count_direction_and_start_are_resampled_into_correspondence(tmp_path, outlines):
+    from toonmotion.keyshape.model import resample_contour
+
+    shape = outlines[0]
+    a = resample_contour(shape, 50, start=shape[10])
+    b = resample_contour(np.roll(shape, 17, axis=0)[::-1], 50, start=shape[10])  # other start, other way
+    np.testing.assert_allclose(a, b, atol=1e-9)
+    np.testing.assert_allclose(a[0], shape[10], atol=1e-9)
+    # A file of contours with different point counts: refused as they are, read with --points.
+    save_contours(tmp_path / "ragged.json", [outlines[0]], closed=True)
+    ragged = json.loads((tmp_path / "ragged.json").read_text())
+    ragged["contours"] = [outlines[0].tolist(), outlines[1][::2].tolist(), outlines[2][::-1].tolist()]
+    (tmp_path / "ragged.json").write_text(json.dumps(ragged))
+    assert _run("keyshapes", tmp_path / "ragged.json", "-o", tmp_path / "m.json") == 2
+    x, y = outlines[0][0]
+    assert _run("keyshapes", tmp_path / "ragged.json", "-o", tmp_path / "m.json", "--points", "60",
+                "--start", f"{x},{y}") == 0
+    assert load_model(tmp_path / "m.json").keys.shape == (3, 60, 2)

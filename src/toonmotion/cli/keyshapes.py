@@ -36,6 +36,11 @@ def keyshapes(
                                              help="Largest reconstruction error of any example, px.")] = 0.5,
     sheet: Annotated[Path | None, typer.Option(
         "--sheet", help="Also write a preview sheet of the keys and their in-betweens (.png).")] = None,
+    points: Annotated[int | None, typer.Option(
+        "--points", min=3, max=100_000,
+        help="Resample every contour (closed) to this many points by arc length.")] = None,
+    start: Annotated[str | None, typer.Option(
+        "--start", help="With --points: each contour starts at its point nearest X,Y.")] = None,
 ) -> None:
     """Build a key-shape model: in-betweens of every pair of keys, then PCA (the extended space).
 
@@ -45,7 +50,7 @@ def keyshapes(
     options.suffix(output, ".json", "an output", why="a key-shape model is JSON; ")
     if sheet is not None:
         options.suffix(sheet, ".png", "a sheet", why="the sheet is a PNG; ")
-    keys, _, closed = load_contours(keys_file)
+    keys, _, closed = load_contours(keys_file, points=points, start=_start(start, points))
     space = api.keyshape_space(keys, closed=closed, inbetweens=inbetweens, tolerance=tolerance)
     picture = api.keyshape_sheet(space) if sheet is not None else None
     save_model(output, space)
@@ -68,11 +73,16 @@ def capture_contours(
     upper: Annotated[float, typer.Option("--upper", help="With --keys: each weight's upper bound.")] = 1.5,
     support: Annotated[int | None, typer.Option(
         "--support", min=1, help="With --keys: at most this many non-zero weights.")] = None,
+    points: Annotated[int | None, typer.Option(
+        "--points", min=3, max=100_000,
+        help="Resample every contour (closed) to this many points by arc length.")] = None,
+    start: Annotated[str | None, typer.Option(
+        "--start", help="With --points: each contour starts at its point nearest X,Y.")] = None,
 ) -> None:
     """Capture contours: each frame's affine motion and key-shape weights (Bregler et al. 3.2)."""
     options.suffix(output, ".json", "an output", why="a key-shape motion is JSON; ")
     space = load_model(model)
-    contours, fps, _ = load_contours(contours_file)
+    contours, fps, _ = load_contours(contours_file, points=points, start=_start(start, points))
     if keys_only:
         found = api.capture_contours(contours, space.keys, lower=lower, upper=upper, support=support)
     else:
@@ -125,3 +135,9 @@ def retarget_keyshapes(
     save_motion(output, motion)
     typer.echo(f"retargeted {motion.frame_count} frames onto {project.name}'s {len(timeline.keys)} key poses "
                f"-> {output}")
+
+
+def _start(text: str | None, points: int | None) -> tuple[float, float] | None:
+    if text is not None and points is None:
+        raise SettingsError("--start goes with --points: it says where the resampled contours begin")
+    return None if text is None else options.point(text, "--start")

@@ -25,7 +25,7 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,7 +35,7 @@ from toonmotion.errors import KeyShapeError
 from toonmotion.io.atomic import write_text
 from toonmotion.io.schema import Float, Int, JsonFormat, Model, Point, explained, read_versioned
 from toonmotion.keyshape.contour import ContourCapture
-from toonmotion.keyshape.model import check_shapes
+from toonmotion.keyshape.model import check_shapes, resample_contour
 from toonmotion.keyshape.space import KeyShapeSpace
 
 CONTOURS, MODEL, MOTION = "toonmotion.contours", "toonmotion.keyshapes", "toonmotion.keymotion"
@@ -89,13 +89,24 @@ MODEL_FORMAT = _format(ModelFile, MODEL, "key-shape model")
 MOTION_FORMAT = _format(MotionFile, MOTION, "key-shape motion")
 
 
-def load_contours(path: str | Path) -> tuple[NDArray[np.float64], float, bool]:
-    """The contours ``(T, N, 2)``, their fps and whether they are closed, from JSON or CSV."""
+def load_contours(path: str | Path, *, points: int | None = None, start: ArrayLike | None = None
+                  ) -> tuple[NDArray[np.float64], float, bool]:
+    """The contours ``(T, N, 2)``, their fps and whether they are closed, from JSON or CSV.
+
+    With ``points``, every contour (closed; any number of points each) is resampled to that many
+    by arc length, counter-clockwise, from its point nearest ``start``
+    (:func:`~toonmotion.keyshape.model.resample_contour`).
+    """
     path = Path(path)
+    shapes: list[Any]
     if path.suffix.lower() == ".csv":
-        return _contours_csv(path), 12.0, True
-    model = read_versioned(path, CONTOURS_FORMAT)
-    return check_shapes(model.contours, what=f"{path.name}: the contours"), float(model.fps), model.closed
+        shapes, fps, closed = _contours_csv(path), 12.0, True
+    else:
+        model = read_versioned(path, CONTOURS_FORMAT)
+        shapes, fps, closed = model.contours, float(model.fps), model.closed
+    if points is not None:
+        shapes = [resample_contour(shape, points, start=start) for shape in shapes]
+    return check_shapes(shapes, what=f"{path.name}: the contours"), fps, closed
 
 
 def save_contours(path: str | Path, contours: ArrayLike, *, fps: float = 12.0, closed: bool = True) -> None:
@@ -145,7 +156,7 @@ def load_keymotion(path: str | Path) -> tuple[ContourCapture, float, str]:
             float(model.fps), model.space)
 
 
-def _contours_csv(path: Path) -> NDArray[np.float64]:
+def _contours_csv(path: Path) -> list[list[tuple[float, float]]]:
     try:
         with path.open(newline="", encoding="utf-8") as file:
             rows = list(csv.reader(file))
@@ -170,6 +181,4 @@ def _contours_csv(path: Path) -> NDArray[np.float64]:
             raise KeyShapeError(f"{path.name}: contour {contour}'s points must be numbered 0, 1, 2, "
                                 "...")
         shapes.append([points[i] for i in range(len(points))])
-    if len({len(s) for s in shapes}) != 1:
-        raise KeyShapeError(f"{path.name}: every contour must have the same number of points")
-    return check_shapes(shapes, what=f"{path.name}: the contours")
+    return shapes

@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import KeyShapeError
 from toonmotion.geometry.arrays import MAX_COORDINATE
+from toonmotion.geometry.polygon import signed_area
 
 FloatArray = NDArray[np.float64]
 
@@ -74,3 +75,35 @@ def fit_affine(target: ArrayLike, source: ArrayLike) -> FloatArray:
     homogeneous = np.column_stack([S, np.ones(len(S))])
     solution, *_ = np.linalg.lstsq(homogeneous, V, rcond=None)  # (3, 2): V = [S 1] @ solution
     return solution.T
+
+
+def resample_contour(polyline: ArrayLike, count: int, *, start: ArrayLike | None = None) -> FloatArray:
+    """A closed polyline resampled to ``count`` points evenly spaced by arc length (3.2's
+    contours in correspondence), counter-clockwise on screen, from the point nearest ``start``
+    (default: its first point).
+
+    Examples
+    --------
+    >>> square = [(0, 0), (4, 0), (4, 4), (0, 4)]  # clockwise on screen (y down)
+    >>> resample_contour(square, 8, start=(4, 4)).tolist()
+    [[4.0, 4.0], [4.0, 2.0], [4.0, 0.0], [2.0, 0.0], [0.0, 0.0], [0.0, 2.0], [0.0, 4.0], [2.0, 4.0]]
+    """
+    P = check_shapes(polyline, what="a contour")[0]
+    if not (isinstance(count, int) and 3 <= count <= 100_000):
+        raise KeyShapeError(f"a contour is resampled to 3 to 100,000 points, not {count!r}")
+    if signed_area(P) < 0:  # clockwise on screen
+        P = P[::-1]
+    closed = np.vstack([P, P[:1]])
+    steps = np.hypot(*np.diff(closed, axis=0).T)
+    run = np.concatenate([[0.0], np.cumsum(steps)])
+    at = 0.0
+    if start is not None:
+        s = np.asarray(start, dtype=float)
+        ab = closed[1:] - closed[:-1]
+        span = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+        t = np.clip(np.einsum("ij,ij->i", s - closed[:-1], ab) / span, 0, 1)
+        near = closed[:-1] + ab * t[:, None]
+        k = int(np.argmin(np.hypot(*(near - s).T)))
+        at = run[k] + t[k] * steps[k]
+    where = (at + run[-1] * np.arange(count) / count) % run[-1]
+    return np.stack([np.interp(where, run, closed[:, 0]), np.interp(where, run, closed[:, 1])], axis=1)
