@@ -15,7 +15,7 @@ PACKAGE = Path(toonmotion.__file__).parent
 LAYERS = (
     {"cli", "web"},
     {"api"},
-    {"io", "render", "testing", "samples", "sample_animation"},
+    {"io", "render", "testing", "samples", "sample_animation", "sample_cartoons"},
     {"capture", "keyshape"},
     {"animate"},
     {"deform"},
