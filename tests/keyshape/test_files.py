@@ -160,3 +160,22 @@ def test_contours_of_any_count_direction_and_start_are_resampled_into_correspond
     assert _run("keyshapes", tmp_path / "ragged.json", "-o", tmp_path / "m.json", "--points", "60",
                 "--start", f"{x},{y}") == 0
     assert load_model(tmp_path / "m.json").keys.shape == (3, 60, 2)
+
+
+def test_an_svg_files_shapes_are_contours_resampled_into_correspondence(tmp_path, capsys):
+    svg = """<svg xmlns="http://www.w3.org/2000/svg" width="200" height="200">
+      <path d="M 60,100 C 60,40 140,40 140,100 C 140,160 60,160 60,100 Z"/>
+      <g transform="translate(10, 0)"><ellipse cx="90" cy="100" rx="50" ry="30"/></g>
+      <polygon points="50,70 150,70 150,130 50,130"/>
+    </svg>"""
+    (tmp_path / "keys.svg").write_text(svg)
+    keys, _, closed = load_contours(tmp_path / "keys.svg", points=40, start=(100, 0))
+    assert keys.shape == (3, 40, 2) and closed
+    assert abs(keys[1][:, 0].mean() - 100) < 0.01  # the group's transform (10 px) applied
+    np.testing.assert_allclose(keys[2][0], (100, 70), atol=1e-6)  # starts nearest (100, 0)
+    np.testing.assert_allclose(keys[2].min(axis=0), (50, 70), atol=1e-6)
+    assert _run("keyshapes", tmp_path / "keys.svg", "-o", tmp_path / "model.json") == 0
+    assert load_model(tmp_path / "model.json").keys.shape == (3, 100, 2)  # 100 points by default
+    (tmp_path / "bad.svg").write_text("<svg><not closed")
+    assert _run("keyshapes", tmp_path / "bad.svg", "-o", tmp_path / "model.json") == 2
+    assert "cannot read bad.svg as SVG" in capsys.readouterr().err

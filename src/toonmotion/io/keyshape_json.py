@@ -8,7 +8,8 @@ Contours (the key-shapes themselves, or the frames to capture), points in corres
      "contours": [[[x, y], ...], ...]}
 
 or a CSV table ``contour, point, x, y`` (a header row first; contours and points numbered from
-0, in order). A model (:func:`toonmotion.api.keyshape_space`)::
+0, in order), or an SVG file whose shapes, in document order, are the contours (resampled by
+arc length into correspondence). A model (:func:`toonmotion.api.keyshape_space`)::
 
     {"format": "toonmotion.keyshapes", "version": 1, "closed": true, "inbetweens": 5,
      "tolerance": 0.5, "error": 0.31, "keys": [...], "mean": [...], "eigen": [[...], ...]}
@@ -39,6 +40,9 @@ from toonmotion.keyshape.model import check_shapes, resample_contour
 from toonmotion.keyshape.space import KeyShapeSpace
 
 CONTOURS, MODEL, MOTION = "toonmotion.contours", "toonmotion.keyshapes", "toonmotion.keymotion"
+# An SVG shape is sampled at this many points along it, then resampled to SVG_POINTS by arc
+# length unless the caller asks for another count.
+SVG_SAMPLES, SVG_POINTS = 1024, 100
 VERSION = 1
 
 _Shape = Annotated[list[Point], Field(min_length=3),
@@ -91,15 +95,20 @@ MOTION_FORMAT = _format(MotionFile, MOTION, "key-shape motion")
 
 def load_contours(path: str | Path, *, points: int | None = None, start: ArrayLike | None = None
                   ) -> tuple[NDArray[np.float64], float, bool]:
-    """The contours ``(T, N, 2)``, their fps and whether they are closed, from JSON or CSV.
+    """The contours ``(T, N, 2)``, their fps and whether they are closed, from JSON, CSV or SVG.
 
     With ``points``, every contour (closed; any number of points each) is resampled to that many
     by arc length, counter-clockwise, from its point nearest ``start``
-    (:func:`~toonmotion.keyshape.model.resample_contour`).
+    (:func:`~toonmotion.keyshape.model.resample_contour`). An SVG file's shapes (paths, polygons,
+    circles, ...; transforms applied), in document order, are contours, always resampled
+    (``SVG_POINTS`` points by default).
     """
     path = Path(path)
     shapes: list[Any]
-    if path.suffix.lower() == ".csv":
+    if path.suffix.lower() == ".svg":  # SVG nodes are not in correspondence: always resampled
+        shapes, fps, closed = _contours_svg(path), 12.0, True
+        points = SVG_POINTS if points is None else points
+    elif path.suffix.lower() == ".csv":
         shapes, fps, closed = _contours_csv(path), 12.0, True
     else:
         model = read_versioned(path, CONTOURS_FORMAT)
@@ -154,6 +163,27 @@ def load_keymotion(path: str | Path) -> tuple[ContourCapture, float, str]:
     return (ContourCapture(affine=np.array(model.affine, dtype=float), weights=weights,
                            error=np.array(model.error, dtype=float), rounds=np.array(model.rounds)),
             float(model.fps), model.space)
+
+
+def _contours_svg(path: Path) -> list[NDArray[np.float64]]:
+    import svgelements
+
+    try:
+        svg = svgelements.SVG.parse(str(path))
+    except Exception as error:  # svgelements raises many kinds on a malformed file
+        raise KeyShapeError(f"cannot read {path.name} as SVG: {type(error).__name__}") from None
+    shapes = []
+    for element in svg.elements():
+        if not isinstance(element, svgelements.Shape) or isinstance(element, svgelements.SVG):
+            continue
+        outline = svgelements.Path(element)
+        if len(outline) == 0 or not outline.length() > 0:
+            continue
+        sampled = np.asarray(outline.npoint(np.linspace(0, 1, SVG_SAMPLES)), dtype=float).reshape(-1, 2)
+        shapes.append(sampled[:-1] if np.allclose(sampled[0], sampled[-1]) else sampled)
+    if not shapes:
+        raise KeyShapeError(f"{path.name} holds no path or shape to read as a contour")
+    return shapes
 
 
 def _contours_csv(path: Path) -> list[list[tuple[float, float]]]:
