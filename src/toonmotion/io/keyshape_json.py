@@ -166,12 +166,23 @@ def load_keymotion(path: str | Path) -> tuple[ContourCapture, float, str]:
 
 
 def _contours_svg(path: Path) -> list[NDArray[np.float64]]:
+    try:
+        shapes = _svg_shapes(path)
+    except KeyShapeError:
+        raise
+    except Exception as error:  # the SVG library raises many kinds on a malformed file
+        raise KeyShapeError(f"cannot read {path.name} as SVG: {type(error).__name__}") from None
+    if not shapes:
+        raise KeyShapeError(f"{path.name} holds no path or shape to read as a contour")
+    return shapes
+
+
+def _svg_shapes(path: Path) -> list[NDArray[np.float64]]:
     import svgelements
 
-    try:
-        svg = svgelements.SVG.parse(str(path))
-    except Exception as error:  # svgelements raises many kinds on a malformed file
-        raise KeyShapeError(f"cannot read {path.name} as SVG: {type(error).__name__}") from None
+    svg = svgelements.SVG.parse(str(path))
+    if not isinstance(svg, svgelements.SVG):
+        raise KeyShapeError(f"cannot read {path.name} as SVG: it has no <svg> element")
     shapes = []
     for element in svg.elements():
         if not isinstance(element, svgelements.Shape) or isinstance(element, svgelements.SVG):
@@ -181,8 +192,6 @@ def _contours_svg(path: Path) -> list[NDArray[np.float64]]:
             continue
         sampled = np.asarray(outline.npoint(np.linspace(0, 1, SVG_SAMPLES)), dtype=float).reshape(-1, 2)
         shapes.append(sampled[:-1] if np.allclose(sampled[0], sampled[-1]) else sampled)
-    if not shapes:
-        raise KeyShapeError(f"{path.name} holds no path or shape to read as a contour")
     return shapes
 
 
