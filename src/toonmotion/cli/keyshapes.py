@@ -24,11 +24,19 @@ from toonmotion.io.keyshape_json import (
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import load_keyframes
 
+# Contours of any point count, resampled into correspondence (both capture commands take them).
+Points = Annotated[int | None, typer.Option(
+    "--points", min=3, max=100_000,
+    help="Resample every contour (closed) to this many points by arc length.")]
+Start = Annotated[str | None, typer.Option(
+    "--start", help="With --points: each contour starts at its point nearest X,Y.")]
+
 
 @app.command()
 def keyshapes(
     keys_file: Annotated[Path, typer.Argument(
-        metavar="KEYS.json|KEYS.csv", help="The key-shapes: a contours file, points in correspondence.")],
+        metavar="KEYS.json|KEYS.csv|KEYS.svg",
+        help="The key-shapes: a contours file (points in correspondence) or an SVG file.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="The key-shape model to write (.json).")],
     inbetweens: Annotated[int, typer.Option("--inbetweens", min=0, max=1000,
                                             help="ARAP in-betweens per pair of keys.")] = 5,
@@ -36,11 +44,8 @@ def keyshapes(
                                              help="Largest reconstruction error of any example, px.")] = 0.5,
     sheet: Annotated[Path | None, typer.Option(
         "--sheet", help="Also write a preview sheet of the keys and their in-betweens (.png).")] = None,
-    points: Annotated[int | None, typer.Option(
-        "--points", min=3, max=100_000,
-        help="Resample every contour (closed) to this many points by arc length.")] = None,
-    start: Annotated[str | None, typer.Option(
-        "--start", help="With --points: each contour starts at its point nearest X,Y.")] = None,
+    points: Points = None,
+    start: Start = None,
 ) -> None:
     """Build a key-shape model: in-betweens of every pair of keys, then PCA (the extended space).
 
@@ -64,7 +69,7 @@ def keyshapes(
 def capture_contours(
     model: Annotated[Path, typer.Argument(metavar="MODEL.json", help="A key-shape model ('keyshapes').")],
     contours_file: Annotated[Path, typer.Argument(
-        metavar="CONTOURS.json|CONTOURS.csv",
+        metavar="CONTOURS.json|CONTOURS.csv|CONTOURS.svg",
         help="The contours to capture, in correspondence with the keys.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="The captured motion to write (.json).")],
     keys_only: Annotated[bool, typer.Option(
@@ -73,11 +78,8 @@ def capture_contours(
     upper: Annotated[float, typer.Option("--upper", help="With --keys: each weight's upper bound.")] = 1.5,
     support: Annotated[int | None, typer.Option(
         "--support", min=1, help="With --keys: at most this many non-zero weights.")] = None,
-    points: Annotated[int | None, typer.Option(
-        "--points", min=3, max=100_000,
-        help="Resample every contour (closed) to this many points by arc length.")] = None,
-    start: Annotated[str | None, typer.Option(
-        "--start", help="With --points: each contour starts at its point nearest X,Y.")] = None,
+    points: Points = None,
+    start: Start = None,
 ) -> None:
     """Capture contours: each frame's affine motion and key-shape weights (Bregler et al. 3.2)."""
     options.suffix(output, ".json", "an output", why="a key-shape motion is JSON; ")

@@ -105,19 +105,30 @@ def solve_weights(A: FloatArray, contour: FloatArray, S: FloatArray, low: FloatA
     chosen = np.arange(K) if keys is None else np.asarray(keys)
     B = (S[chosen] @ A[:, :2].T + A[:, 2]).reshape(len(chosen), -1).T  # (2N, k): each key, aligned
     v = contour.ravel()
-    H = B.T @ B
-    H += np.eye(len(chosen)) * 1e-12 * max(np.trace(H), 1e-300)
-    f = -B.T @ v
-    sense = np.zeros(len(chosen) + 1, dtype=np.int32)
-    sense[-1] = 5  # the sum: an equality
-    x, _, flag, _ = daqp.solve(H, f, np.ones((1, len(chosen))), np.concatenate([high[chosen], [1.0]]),
-                               np.concatenate([low[chosen], [1.0]]), sense)
-    if flag < 1:
+    x = _least_squares(B, v, 0, low[chosen], high[chosen])
+    if x is None:
         return np.full(K, np.nan), math.inf
     w = np.zeros(K)
     w[chosen] = x
     residual = B @ x - v
     return w, float(residual @ residual)
+
+
+def _least_squares(M: FloatArray, v: FloatArray, free: int, low: FloatArray, high: FloatArray
+                   ) -> FloatArray | None:
+    """``x`` minimising ``|M x - v|^2`` whose first ``free`` entries are unbounded and whose
+    other entries (the weights) lie within ``low``, ``high`` and sum to 1: DAQP's QP; None when
+    no such ``x`` exists."""
+    n = M.shape[1]
+    H = M.T @ M
+    H += np.eye(n) * 1e-12 * max(np.trace(H), 1e-300)  # keys that the affine can mimic: still solvable
+    sense = np.zeros(n + 1, dtype=np.int32)
+    sense[-1] = 5  # the weights' sum: an equality
+    row = np.concatenate([np.zeros(free), np.ones(n - free)])[None]
+    unbounded = np.full(free, 1e30)
+    x, _, flag, _ = daqp.solve(H, -M.T @ v, row, np.concatenate([unbounded, high, [1.0]]),
+                               np.concatenate([-unbounded, low, [1.0]]), sense)
+    return None if flag < 1 else np.asarray(x, dtype=float)
 
 
 def _subsets(K: int, J: int) -> list[tuple[int, ...]] | None:
@@ -165,15 +176,8 @@ def _step(contour, S, A, w, low, high, keys):
     J[1::2, 3:6] = homogeneous  # y rows: a3 a4 dy
     J[:, 6:] = (S[keys] @ linear.T).reshape(k, -1).T  # each key through the current linear part
     goal = (contour - homogeneous @ A.T + blend @ linear.T).ravel()
-    H = J.T @ J
-    H += np.eye(6 + k) * 1e-12 * max(np.trace(H), 1e-300)
-    sense = np.zeros(6 + k + 1, dtype=np.int32)
-    sense[-1] = 5  # the weights' sum: an equality
-    free = np.full(6, 1e30)
-    row = np.concatenate([np.zeros(6), np.ones(k)])[None]
-    x, _, flag, _ = daqp.solve(H, -J.T @ goal, row, np.concatenate([free, high[keys], [1.0]]),
-                               np.concatenate([-free, low[keys], [1.0]]), sense)
-    if flag < 1:
+    x = _least_squares(J, goal, 6, low[keys], high[keys])
+    if x is None:
         return None
     A_new = A + x[:6].reshape(2, 3)
     w_new = np.zeros(len(S))

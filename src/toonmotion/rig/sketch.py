@@ -8,7 +8,8 @@ ours (docs/editor.md, "Sketching a pose"):
 1. Each stroke is simplified to straight segments (Douglas-Peucker, tolerance 6% of the
    stroke's length, at least 3 px); its corners are joints.
 2. A stroke end within ``snap`` of an earlier stroke's joint, or of the inside of one of its
-   segments, joins it there, so strokes build one stick figure. A loop is refused.
+   segments, joins it there, so strokes build one stick figure; a join that would close a loop
+   (a skeleton has none) is not made.
 3. Each connected piece of the figure is embedded in the skeleton: sketch joints onto skeleton
    joints, each segment onto a bone, or onto a chain of up to 3 bones through joints with no
    branch (one straight stroke along an arm covers the elbow). Joints joined by a bone of no
@@ -277,11 +278,7 @@ def _graph(strokes: Sequence[NDArray[np.float64]], *, snap: float
                 break
     if not points:
         raise SketchError("the sketch is empty: draw at least one stroke")
-    array = np.array(points, dtype=float)
-    if len(edges) >= len(array) - _component_count(len(array), edges) + 1:
-        raise SketchError("the sketch closes a loop, and a skeleton has none: "
-                          "draw its strokes without closing them")
-    return array, edges, owner, trails
+    return np.array(points, dtype=float), edges, owner, trails
 
 
 # --- the skeleton as a tree of joint clusters ----------------------------------------------------
@@ -558,14 +555,6 @@ def _pieces(count: int, edges: list[tuple[int, int]]) -> list[list[tuple[int, in
     for a, b in edges:
         groups.setdefault(int(label[a]), []).append((a, b))
     return sorted(groups.values(), key=len, reverse=True)
-
-
-def _component_count(count: int, edges: list[tuple[int, int]]) -> int:
-    if not edges:
-        return count
-    rows, cols = zip(*edges, strict=True)
-    return int(connected_components(coo_array((np.ones(len(edges)), (rows, cols)), shape=(count, count)),
-                                    directed=False)[0])
 
 
 def _size(positions: NDArray[np.float64]) -> float:
