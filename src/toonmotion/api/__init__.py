@@ -30,6 +30,7 @@ from toonmotion.api.keyshapes import (
     keyshape_space,
     retarget_keyposes,
     retarget_keyshapes,
+    retarget_line_of_action,
 )
 from toonmotion.api.posing import (
     PosedFrame,
@@ -82,6 +83,7 @@ __all__ = [
     "retarget",
     "retarget_keyposes",
     "retarget_keyshapes",
+    "retarget_line_of_action",
     "retime",
     "rig_again",
     "rig_image",

@@ -11,6 +11,8 @@ from toonmotion.animate.timeline import Timeline
 from toonmotion.keyshape.arap import ArapPair, triangulate_shape
 from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.keyshape.contour import capture_contours as _capture
+from toonmotion.keyshape.line_of_action import capture_lines, captured_lines, retarget_line
+from toonmotion.keyshape.retarget import pin as pin_point
 from toonmotion.keyshape.retarget import retarget_poses, retarget_shapes
 from toonmotion.keyshape.space import KeyShapeSpace, build_space
 from toonmotion.render.keyshape_sheet import inbetween_sheet
@@ -216,4 +218,82 @@ def retarget_keyposes(capture: ContourCapture, input_keys: ArrayLike, skeleton: 
     """
     poses = np.stack([key.pose.positions for key in key_poses.keys])
     positions = retarget_poses(capture, input_keys, skeleton, poses, reference=reference)
+    return Motion(skeleton=skeleton, positions=positions, fps=fps)
+
+
+def retarget_line_of_action(lines: ArrayLike, key_lines: ArrayLike, skeleton: Skeleton, *,
+                            chain: list[str] | tuple[str, ...] | str | None = None, direction: str = "auto",
+                            fps: float = 12.0, lower: float = -0.5, upper: float = 1.5,
+                            support: int | None = None, pin: tuple[str, dict[int, ArrayLike]] | None = None
+                            ) -> Motion:
+    """Capture a line of action drawn over a cartoon and bend a character's chain of joints along
+    it (Bregler et al., section 4).
+
+    Each frame's line is captured with the key lines (contour capture, straight lines allowed);
+    the model's line of every frame then poses the chain: the joints at their rest arc-length
+    fractions along the line, every bone keeping its rest length, the rest of the body hanging
+    rigidly from the chain (docs/keyshapes.md, "The line of action").
+
+    Parameters
+    ----------
+    lines : (T, N, 2) float
+        The line of action of every frame, open, points in correspondence with the key lines
+        (``resample_line`` makes them so), drawing pixels, y down.
+    key_lines : (K, N, 2) float
+        Hand-picked key lines (a straight one is allowed).
+    skeleton : Skeleton
+        The character's; its rest positions are the pose bent.
+    chain : sequence of str or str, optional
+        Joint names from a root-side joint to a tip, each the parent of the next (or one
+        comma-separated string); by default the chain from the first root to the joint farthest
+        from it at rest.
+    direction : {"auto", "root-first", "tip-first"}
+        Which end the lines were drawn from; ``"auto"`` picks the end that makes the first line
+        point the way the chain does at rest.
+    fps : float
+        The motion's frame rate.
+    lower, upper : float
+        Each key line's weight bounds.
+    support : int, optional
+        At most this many non-zero weights.
+    pin : (str, dict of int to (x, y)), optional
+        A joint and its positions at chosen frames: the motion is moved by one translation per
+        frame to put it there (blended between pinned frames, held beyond them).
+
+    Returns
+    -------
+    Motion
+        For :func:`animate_character`.
+
+    Raises
+    ------
+    KeyShapeError
+        For lines out of correspondence or coincident points, a chain whose joints are not
+        each the parent of the next, or bad bounds.
+    SkeletonError
+        For a chain naming a joint the skeleton lacks.
+
+    Examples
+    --------
+    >>> from toonmotion.keyshape.line_of_action import resample_line
+    >>> from toonmotion.keyshape.model import warp
+    >>> from toonmotion.samples import sample_rig
+    >>> skeleton = sample_rig().skeleton
+    >>> u = np.linspace(0, 1, 50)[:, None]
+    >>> straight = resample_line(np.hstack([0 * u, -100 * u]), 20)  # drawn from the hips up
+    >>> lean = resample_line(np.hstack([30 * u ** 2, -100 * u]), 20)  # curving to the right
+    >>> clip = [warp(np.eye(2, 3), [1 - w, w], [straight, lean]) for w in (0.0, 0.5, 1.0)]
+    >>> motion = retarget_line_of_action(clip, [straight, lean], skeleton)
+    >>> motion.positions.shape
+    (3, 17, 2)
+    >>> bool(np.allclose(motion.positions[0], skeleton.positions))  # a straight line: standing
+    True
+    >>> bool(motion.positions[2, skeleton.index("head"), 0] > skeleton.positions[skeleton.index("head"), 0])
+    True
+    """
+    found = capture_lines(lines, key_lines, lower=lower, upper=upper, support=support)
+    positions = retarget_line(captured_lines(found, key_lines), skeleton, chain, direction=direction)
+    if pin is not None:
+        joint, targets = pin
+        positions = pin_point(positions, skeleton.index(joint), targets)
     return Motion(skeleton=skeleton, positions=positions, fps=fps)

@@ -1,5 +1,5 @@
 """Key-shape commands (Bregler et al. capture): ``keyshapes``, ``capture-contours``,
-``retarget-keyshapes``."""
+``retarget-keyshapes``, ``retarget-line``."""
 
 from __future__ import annotations
 
@@ -143,3 +143,66 @@ def _start(text: str | None, points: int | None) -> tuple[float, float] | None:
     if text is not None and points is None:
         raise SettingsError("--start goes with --points: it says where the resampled contours begin")
     return None if text is None else options.point(text, "--start")
+
+
+@app.command("retarget-line")
+def retarget_line(
+    lines_file: Annotated[Path, typer.Argument(
+        metavar="LINES.json|LINES.csv|LINES.svg",
+        help="The line of action of every frame: open lines (an SVG file's paths, in order).")],
+    project: Annotated[Path, typer.Option("--project", help="The rigged character to bend.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="The motion to write (.json).")],
+    keys_file: Annotated[Path | None, typer.Option(
+        "--keys", help="Key lines, in correspondence with the lines (a contours or SVG file).")] = None,
+    key_frames: Annotated[str | None, typer.Option(
+        "--key-frames", help="Or: the lines of these frames (numbered from 0) are the keys, e.g. 0,8,20.")
+    ] = None,
+    chain: Annotated[str | None, typer.Option(
+        "--chain", help="Joints along the line, parent to child, e.g. hip,torso,neck,head "
+                        "\\[default: from the root to the joint farthest from it].")] = None,
+    direction: Annotated[str, typer.Option(
+        "--direction", help="Which end the lines start at: auto, root-first or tip-first.")] = "auto",
+    pin: Annotated[str | None, typer.Option(
+        "--pin", help="Hold a joint at a place on every frame, e.g. left_foot=140,280.")] = None,
+    lower: Annotated[float, typer.Option("--lower", help="Each key line's weight lower bound.")] = -0.5,
+    upper: Annotated[float, typer.Option("--upper", help="Each key line's weight upper bound.")] = 1.5,
+    support: Annotated[int | None, typer.Option(
+        "--support", min=1, help="At most this many non-zero weights.")] = None,
+    points: Annotated[int | None, typer.Option(
+        "--points", min=3, max=100_000,
+        help="Resample every line (open: first point to last) to this many points by arc length.")] = None,
+) -> None:
+    """Capture a line of action and bend a character's chain of joints along it (Bregler et al. 4).
+
+    Each frame's line is captured with the key lines; the chain's joints then sit along the
+    model's line, bones keeping their lengths, the rest of the body hanging rigidly from the chain
+    (docs/keyshapes.md). Render the motion with 'toonmotion animate PROJECT OUT.json -o OUT.gif'.
+    """
+    options.suffix(output, ".json", "an output", why="a motion is JSON; ")
+    if (keys_file is None) == (key_frames is None):
+        raise SettingsError("give the key lines: either --keys KEYLINES.json or --key-frames 0,8,20")
+    held = None if pin is None else options.named_point(pin, "--pin")
+    lines, fps, _ = load_contours(lines_file, points=points, closed=False)
+    if keys_file is not None:
+        keys, _, _ = load_contours(keys_file, points=points, closed=False)
+    else:
+        assert key_frames is not None  # checked above
+        keys = lines[_frames(key_frames, len(lines))]
+    character = api.load_project(project)
+    motion = api.retarget_line_of_action(
+        lines, keys, character.skeleton, chain=chain, direction=direction, fps=fps, lower=lower, upper=upper,
+        support=support, pin=None if held is None else (held[0], dict.fromkeys(range(len(lines)), held[1])))
+    save_motion(output, motion)
+    typer.echo(f"retargeted {motion.frame_count} frames of the line of action ({len(keys)} key lines) onto "
+               f"{project.name}'s {'chain ' + chain if chain else 'default chain'} -> {output}")
+
+
+def _frames(text: str, count: int) -> list[int]:
+    try:
+        frames = [int(f) for f in text.split(",")]
+    except ValueError:
+        frames = []
+    if not frames or min(frames) < 0 or max(frames) >= count:
+        raise SettingsError(f"--key-frames takes frame numbers from 0 to {count - 1} separated by commas, "
+                            f"got {text!r}")
+    return frames

@@ -36,6 +36,7 @@ from toonmotion.errors import KeyShapeError
 from toonmotion.io.atomic import write_text
 from toonmotion.io.schema import Float, Int, JsonFormat, Model, Point, explained, read_versioned
 from toonmotion.keyshape.contour import ContourCapture
+from toonmotion.keyshape.line_of_action import resample_line
 from toonmotion.keyshape.model import check_shapes, resample_contour
 from toonmotion.keyshape.space import KeyShapeSpace
 
@@ -93,8 +94,8 @@ MODEL_FORMAT = _format(ModelFile, MODEL, "key-shape model")
 MOTION_FORMAT = _format(MotionFile, MOTION, "key-shape motion")
 
 
-def load_contours(path: str | Path, *, points: int | None = None, start: ArrayLike | None = None
-                  ) -> tuple[NDArray[np.float64], float, bool]:
+def load_contours(path: str | Path, *, points: int | None = None, start: ArrayLike | None = None,
+                  closed: bool | None = None) -> tuple[NDArray[np.float64], float, bool]:
     """The contours ``(T, N, 2)``, their fps and whether they are closed, from JSON, CSV or SVG.
 
     With ``points``, every contour (closed; any number of points each) is resampled to that many
@@ -102,20 +103,32 @@ def load_contours(path: str | Path, *, points: int | None = None, start: ArrayLi
     (:func:`~toonmotion.keyshape.model.resample_contour`). An SVG file's shapes (paths, polygons,
     circles, ...; transforms applied), in document order, are contours, always resampled
     (``SVG_POINTS`` points by default).
+
+    Open lines (``"closed": false`` in JSON, or ``closed=False`` for any file: lines of action)
+    are resampled from their first point to their last
+    (:func:`~toonmotion.keyshape.line_of_action.resample_line`; ``start`` is refused) and may be
+    straight.
     """
     path = Path(path)
     shapes: list[Any]
     if path.suffix.lower() == ".svg":  # SVG nodes are not in correspondence: always resampled
-        shapes, fps, closed = _contours_svg(path), 12.0, True
+        shapes, fps, is_closed = _contours_svg(path), 12.0, True
         points = SVG_POINTS if points is None else points
     elif path.suffix.lower() == ".csv":
-        shapes, fps, closed = _contours_csv(path), 12.0, True
+        shapes, fps, is_closed = _contours_csv(path), 12.0, True
     else:
         model = read_versioned(path, CONTOURS_FORMAT)
-        shapes, fps, closed = model.contours, float(model.fps), model.closed
-    if points is not None:
+        shapes, fps, is_closed = model.contours, float(model.fps), model.closed
+    is_closed = is_closed if closed is None else closed
+    if not is_closed and start is not None:
+        raise KeyShapeError(f"{path.name}: a start point is for closed contours; an open line runs from "
+                            "its first point")
+    if points is not None and is_closed:
         shapes = [resample_contour(shape, points, start=start) for shape in shapes]
-    return check_shapes(shapes, what=f"{path.name}: the contours"), fps, closed
+    elif points is not None:
+        shapes = [resample_line(shape, points) for shape in shapes]
+    checked = check_shapes(shapes, what=f"{path.name}: the contours", allow_straight=not is_closed)
+    return checked, fps, is_closed
 
 
 def save_contours(path: str | Path, contours: ArrayLike, *, fps: float = 12.0, closed: bool = True) -> None:

@@ -53,7 +53,8 @@ class ContourCapture:
 
 
 def capture_contours(contours: ArrayLike, shapes: ArrayLike, *, lower: ArrayLike = -0.5,
-                     upper: ArrayLike = 1.5, support: int | None = None) -> ContourCapture:
+                     upper: ArrayLike = 1.5, support: int | None = None, straight: bool = False
+                     ) -> ContourCapture:
     """Capture ``contours`` (T, N, 2) with key-shapes ``shapes`` (K, N, 2).
 
     Parameters
@@ -62,6 +63,11 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike, *, lower: ArrayLike
         Each weight's bounds (the paper's T1 = -0.5, T2 = 1.5); ``-inf``/``inf`` for none.
     support : int, optional
         At most this many non-zero weights (the paper's J); default all K.
+    straight : bool
+        Open lines, which may be straight (lines of action). A straight blend is a saddle of
+        the model (a bend's weight and a stretch across the line have no gradient there), so
+        each frame is then solved from the previous frame's weights, the even blend and each
+        key alone, and the least error kept.
 
     Examples
     --------
@@ -72,8 +78,8 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike, *, lower: ArrayLike
     >>> found.weights.round(9).tolist(), found.affine[0, :, 2].round(9).tolist()
     ([[0.3, 0.7]], [5.0, 1.0])
     """
-    S = check_shapes(shapes)
-    V = check_shapes(contours, what="contours")
+    S = check_shapes(shapes, allow_straight=straight)
+    V = check_shapes(contours, what="contours", allow_straight=straight)
     K, N = S.shape[:2]
     if V.shape[1] != N:
         raise KeyShapeError(f"the contours have {V.shape[1]} points but the key-shapes {N}: "
@@ -90,11 +96,30 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike, *, lower: ArrayLike
     weights = np.zeros((len(V), K))
     error = np.zeros(len(V))
     rounds = np.zeros(len(V), dtype=np.int64)
-    w = np.eye(K)[0]
+    w = np.full(K, 1 / K) if straight else np.eye(K)[0]
     for t, contour in enumerate(V):
-        w, A, e, n = _frame(contour, S, w, low, high, J, subsets)
+        starts = [w, np.full(K, 1 / K), *np.eye(K)] if straight else [w]
+        w, A, e, n = _best_frame(contour, S, starts, low, high, J, subsets)
         affine[t], weights[t], error[t], rounds[t] = A, w, e, n
     return ContourCapture(affine=affine, weights=weights, error=error, rounds=rounds)
+
+
+def _best_frame(contour, S, starts, low, high, J, subsets):
+    """:func:`_frame` from each of ``starts``, the least error kept (a start that finds no
+    weights within the bounds is passed over, unless every one does)."""
+    best, refused = None, None
+    for start in starts:
+        try:
+            found = _frame(contour, S, np.asarray(start, dtype=float), low, high, J, subsets)
+        except KeyShapeError as error:
+            refused = error
+            continue
+        if best is None or found[2] < best[2]:
+            best = found
+    if best is None:
+        assert refused is not None
+        raise refused
+    return best
 
 
 def solve_weights(A: FloatArray, contour: FloatArray, S: FloatArray, low: FloatArray, high: FloatArray,

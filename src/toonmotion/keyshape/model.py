@@ -16,13 +16,19 @@ from toonmotion.geometry.polygon import signed_area
 FloatArray = NDArray[np.float64]
 
 
-def check_shapes(shapes: ArrayLike, *, what: str = "key-shapes") -> FloatArray:
+def check_shapes(shapes: ArrayLike, *, what: str = "key-shapes", allow_straight: bool = False) -> FloatArray:
     """``shapes`` as a (K, N, 2) float array; :class:`KeyShapeError` unless every shape has the
     same N >= 3 finite points within the coordinate bound and is not collinear.
+
+    ``allow_straight`` lets a shape's points lie on one line (not all on one point): an open line
+    of action drawn straight (:mod:`~toonmotion.keyshape.line_of_action`). Its affine is then not
+    unique across the line; :func:`fit_affine` gives the least-norm one.
 
     Examples
     --------
     >>> check_shapes([[(0, 0), (1, 0), (0, 1)]]).shape
+    (1, 3, 2)
+    >>> check_shapes([[(0, 0), (0, 5), (0, 10)]], allow_straight=True).shape
     (1, 3, 2)
     """
     try:
@@ -42,7 +48,9 @@ def check_shapes(shapes: ArrayLike, *, what: str = "key-shapes") -> FloatArray:
     for k, shape in enumerate(array):
         centred = shape - shape.mean(axis=0)
         singular = np.linalg.svd(centred, compute_uv=False)
-        if singular[1] <= 1e-9 * max(singular[0], 1e-300):
+        if allow_straight and singular[0] <= 1e-9 * max(np.abs(shape).max(), 1.0):
+            raise KeyShapeError(f"{what}: shape {k + 1} is degenerate (its points are all one point)")
+        if not allow_straight and singular[1] <= 1e-9 * max(singular[0], 1e-300):
             raise KeyShapeError(f"{what}: shape {k + 1} is degenerate (its points lie on one line)")
     return array
 
