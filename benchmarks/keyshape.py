@@ -1,6 +1,8 @@
 """Key-shape contour capture: frames per second, and the weight QP against scipy's SLSQP; JSON lines.
 
     python benchmarks/keyshape.py [--keys K] [--points N] [--frames T] [--drawing DIR]
+                                  [--footage VIDEO|DIR --outlines KEYS.json [--key-frames ...]
+                                   [--truth CONTOURS.json]]
 
 The key-shapes are a drawing's outer outline (default: the bundled character's; ``--drawing``
 takes a folder with texture.png, mask.png and char_cfg.yaml) resampled by arc length to N
@@ -19,6 +21,22 @@ Keys of the one line:
   slsqp_per_s     scipy's SLSQP on the same problems (same constraints), and qp_speedup the ratio
   qp_max_gap      how much higher DAQP's objective ever was than SLSQP's (relative; 0 or below
                   means DAQP always found the lower)
+
+Then one line per video sequence (``keyshape/video.py``): the generated ones
+(``toonmotion.sample_cartoons``: the bouncing ball, affine only; the morphing character, affine
+and 10 eigen-images; with noise and an occluding bar; the character at twice the size, a layer
+of about 200x200 px), or footage given with ``--footage VIDEO|DIR --outlines KEYS.json
+[--key-frames 0,8,16] [--truth CONTOURS.json]``.
+
+Keys of a video line:
+  sequence, frames, keys, eigen, window    the layer's template window, w x h px
+  video_ms        milliseconds per frame tracked (one core), the model built beforehand
+  build_ms        building the image model (matte, in-betweens, eigen-images)
+  iterations      mean Levenberg-Marquardt steps per frame
+  point_err_px    mean distance of the captured outline's points from the true ones (when known)
+  ecc_ms, ecc_point_err_px   the peer on affine-only sequences: OpenCV's ECC image alignment
+                  (findTransformECC, affine, the first key frame's layer as template, each frame
+                  started from the one before); ms_ratio = ecc_ms / video_ms
 """
 
 import argparse
@@ -78,7 +96,19 @@ def main(argv=None):
     parser.add_argument("--frames", type=int, default=200)
     parser.add_argument("--drawing", type=Path, default=None,
                         help="a drawing folder (texture, mask, char_cfg)")
+    parser.add_argument("--footage", type=Path, default=None, help="a video or a folder of frames")
+    parser.add_argument("--outlines", type=Path, default=None,
+                        help="with --footage: the layer's outline at each key frame (a contours file)")
+    parser.add_argument("--key-frames", default=None, help="with --footage: e.g. 0,8,16 [default: 0]")
+    parser.add_argument("--truth", type=Path, default=None,
+                        help="with --footage: the true outline of every frame (a contours file)")
     args = parser.parse_args(argv)
+    contour_line(args)
+    for name, frames, outlines, key_frames, truth in sequences(args):
+        video_line(name, frames, outlines, key_frames, truth)
+
+
+def contour_line(args):
     rng = np.random.default_rng(0)
     shapes = variations(outline(args.drawing, args.points), args.keys - 1, rng)
     contours, K = [], len(shapes)
@@ -117,6 +147,84 @@ def main(argv=None):
                       "error_px": round(float(found.error.mean()), 3),
                       "qp_per_s": round(n / qp_s, 1), "slsqp_per_s": round(n / slsqp_s, 1),
                       "qp_speedup": round(slsqp_s / qp_s, 2), "qp_max_gap": float(f"{gap:.2e}")}), flush=True)
+
+
+def sequences(args):
+    """(name, frames, key outlines, key frames, true outlines or None) for each video line."""
+    if args.footage is not None:
+        from toonmotion.io.frames import load_frames
+        from toonmotion.io.keyshape_json import load_contours
+
+        frames, _ = load_frames(args.footage)
+        outlines, _, _ = load_contours(args.outlines)
+        keys = [0] if args.key_frames is None else [int(k) for k in args.key_frames.split(",")]
+        truth = None if args.truth is None else load_contours(args.truth)[0]
+        yield args.footage.name, frames, outlines, keys, truth
+        return
+    from toonmotion.sample_cartoons import bouncing_ball, morphing_character
+
+    for name, cartoon in [("ball", bouncing_ball(frames=48)),
+                          ("ball_noise_bar", bouncing_ball(frames=48, noise=4.0, occluder=True)),
+                          ("character", morphing_character(frames=48)),
+                          ("character_noise_bar", morphing_character(frames=48, noise=4.0, occluder=True)),
+                          ("character_2x", morphing_character(frames=48, size=(480, 400)))]:
+        keys = list(cartoon.key_frames)
+        yield name, cartoon.frames, cartoon.contours[keys], keys, cartoon.contours
+
+
+def video_line(name, frames, outlines, key_frames, truth):
+    from toonmotion.keyshape.matte import fit_matte
+    from toonmotion.keyshape.video import build_image_model, region_mask, track_layer
+
+    first = key_frames[0]
+    started = time.perf_counter()
+    matte = fit_matte(frames[first], region_mask(outlines[0], frames[first].shape[:2]))
+    model = build_image_model(frames, key_frames, outlines, matte)
+    build_s = time.perf_counter() - started
+    started = time.perf_counter()
+    found = track_layer(frames[first:], model, matte)
+    video_s = time.perf_counter() - started
+    count = len(found.shapes)
+    line = {"sequence": name, "frames": count, "keys": len(outlines), "eigen": len(model.eigen),
+            "window": "x".join(map(str, model.mean.shape[::-1])),
+            "video_ms": round(1000 * video_s / count, 2), "build_ms": round(1000 * build_s),
+            "iterations": round(float(found.iterations.mean()), 1)}
+    if truth is not None:
+        line["point_err_px"] = round(_point_error(found.shapes, truth[first:]), 3)
+    if len(outlines) == 1:  # affine only: OpenCV's ECC alignment is the peer
+        started = time.perf_counter()
+        ecc = ecc_track(frames[first:], outlines[0])
+        ecc_s = time.perf_counter() - started
+        line["ecc_ms"] = round(1000 * ecc_s / count, 2)
+        if truth is not None:
+            line["ecc_point_err_px"] = round(_point_error(ecc, truth[first:]), 3)
+        line["ms_ratio"] = round(ecc_s / video_s, 2)
+    print(json.dumps(line), flush=True)
+
+
+def ecc_track(frames, outline):
+    """The outline (N, 2) moved through ``frames`` by OpenCV's ECC affine alignment of the first
+    frame's layer (its outline's region and a band of 4 px), each frame from the one before."""
+    import cv2
+
+    from toonmotion.keyshape.video import region_mask
+
+    grey = [cv2.cvtColor(np.ascontiguousarray(f), cv2.COLOR_RGB2GRAY).astype(np.float32) for f in frames]
+    mask = cv2.dilate(region_mask(outline, grey[0].shape).astype(np.uint8), np.ones((9, 9), np.uint8))
+    W = np.eye(2, 3, dtype=np.float32)
+    shapes = []
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-5)
+    for image in grey:
+        try:
+            _, W = cv2.findTransformECC(grey[0], image, W, cv2.MOTION_AFFINE, criteria, mask, 5)
+        except cv2.error:  # did not converge: keep the last warp
+            pass
+        shapes.append(outline @ W[:, :2].T.astype(float) + W[:, 2])
+    return np.array(shapes)
+
+
+def _point_error(shapes, truth):
+    return float(np.hypot(*(np.asarray(shapes) - np.asarray(truth)).T).mean())
 
 
 if __name__ == "__main__":

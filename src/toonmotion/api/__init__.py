@@ -26,8 +26,10 @@ from toonmotion.api.animation import animate_character, delete_key, filter_motio
 from toonmotion.api.capture import track_footage
 from toonmotion.api.keyshapes import (
     capture_contours,
+    capture_video,
     keyshape_sheet,
     keyshape_space,
+    pick_layer,
     retarget_keyposes,
     retarget_keyshapes,
     retarget_line_of_action,
@@ -48,6 +50,7 @@ from toonmotion.deform.deformer import DeformSettings
 from toonmotion.io.project import load_project, save_project
 from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.keyshape.space import KeyShapeSpace
+from toonmotion.keyshape.video import VideoCapture
 from toonmotion.render.sequence import write_animation
 from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.sketch import SketchMatch
@@ -66,8 +69,10 @@ __all__ = [
     "SameDepthOverlap",
     "SketchMatch",
     "TrackSettings",
+    "VideoCapture",
     "animate_character",
     "capture_contours",
+    "capture_video",
     "correct_regions",
     "delete_key",
     "exaggerate",
@@ -83,6 +88,7 @@ __all__ = [
     "retarget",
     "retarget_keyposes",
     "retarget_keyshapes",
+    "pick_layer",
     "retarget_line_of_action",
     "retime",
     "rig_again",

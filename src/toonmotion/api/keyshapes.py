@@ -3,6 +3,8 @@ contour capture (docs/keyshapes.md)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -12,9 +14,13 @@ from toonmotion.keyshape.arap import ArapPair, triangulate_shape
 from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.keyshape.contour import capture_contours as _capture
 from toonmotion.keyshape.line_of_action import capture_lines, captured_lines, retarget_line
+from toonmotion.keyshape.matte import pick_layer as _pick_layer
 from toonmotion.keyshape.retarget import pin as pin_point
 from toonmotion.keyshape.retarget import retarget_poses, retarget_shapes
 from toonmotion.keyshape.space import KeyShapeSpace, build_space
+from toonmotion.keyshape.video import VideoCapture
+from toonmotion.keyshape.video import capture_video as _capture_video
+from toonmotion.progress import Progress
 from toonmotion.render.keyshape_sheet import inbetween_sheet
 from toonmotion.rig.skeleton import Skeleton
 
@@ -99,6 +105,96 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike | KeyShapeSpace, *, 
         high = np.append(np.full(L, EIGEN_BOUND), np.inf)
         return _capture(contours, shapes.extended, lower=low, upper=high)
     return _capture(contours, shapes, lower=lower, upper=upper, support=support)
+
+
+def capture_video(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shapes: ArrayLike, *,
+                  key_frames: Sequence[int] = (0,), closed: bool = True, inbetweens: int = 5, eigen: int = 10,
+                  progress: Progress | None = None) -> VideoCapture:
+    """Capture a cartoon layer straight from footage (eq. 8-16): each frame's affine motion and
+    eigen-image weights, and the shape they give.
+
+    The layer's colour matte is learnt from the first key frame (its shape's pixels against
+    their surroundings); the key frames' images, warped through the as-rigid-as-possible
+    in-betweens of their shapes, give the eigen-images; each frame is then tracked from the
+    one before (from the first key frame to the end, and back to the start), affine and weights
+    together (docs/keyshapes.md, "Video capture").
+
+    Parameters
+    ----------
+    frames : (T, h, w, 3) uint8, or a sequence of such images
+        The footage (:func:`toonmotion.io.frames.load_frames` reads videos, GIFs and folders).
+    shapes : (K, N, 2) float
+        The layer's outline at each key frame, points in correspondence (one shape: affine
+        motion only).
+    key_frames : sequence of int
+        The frames the shapes are drawn on, from 0.
+    closed : bool
+        Whether the shapes are closed contours.
+    inbetweens : int
+        ARAP in-betweens per pair of keys.
+    eigen : int
+        Eigen-images kept at most (the paper's L = 10).
+    progress : callable, optional
+        ``progress("capturing", index, count)`` after each frame.
+
+    Returns
+    -------
+    VideoCapture
+        ``affine`` (T, 2, 3) from the first key frame's pixels, ``weights`` (T, L), ``shapes``
+        (T, N, 2), ``residual`` and ``iterations`` per frame.
+
+    Raises
+    ------
+    KeyShapeError
+        For shapes out of correspondence or outside the frame, a key frame outside the
+        sequence, frames of different sizes, or a layer lost from every start.
+
+    Examples
+    --------
+    >>> from toonmotion.sample_cartoons import morphing_character
+    >>> hero = morphing_character(frames=24)
+    >>> keys = list(hero.key_frames)
+    >>> found = capture_video(hero.frames, hero.contours[keys], key_frames=keys)
+    >>> float(np.hypot(*(found.shapes - hero.contours).T).mean()) < 1  # mean point error, px
+    True
+    """
+    return _capture_video(frames, shapes, key_frames=key_frames, closed=closed, inbetweens=inbetweens,
+                          eigen=eigen, progress=progress)
+
+
+def pick_layer(frame: NDArray[np.uint8], point: ArrayLike, *, tolerance: int = 24, points: int = 100
+               ) -> NDArray[np.float64]:
+    """The outline of the layer under ``point`` (x, y) in ``frame``, by its colour: the
+    connected region of colours within ``tolerance`` of their neighbours, holes filled,
+    resampled to ``points`` points from its topmost one. For :func:`capture_video`'s shapes.
+
+    Parameters
+    ----------
+    frame : (h, w, 3) uint8
+    point : (2,) float
+    tolerance : int
+        Colour step allowed between neighbouring pixels, per channel.
+    points : int
+        Points in the outline.
+
+    Returns
+    -------
+    (points, 2) float
+
+    Raises
+    ------
+    KeyShapeError
+        For a point outside the frame, or a region under 16 px or filling the frame.
+
+    Examples
+    --------
+    >>> from toonmotion.sample_cartoons import morphing_character
+    >>> hero = morphing_character(frames=6)
+    >>> outline = pick_layer(hero.frames[0], hero.contours[0].mean(axis=0), points=60)
+    >>> outline.shape
+    (60, 2)
+    """
+    return _pick_layer(frame, point, tolerance=tolerance, points=points)
 
 
 def keyshape_sheet(space: KeyShapeSpace) -> NDArray[np.uint8]:

@@ -1,17 +1,20 @@
 """Key-shape commands (Bregler et al. capture): ``keyshapes``, ``capture-contours``,
-``retarget-keyshapes``, ``retarget-line``."""
+``capture-video``, ``retarget-keyshapes``, ``retarget-line``."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
+from numpy.typing import NDArray
 
 from toonmotion import api
 from toonmotion.cli import options
 from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
+from toonmotion.io.frames import load_frames
 from toonmotion.io.image import save_png
 from toonmotion.io.keyshape_json import (
     load_contours,
@@ -20,9 +23,12 @@ from toonmotion.io.keyshape_json import (
     save_contours,
     save_keymotion,
     save_model,
+    save_video_report,
 )
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import load_keyframes
+from toonmotion.io.video import animation_format, save_animation
+from toonmotion.render.shape_overlay import draw_shape
 
 # Contours of any point count, resampled into correspondence (both capture commands take them).
 Points = Annotated[int | None, typer.Option(
@@ -137,6 +143,97 @@ def retarget_keyshapes(
     save_motion(output, motion)
     typer.echo(f"retargeted {motion.frame_count} frames onto {project.name}'s {len(timeline.keys)} key poses "
                f"-> {output}")
+
+
+@app.command("capture-video")
+def capture_video(
+    source: Annotated[Path, typer.Argument(
+        metavar="INPUT", help="A video, an animated GIF, or a folder (or pattern) of frames.")],
+    output: Annotated[Path, typer.Option(
+        "-o", "--output", help="The captured shape of every frame to write (a contours file, .json).")],
+    keys_file: Annotated[Path | None, typer.Option(
+        "--keys", help="The layer's outline at each key frame, in correspondence (a contours or SVG file; "
+                       "one outline: affine motion only).")] = None,
+    key_frames: Annotated[str | None, typer.Option(
+        "--key-frames", help="The frames the --keys outlines are drawn on, from 0, e.g. 0,8,16 "
+                             r"\[default: 0, for one outline].")] = None,
+    pick: Annotated[str | None, typer.Option(
+        "--pick", help="Instead of --keys: X,Y on the layer in frame --at; its colour region is the layer "
+                       "(affine motion only).")] = None,
+    at: Annotated[int, typer.Option("--at", min=0, help="With --pick: the frame picked in.")] = 0,
+    motion_file: Annotated[Path | None, typer.Option(
+        "--motion", help="Also write the key-shape motion of the captured shapes, with the --keys outlines "
+                         "as keys (for 'retarget-keyshapes').")] = None,
+    report: Annotated[Path | None, typer.Option(
+        "--report", help="Also write each frame's iterations, residual, affine and weights (.csv).")] = None,
+    overlay: Annotated[Path | None, typer.Option(
+        "--overlay", help="Also draw the captured shape on the footage: OUT.mp4, OUT.gif or a folder."
+    )] = None,
+    eigen: Annotated[int, typer.Option("--eigen", min=0, max=100, help="Eigen-images kept, at most.")] = 10,
+    inbetweens: Annotated[int, typer.Option(
+        "--inbetweens", min=0, max=100, help="ARAP in-betweens per pair of keys.")] = 5,
+    fps: Annotated[float | None, typer.Option(
+        "--fps", help="Frame rate \\[default: the video's, else 24].")] = None,
+    points: Points = None,
+    start: Start = None,
+) -> None:
+    """Capture a cartoon layer straight from footage: affine motion and key-images (Bregler et
+    al. 3.3), tracked from the first key frame both ways. See docs/keyshapes.md.
+    """
+    options.suffix(output, ".json", "an output", why="captured shapes are a contours file (JSON); ")
+    if motion_file is not None:
+        options.suffix(motion_file, ".json", "a motion", why="a key-shape motion is JSON; ")
+    if report is not None:
+        options.suffix(report, ".csv", "a report", why="the report is CSV; ")
+    if overlay is not None:
+        animation_format(overlay)
+    if (keys_file is None) == (pick is None):
+        raise SettingsError("give the layer: either --keys OUTLINES.json (and --key-frames) or --pick X,Y")
+    if pick is not None and (key_frames is not None or motion_file is not None):
+        raise SettingsError("--pick gives one outline, on frame --at: --key-frames and --motion go with "
+                            "--keys")
+    spot = None if pick is None else options.point(pick, "--pick")
+    frames, video_fps = load_frames(source)
+    rate = fps if fps is not None else video_fps or 24.0
+    if spot is not None:
+        if at >= len(frames):
+            raise SettingsError(f"--at {at} is outside the footage's {len(frames)} frames")
+        keys, closed, frames_at = api.pick_layer(frames[at], spot, points=points or 100)[None], True, [at]
+    else:
+        assert keys_file is not None  # checked above
+        keys, _, closed = load_contours(keys_file, points=points, start=_start(start, points))
+        frames_at = [0] if key_frames is None and len(keys) == 1 else _key_frames(key_frames, len(keys))
+    with options.progress("capturing") as report_progress:
+        found = api.capture_video(frames, keys, key_frames=frames_at, closed=closed, inbetweens=inbetweens,
+                                  eigen=eigen, progress=report_progress)
+    save_contours(output, found.shapes, fps=rate, closed=closed)
+    if motion_file is not None:
+        save_keymotion(motion_file, api.capture_contours(found.shapes, keys), fps=rate, space="keys")
+    if report is not None:
+        save_video_report(report, found)
+    if overlay is not None:
+        pictures = (_opaque(draw_shape(frame, shape, closed=closed))
+                    for frame, shape in zip(frames, found.shapes, strict=True))
+        save_animation(overlay, pictures, fps=rate, background=(255, 255, 255))
+    typer.echo(f"captured {len(found.shapes)} frames with {len(keys)} key frame(s) and "
+               f"{found.weights.shape[1]} eigen-images: {found.iterations.mean():.1f} iterations a frame, "
+               f"residual {found.residual.mean():.3g} -> {output}")
+
+
+def _opaque(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    return np.dstack([rgb, np.full(rgb.shape[:2], 255, np.uint8)])
+
+
+def _key_frames(text: str | None, count: int) -> list[int]:
+    if text is None:
+        raise SettingsError(f"--key-frames: say which frames the {count} outlines are drawn on, e.g. 0,8,16")
+    try:
+        frames = [int(f) for f in text.split(",")]
+    except ValueError:
+        raise SettingsError(f"--key-frames takes frame numbers separated by commas, got {text!r}") from None
+    if len(frames) != count:
+        raise SettingsError(f"--key-frames names {len(frames)} frames for {count} outlines: one frame each")
+    return frames
 
 
 def _start(text: str | None, points: int | None) -> tuple[float, float] | None:

@@ -19,6 +19,8 @@ Captured motion (:func:`toonmotion.api.capture_contours`)::
     {"format": "toonmotion.keymotion", "version": 1, "fps": 12, "space": "extended" | "keys",
      "affine": [[[a1, a2, dx], [a3, a4, dy]], ...], "weights": [[w1, ...], ...],
      "error": [...], "rounds": [...]}
+
+and video capture's report, frame by frame, as CSV (:func:`save_video_report`).
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.keyshape.line_of_action import resample_line
 from toonmotion.keyshape.model import check_shapes, resample_contour
 from toonmotion.keyshape.space import KeyShapeSpace
+from toonmotion.keyshape.video import VideoCapture
 
 CONTOURS, MODEL, MOTION = "toonmotion.contours", "toonmotion.keyshapes", "toonmotion.keymotion"
 # An SVG shape is sampled at this many points along it, then resampled to SVG_POINTS by arc
@@ -163,6 +166,19 @@ def save_keymotion(path: str | Path, capture: ContourCapture, *, fps: float, spa
             "affine": capture.affine.tolist(), "weights": capture.weights.tolist(),
             "error": capture.error.tolist(), "rounds": capture.rounds.tolist()}
     write_text(path, json.dumps(data) + "\n")
+
+
+def save_video_report(path: str | Path, capture: VideoCapture) -> None:
+    """Video capture frame by frame, as CSV: ``frame, iterations, residual, a1, a2, dx, a3, a4,
+    dy`` and the eigen-image weights ``w1 ..``."""
+    L = capture.weights.shape[1]
+    lines = [",".join(["frame", "iterations", "residual", "a1", "a2", "dx", "a3", "a4", "dy",
+                       *(f"w{k + 1}" for k in range(L))])]
+    for t in range(len(capture.affine)):
+        numbers = [*capture.affine[t].ravel(), *capture.weights[t]]
+        lines.append(",".join([str(t), str(int(capture.iterations[t])), repr(float(capture.residual[t])),
+                               *(repr(float(v)) for v in numbers)]))
+    write_text(path, "\n".join(lines) + "\n")
 
 
 def load_keymotion(path: str | Path) -> tuple[ContourCapture, float, str]:
