@@ -25,11 +25,13 @@ Keys of the one line:
 Then one line per video sequence (``keyshape/video.py``): the generated ones
 (``toonmotion.sample_cartoons``: the bouncing ball, affine only; the morphing character, affine
 and 10 eigen-images; with noise and an occluding bar; the character at twice the size, a layer
-of about 200x200 px), or footage given with ``--footage VIDEO|DIR --outlines KEYS.json
-[--key-frames 0,8,16] [--truth CONTOURS.json]``.
+of about 170x160 px tracked at full size, and at four times, shrunk by 2), or footage given
+with ``--footage VIDEO|DIR --outlines KEYS.json [--key-frames 0,8,16] [--truth CONTOURS.json]``.
 
 Keys of a video line:
-  sequence, frames, keys, eigen, window    the layer's template window, w x h px
+  sequence, frames, keys, eigen
+  shrunk_by       the whole factor the frames were shrunk by (a layer over 200 px across, as
+                  ``capture_video`` does), and window, the template's window, w x h px
   video_ms        milliseconds per frame tracked (one core), the model built beforehand
   build_ms        building the image model (matte, in-betweens, eigen-images)
   iterations      mean Levenberg-Marquardt steps per frame
@@ -104,8 +106,8 @@ def main(argv=None):
                         help="with --footage: the true outline of every frame (a contours file)")
     args = parser.parse_args(argv)
     contour_line(args)
-    for name, frames, outlines, key_frames, truth in sequences(args):
-        video_line(name, frames, outlines, key_frames, truth)
+    for name, frames, outlines, key_frames, truth, largest in sequences(args):
+        video_line(name, frames, outlines, key_frames, truth, largest)
 
 
 def contour_line(args):
@@ -150,7 +152,10 @@ def contour_line(args):
 
 
 def sequences(args):
-    """(name, frames, key outlines, key frames, true outlines or None) for each video line."""
+    """(name, frames, key outlines, key frames, true outlines or None, largest layer tracked at
+    full size) for each video line."""
+    from toonmotion.keyshape.video import LARGEST
+
     if args.footage is not None:
         from toonmotion.io.frames import load_frames
         from toonmotion.io.keyshape_json import load_contours
@@ -159,24 +164,30 @@ def sequences(args):
         outlines, _, _ = load_contours(args.outlines)
         keys = [0] if args.key_frames is None else [int(k) for k in args.key_frames.split(",")]
         truth = None if args.truth is None else load_contours(args.truth)[0]
-        yield args.footage.name, frames, outlines, keys, truth
+        yield args.footage.name, frames, outlines, keys, truth, LARGEST
         return
     from toonmotion.sample_cartoons import bouncing_ball, morphing_character
 
-    for name, cartoon in [("ball", bouncing_ball(frames=48)),
-                          ("ball_noise_bar", bouncing_ball(frames=48, noise=4.0, occluder=True)),
-                          ("character", morphing_character(frames=48)),
-                          ("character_noise_bar", morphing_character(frames=48, noise=4.0, occluder=True)),
-                          ("character_2x", morphing_character(frames=48, size=(480, 400)))]:
+    twice = morphing_character(frames=48, size=(480, 400))
+    for name, cartoon, largest in [
+            ("ball", bouncing_ball(frames=48), LARGEST),
+            ("ball_noise_bar", bouncing_ball(frames=48, noise=4.0, occluder=True), LARGEST),
+            ("character", morphing_character(frames=48), LARGEST),
+            ("character_noise_bar", morphing_character(frames=48, noise=4.0, occluder=True), LARGEST),
+            ("character_2x", twice, LARGEST),
+            ("character_2x_full_size", twice, np.inf),  # the 10 ms goal's 200 x 200 layer, not shrunk
+            ("character_4x", morphing_character(frames=48, size=(960, 800)), LARGEST)]:
         keys = list(cartoon.key_frames)
-        yield name, cartoon.frames, cartoon.contours[keys], keys, cartoon.contours
+        yield name, cartoon.frames, cartoon.contours[keys], keys, cartoon.contours, largest
 
 
-def video_line(name, frames, outlines, key_frames, truth):
+def video_line(name, frames, outlines, key_frames, truth, largest):
     from toonmotion.keyshape.matte import fit_matte
-    from toonmotion.keyshape.video import build_image_model, region_mask, track_layer
+    from toonmotion.keyshape.video import build_image_model, region_mask, shrunk, track_layer
 
     first = key_frames[0]
+    full_frames, full_outlines = frames, outlines
+    frames, outlines, factor = shrunk(frames, outlines, largest)  # as capture_video does
     started = time.perf_counter()
     matte = fit_matte(frames[first], region_mask(outlines[0], frames[first].shape[:2]))
     model = build_image_model(frames, key_frames, outlines, matte)
@@ -185,15 +196,16 @@ def video_line(name, frames, outlines, key_frames, truth):
     found = track_layer(frames[first:], model, matte)
     video_s = time.perf_counter() - started
     count = len(found.shapes)
+    shapes = found.shapes * factor + (factor - 1) / 2
     line = {"sequence": name, "frames": count, "keys": len(outlines), "eigen": len(model.eigen),
-            "window": "x".join(map(str, model.mean.shape[::-1])),
+            "shrunk_by": factor, "window": "x".join(map(str, model.mean.shape[::-1])),
             "video_ms": round(1000 * video_s / count, 2), "build_ms": round(1000 * build_s),
             "iterations": round(float(found.iterations.mean()), 1)}
     if truth is not None:
-        line["point_err_px"] = round(_point_error(found.shapes, truth[first:]), 3)
+        line["point_err_px"] = round(_point_error(shapes, truth[first:]), 3)
     if len(outlines) == 1:  # affine only: OpenCV's ECC alignment is the peer
         started = time.perf_counter()
-        ecc = ecc_track(frames[first:], outlines[0])
+        ecc = ecc_track(full_frames[first:], full_outlines[0])
         ecc_s = time.perf_counter() - started
         line["ecc_ms"] = round(1000 * ecc_s / count, 2)
         if truth is not None:

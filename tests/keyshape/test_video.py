@@ -39,6 +39,18 @@ def test_the_ball_is_captured_by_its_affine_within_a_pixel(settings):
     assert found.weights.shape == (len(ball.frames), 0)
 
 
+def test_a_large_layer_is_captured_on_shrunk_frames_in_the_frames_own_pixels():
+    ball = bouncing_ball(frames=36, size=(800, 600), radius=90.0, points=128)  # 300 px across: halved
+    found = api.capture_video(ball.frames, ball.contours[:1])
+    assert point_error(found, ball) <= 2.0  # a pixel at the shrunk size
+    full = api.capture_video(ball.frames, ball.contours[:1], largest=1000)
+    assert point_error(full, ball) <= 1.0
+    shift = (found.shapes - full.shapes).mean(axis=(0, 1))
+    assert np.abs(shift).max() <= 0.25  # mapped back without a shift
+    moved = np.einsum("tij,nj->tni", found.affine[:, :, :2], ball.contours[0]) + found.affine[:, None, :, 2]
+    np.testing.assert_allclose(moved, found.shapes, atol=1e-6)  # the affine is in the frames' pixels too
+
+
 def test_the_character_is_captured_by_affine_and_key_images_within_a_pixel():
     hero = morphing_character(frames=24)
     shapes, frames = _keys(hero)

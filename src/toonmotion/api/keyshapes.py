@@ -109,7 +109,7 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike | KeyShapeSpace, *, 
 
 def capture_video(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shapes: ArrayLike, *,
                   key_frames: Sequence[int] = (0,), closed: bool = True, inbetweens: int = 5, eigen: int = 10,
-                  progress: Progress | None = None) -> VideoCapture:
+                  largest: float = 200.0, progress: Progress | None = None) -> VideoCapture:
     """Capture a cartoon layer straight from footage (eq. 8-16): each frame's affine motion and
     eigen-image weights, and the shape they give.
 
@@ -134,6 +134,10 @@ def capture_video(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shape
         ARAP in-betweens per pair of keys.
     eigen : int
         Eigen-images kept at most (the paper's L = 10).
+    largest : float
+        A layer more than this many px across is captured on frames shrunk by the smallest
+        whole factor that brings it within (the time grows with the layer's area); the result
+        is in the frames' own pixels.
     progress : callable, optional
         ``progress("capturing", index, count)`` after each frame.
 
@@ -159,7 +163,7 @@ def capture_video(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shape
     True
     """
     return _capture_video(frames, shapes, key_frames=key_frames, closed=closed, inbetweens=inbetweens,
-                          eigen=eigen, progress=progress)
+                          eigen=eigen, largest=largest, progress=progress)
 
 
 def pick_layer(frame: NDArray[np.uint8], point: ArrayLike, *, tolerance: int = 24, points: int = 100

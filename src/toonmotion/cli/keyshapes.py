@@ -172,6 +172,9 @@ def capture_video(
     eigen: Annotated[int, typer.Option("--eigen", min=0, max=100, help="Eigen-images kept, at most.")] = 10,
     inbetweens: Annotated[int, typer.Option(
         "--inbetweens", min=0, max=100, help="ARAP in-betweens per pair of keys.")] = 5,
+    largest: Annotated[float, typer.Option(
+        "--largest", min=16, help="A layer wider or taller than this (px) is captured on frames shrunk by a "
+                                  "whole factor, for speed.")] = 200.0,
     fps: Annotated[float | None, typer.Option(
         "--fps", help="Frame rate \\[default: the video's, else 24].")] = None,
     points: Points = None,
@@ -205,7 +208,7 @@ def capture_video(
         frames_at = [0] if key_frames is None and len(keys) == 1 else _key_frames(key_frames, len(keys))
     with options.progress("capturing") as report_progress:
         found = api.capture_video(frames, keys, key_frames=frames_at, closed=closed, inbetweens=inbetweens,
-                                  eigen=eigen, progress=report_progress)
+                                  eigen=eigen, largest=largest, progress=report_progress)
     save_contours(output, found.shapes, fps=rate, closed=closed)
     if motion_file is not None:
         save_keymotion(motion_file, api.capture_contours(found.shapes, keys), fps=rate, space="keys")

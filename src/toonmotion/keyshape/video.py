@@ -44,6 +44,7 @@ ITERATIONS = 20  # Levenberg-Marquardt steps per solve, at most
 SETTLED = 0.05  # px (at the level's scale): a step that moves no window corner further has converged
 HUBER = 0.35  # Huber's function's knee, as a share of the layer's typical value in the layer image
 SEEN = 0.2  # a start from which the frame shows less of the layer than this share is no start
+LARGEST = 200.0  # px: a layer wider or taller is captured on frames shrunk by a whole factor
 WEIGHT_BOUND = 1.5  # eigen weights stay within +-this (the examples span +-1)
 
 
@@ -233,10 +234,14 @@ def track_layer(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], model: 
 
 def capture_video(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shapes: ArrayLike, *,
                   key_frames: Sequence[int] = (0,), closed: bool = True, inbetweens: int = 5, eigen: int = 10,
-                  progress: Progress | None = None) -> VideoCapture:
+                  largest: float = LARGEST, progress: Progress | None = None) -> VideoCapture:
     """Capture the layer drawn as ``shapes`` (K, N, 2) at ``key_frames`` through ``frames``: its
     colour matte from the first key frame, its image model, and tracking from the first key
     frame to the end and back to the start.
+
+    A layer more than ``largest`` px across is captured on frames shrunk by the smallest whole
+    factor that brings it within (the cost grows with the layer's area); the result is given
+    in the frames' own pixels.
 
     Examples
     --------
@@ -249,6 +254,9 @@ def capture_video(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shape
     _check_frames(frames)
     S = check_shapes(shapes, what="the key frames' shapes")
     keys = _key_frames(key_frames, len(frames), len(S))
+    if not (np.isfinite(largest) and largest >= 16):
+        raise KeyShapeError(f"the largest layer tracked at full size must be at least 16 px, got {largest!r}")
+    frames, S, factor = shrunk(frames, S, largest)
     first = keys[0]
     picture = np.asarray(frames[first])
     matte = fit_matte(picture, region_mask(S[0], picture.shape[:2]))
@@ -261,12 +269,32 @@ def capture_video(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shape
         if progress is not None:
             progress("capturing", done, total)
 
-    forward = track_layer(frames[first:], model, matte, progress=one_more)
-    if first == 0:
-        return forward
-    back = track_layer(frames[first::-1], model, matte, progress=one_more)
-    return VideoCapture(**{name: np.concatenate([getattr(back, name)[:0:-1], getattr(forward, name)])
-                           for name in ("affine", "weights", "shapes", "residual", "iterations")})
+    found = track_layer(frames[first:], model, matte, progress=one_more)
+    if first > 0:
+        back = track_layer(frames[first::-1], model, matte, progress=one_more)
+        found = VideoCapture(**{name: np.concatenate([getattr(back, name)[:0:-1], getattr(found, name)])
+                                for name in ("affine", "weights", "shapes", "residual", "iterations")})
+    if factor == 1:
+        return found
+    # Back to the frames' pixels: x = factor * x_small + centre, on both sides of each affine.
+    centre = (factor - 1) / 2
+    grow = np.array([[factor, 0, centre], [0, factor, centre], [0, 0, 1.0]])
+    affine = np.stack([(grow @ _square(A) @ np.linalg.inv(grow))[:2] for A in found.affine])
+    return VideoCapture(affine=affine, weights=found.weights, shapes=found.shapes * factor + centre,
+                        residual=found.residual, iterations=found.iterations)
+
+
+def shrunk(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shapes: FloatArray, largest: float
+           ) -> tuple[Sequence[NDArray[np.uint8]] | NDArray[np.uint8], FloatArray, int]:
+    """``frames`` and ``shapes`` (K, N, 2) shrunk by the smallest whole factor that brings the
+    shapes within ``largest`` px across (area averaging: pixel i covers pixels ``factor * i`` to
+    ``factor * i + factor - 1``), and the factor (1: as they were)."""
+    factor = max(1, int(np.ceil(float(np.ptp(shapes, axis=1).max()) / largest)))  # the widest shape
+    if factor == 1:
+        return frames, shapes, 1
+    small = [np.asarray(cv2.resize(np.asarray(f), None, fx=1 / factor, fy=1 / factor,
+                                   interpolation=cv2.INTER_AREA), dtype=np.uint8) for f in frames]
+    return small, (shapes - (factor - 1) / 2) / factor, factor
 
 
 def region_mask(polygon: ArrayLike, shape: tuple[int, int]) -> NDArray[np.bool_]:
