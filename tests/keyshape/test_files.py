@@ -9,6 +9,7 @@ import pytest
 from toonmotion import api
 from toonmotion.cli import main
 from toonmotion.errors import KeyShapeError
+from toonmotion.io.image import save_png
 from toonmotion.io.keyshape_json import (
     load_contours,
     load_keymotion,
@@ -118,6 +119,18 @@ def test_contours_captured_with_keys_retarget_onto_other_keys_and_onto_a_rigged_
     shapes, fps, _ = load_contours(tmp_path / "out.json")
     assert fps == 8
     np.testing.assert_allclose(shapes, np.array(clip) * 0.5, atol=1e-5)  # the keys at half size
+    # The output character's picture, drawn in its first key's pixels, animated directly.
+    picture = np.zeros((400, 300, 4), np.uint8)
+    picture[..., :3], picture[..., 3] = (90, 160, 220), 255
+    save_png(tmp_path / "other.png", picture)
+    assert _run("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+                "--onto", tmp_path / "other.json", "--drawing", tmp_path / "other.png",
+                "-o", tmp_path / "frames") == 0
+    assert len(list((tmp_path / "frames").glob("*.png"))) == len(clip)
+    assert _run("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+                "--project", tmp_path / "nowhere", "--poses", tmp_path / "poses.json",
+                "--drawing", tmp_path / "other.png", "-o", tmp_path / "frames2") == 2
+    assert "--drawing goes with --onto" in capsys.readouterr().err
     hero = sample_rig()
     from toonmotion import api as toon
 

@@ -80,3 +80,38 @@ def test_mismatched_keys_are_refused(outlines):
         retarget_shapes(found, outlines[:2], outlines[:2])
     with pytest.raises(KeyShapeError, match="within the motion's"):
         pin(clip, 0, {99: (0, 0)})
+
+
+def _sample_drawing():
+    """The bundled character's picture (RGBA, as rigged) and its outline (every 4th point)."""
+    from toonmotion.samples import sample_rig
+
+    hero = sample_rig()
+    return hero.texture, hero.mesh.V[hero.mesh.boundary[0][::4]]
+
+
+def test_a_drawing_moved_by_its_own_outline_is_itself():
+    from toonmotion import api
+
+    picture, outline = _sample_drawing()
+    still, shifted = api.animate_drawing(picture, outline, [outline, outline + [7, 3]])
+    assert still.shape == shifted.shape
+    low = np.floor(np.vstack([outline, outline + [7, 3]]).min(axis=0) - 8).astype(int)  # the canvas origin
+    inside = np.argwhere(still[..., 3] == 255)
+    assert len(inside) > 0.5 * (picture[..., 3] == 255).sum()  # most of the figure is drawn
+    ys, xs = inside[:, 0], inside[:, 1]
+    np.testing.assert_array_equal(still[ys, xs], picture[ys + low[1], xs + low[0]])  # pixel for pixel
+    np.testing.assert_array_equal(shifted[ys + 3, xs + 7], still[ys, xs])  # and moved whole
+
+
+def test_a_drawing_follows_a_stretched_outline():
+    from toonmotion import api
+
+    picture, outline = _sample_drawing()
+    centre = outline.mean(axis=0)
+    tall = centre + (outline - centre) * [1.0, 1.5]
+    still, stretched = api.animate_drawing(picture, outline, [outline, tall])
+    height = [np.ptp(np.argwhere(frame[..., 3] > 127)[:, 0]) for frame in (still, stretched)]
+    assert abs(height[1] - 1.5 * height[0]) <= 3  # half as tall again, within a pixel or two
+    with pytest.raises(KeyShapeError, match="correspondence"):
+        api.animate_drawing(picture, outline, [tall[:-1]])

@@ -25,6 +25,7 @@ from toonmotion.animate.motion import Motion
 from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, retime, set_key
 from toonmotion.api.capture import track_footage
 from toonmotion.api.keyshapes import (
+    animate_drawing,
     capture_contours,
     capture_video,
     keyshape_sheet,
@@ -71,6 +72,7 @@ __all__ = [
     "TrackSettings",
     "VideoCapture",
     "animate_character",
+    "animate_drawing",
     "capture_contours",
     "capture_video",
     "correct_regions",

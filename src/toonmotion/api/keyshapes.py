@@ -3,18 +3,20 @@ contour capture (docs/keyshapes.md)."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.animate.motion import Motion
 from toonmotion.animate.timeline import Timeline
+from toonmotion.errors import KeyShapeError
 from toonmotion.keyshape.arap import ArapPair, triangulate_shape
 from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.keyshape.contour import capture_contours as _capture
 from toonmotion.keyshape.line_of_action import capture_lines, captured_lines, retarget_line
 from toonmotion.keyshape.matte import pick_layer as _pick_layer
+from toonmotion.keyshape.model import check_shapes
 from toonmotion.keyshape.retarget import pin as pin_point
 from toonmotion.keyshape.retarget import retarget_poses, retarget_shapes
 from toonmotion.keyshape.space import KeyShapeSpace, build_space
@@ -22,6 +24,7 @@ from toonmotion.keyshape.video import VideoCapture
 from toonmotion.keyshape.video import capture_video as _capture_video
 from toonmotion.progress import Progress
 from toonmotion.render.keyshape_sheet import inbetween_sheet
+from toonmotion.render.shape_warp import warp_sequence
 from toonmotion.rig.skeleton import Skeleton
 
 # The bounds on the eigen-shapes' weights in an extended space: half as much again as any
@@ -266,6 +269,55 @@ def retarget_keyshapes(capture: ContourCapture, input_keys: ArrayLike, output_ke
     (1, 5, 2)
     """
     return retarget_shapes(capture, input_keys, output_keys)
+
+
+def animate_drawing(picture: NDArray[np.uint8], outline: ArrayLike, shapes: ArrayLike, *, closed: bool = True,
+                    background: tuple[int, int, int] | None = None) -> Iterator[NDArray[np.uint8]]:
+    """A drawing moved by its outline: ``picture``, drawn with ``outline`` (N, 2) in its pixels,
+    warped onto every shape of ``shapes`` (T, N, 2) — the output of :func:`retarget_keyshapes`
+    with that outline as the first output key (the paper's 2D output).
+
+    The outline's own triangles (Delaunay over its points, those outside a closed outline
+    dropped) carry the picture inside it piecewise-affinely; what lies outside is not drawn.
+
+    Parameters
+    ----------
+    picture : (h, w, 4) uint8
+        RGBA.
+    outline : (N, 2) float
+        The drawing's outline, in its pixels.
+    shapes : (T, N, 2) float
+        The outline of every frame.
+    closed : bool
+        Whether the outline is a closed contour.
+    background : (r, g, b), optional
+        Behind the drawing; transparent by default.
+
+    Returns
+    -------
+    iterator of (H, W, 4) uint8
+        One RGBA frame per shape, all on one canvas that holds every shape (and 8 px round).
+
+    Raises
+    ------
+    KeyShapeError
+        For an outline that cannot be triangulated or shapes of another point count.
+
+    Examples
+    --------
+    >>> picture = np.zeros((40, 40, 4), np.uint8); picture[5:35, 5:35] = (200, 40, 40, 255)
+    >>> square = np.array([(5.0, 5), (35, 5), (35, 35), (5, 35)])
+    >>> frames = list(animate_drawing(picture, square, [square, square * [1.5, 1]]))  # 1.5 times as wide
+    >>> len(frames), frames[0].shape  # one canvas holding both, 8 px round
+    (2, (46, 64, 4))
+    """
+    source = check_shapes(outline, what="the drawing's outline")[0]
+    moved = check_shapes(shapes, what="the shapes")
+    if moved.shape[1] != len(source):
+        raise KeyShapeError(f"the shapes have {moved.shape[1]} points and the drawing's outline "
+                            f"{len(source)}: they must be in correspondence")
+    triangles = triangulate_shape(source, closed=closed)
+    return warp_sequence(picture, source, moved, triangles, background=background)
 
 
 def retarget_keyposes(capture: ContourCapture, input_keys: ArrayLike, skeleton: Skeleton,

@@ -15,7 +15,7 @@ from toonmotion.cli import options
 from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
 from toonmotion.io.frames import load_frames
-from toonmotion.io.image import save_png
+from toonmotion.io.image import load_image, save_png
 from toonmotion.io.keyshape_json import (
     load_contours,
     load_keymotion,
@@ -107,9 +107,17 @@ def retarget_keyshapes(
         help="Key-shape motion captured with the hand-picked keys ('capture-contours').")],
     model: Annotated[Path, typer.Argument(
         metavar="MODEL.json", help="The key-shape model it was captured with.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Contours or a motion to write (.json).")],
+    output: Annotated[Path, typer.Option(
+        "-o", "--output", help="Contours or a motion to write (.json); with --drawing, the animation "
+                               "(OUT.gif, OUT.mp4 or a folder).")],
     onto: Annotated[Path | None, typer.Option(
         "--onto", help="Output key-shapes, one per input key (a contours file): writes contours.")] = None,
+    drawing: Annotated[Path | None, typer.Option(
+        "--drawing", help="With --onto: the output character's picture, drawn in its first key-shape's "
+                          "pixels; the picture inside that outline moves with it, frame by frame.")] = None,
+    background: Annotated[str | None, typer.Option(
+        "--background", help="With --drawing: a background colour #rrggbb \\[default: transparent; "
+                             "white in an MP4].")] = None,
     project: Annotated[Path | None, typer.Option(
         "--project", help="A rigged character, with --poses: writes its motion.")] = None,
     poses: Annotated[Path | None, typer.Option(
@@ -118,12 +126,19 @@ def retarget_keyshapes(
 ) -> None:
     """Replay captured key-shape motion on another character's key-shapes or key poses.
 
-    With --project and --poses the result is a motion: render it with 'toonmotion animate
-    PROJECT OUT.json -o OUT.gif'.
+    With --onto and --drawing the output character's picture is animated directly. With
+    --project and --poses the result is a motion: render it with 'toonmotion animate PROJECT
+    OUT.json -o OUT.gif'.
     """
-    options.suffix(output, ".json", "an output", why="contours and motions are JSON; ")
+    if drawing is None:
+        options.suffix(output, ".json", "an output", why="contours and motions are JSON; ")
+    else:
+        animation_format(output)
+    flat = None if background is None else options.colour(background)
     if (onto is None) == (project is None or poses is None):
         raise SettingsError("give either --onto OUTKEYS.json, or --project PROJECT and --poses KEYS.json")
+    if drawing is not None and onto is None:
+        raise SettingsError("--drawing goes with --onto: the picture is drawn in the first output key-shape")
     captured, fps, space = load_keymotion(motion_file)
     if space != "keys":
         raise SettingsError(f"{motion_file.name} was captured in the extended space: capture it with the "
@@ -131,8 +146,13 @@ def retarget_keyshapes(
     keys = load_model(model).keys
     if onto is not None:
         outputs, _, closed = load_contours(onto)
+        picture = None if drawing is None else load_image(drawing)
         shapes = api.retarget_keyshapes(captured, keys, outputs)
-        save_contours(output, shapes, fps=fps, closed=closed)
+        if picture is None:
+            save_contours(output, shapes, fps=fps, closed=closed)
+        else:
+            frames = api.animate_drawing(picture, outputs[0], shapes, closed=closed, background=flat)
+            save_animation(output, frames, fps=fps, background=flat or (255, 255, 255))
         typer.echo(f"retargeted {len(shapes)} frames onto {len(outputs)} key-shapes -> {output}")
         return
     assert project is not None and poses is not None  # checked above
