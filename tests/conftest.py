@@ -110,3 +110,14 @@ def expect_every_case_to_fail(cases):
                     f"(still failing: {'; '.join(failures)})", pytrace=False)
     if failures:
         raise AssertionError(f"{len(failures)} of {len(cases)} cases fail: " + "; ".join(failures))
+
+
+def run_cli(*argv):
+    """Run the command line in-process; return its exit code (output goes where pytest captures it)."""
+    from toonmotion.cli import main
+
+    try:
+        main([str(a) for a in argv])
+    except SystemExit as stop:
+        return 0 if stop.code is None else stop.code
+    return 0

@@ -111,13 +111,7 @@ def bouncing_ball(*, frames: int = 24, size: tuple[int, int] = (200, 200), radiu
         pen.polygon([tuple(p) for p in contour], fill=BALL, outline=(40, 20, 20))
         stripe_points = stripe @ affine[k, :, :2].T + affine[k, :, 2]
         pen.polygon([tuple(p) for p in stripe_points], fill=STRIPE)
-        if occluder:  # a bar crossing in front, right to left
-            left = width * (1 - k / max(frames - 1, 1)) - 20
-            pen.rectangle([left, 0, left + 14, height], fill=BAR)
-        array = np.asarray(picture, dtype=float)
-        if noise > 0:
-            array = array + rng.normal(0, noise, array.shape)
-        images[k] = np.clip(np.rint(array), 0, 255).astype(np.uint8)
+        images[k] = _finished(picture, k / max(frames - 1, 1), occluder, noise, rng)
     return Cartoon(frames=images, contours=contours, keys=circle[None], affine=affine,
                    weights=np.ones((frames, 1)), fps=fps)
 
@@ -230,15 +224,23 @@ def morphing_character(*, frames: int = 24, size: tuple[int, int] = (240, 200), 
         r = 0.16 * body * np.sqrt(abs(np.linalg.det(affine[f][:, :2])))
         pen.ellipse([eye[0] - r, eye[1] - r, eye[0] + r, eye[1] + r], fill=EYE, outline=INK)
         pen.ellipse([eye[0] - r / 2, eye[1] - r / 2, eye[0] + r / 2, eye[1] + r / 2], fill=PUPIL)
-        if occluder:
-            left = width * (1 - f / max(frames - 1, 1)) - 20
-            pen.rectangle([left, 0, left + 14, height], fill=BAR)
-        array = np.asarray(picture, dtype=float)
-        if noise > 0:
-            array = array + rng.normal(0, noise, array.shape)
-        images[f] = np.clip(np.rint(array), 0, 255).astype(np.uint8)
+        images[f] = _finished(picture, f / max(frames - 1, 1), occluder, noise, rng)
     return Cartoon(frames=images, contours=contours, keys=keys, affine=affine,
                    weights=np.stack(weights)[index], fps=fps, key_frames=tuple(k * hold for k in at_key))
+
+
+def _finished(picture: Image.Image, u: float, occluder: bool, noise: float, rng: np.random.Generator
+              ) -> NDArray[np.uint8]:
+    """The frame at ``u`` (0 first, 1 last) with the occluding bar crossing in front, right to
+    left, and pixel noise of ``noise`` grey levels."""
+    if occluder:
+        width, height = picture.size
+        left = width * (1 - u) - 20
+        ImageDraw.Draw(picture).rectangle([left, 0, left + 14, height], fill=BAR)
+    array = np.asarray(picture, dtype=float)
+    if noise > 0:
+        array = array + rng.normal(0, noise, array.shape)
+    return np.clip(np.rint(array), 0, 255).astype(np.uint8)
 
 
 def _apply(A: NDArray[np.float64], points: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -6,8 +6,8 @@ import json
 import numpy as np
 import pytest
 
+from tests.conftest import run_cli
 from toonmotion import api
-from toonmotion.cli import main
 from toonmotion.errors import KeyShapeError
 from toonmotion.io.image import save_png
 from toonmotion.io.keyshape_json import (
@@ -19,14 +19,6 @@ from toonmotion.io.keyshape_json import (
     save_model,
 )
 from toonmotion.keyshape.model import warp
-
-
-def _run(*argv):
-    try:
-        main([str(a) for a in argv])
-    except SystemExit as stop:
-        return 0 if stop.code is None else stop.code
-    return 0
 
 
 def test_files_round_trip_exactly(tmp_path, smooth_keys):
@@ -55,7 +47,7 @@ def test_contours_read_from_csv(tmp_path, smooth_keys):
 
 def test_the_commands_build_a_model_and_capture_contours(tmp_path, smooth_keys, capsys):
     save_contours(tmp_path / "keys.json", smooth_keys)
-    assert _run("keyshapes", tmp_path / "keys.json", "-o", tmp_path / "model.json",
+    assert run_cli("keyshapes", tmp_path / "keys.json", "-o", tmp_path / "model.json",
                 "--sheet", tmp_path / "sheet.png") == 0
     assert "eigen-shapes" in capsys.readouterr().out and (tmp_path / "sheet.png").stat().st_size > 0
     rng = np.random.default_rng(0)
@@ -64,12 +56,12 @@ def test_the_commands_build_a_model_and_capture_contours(tmp_path, smooth_keys, 
     noise = rng.normal(0, 0.1, (3, *smooth_keys.shape[1:]))
     frames = [warp(a, w, smooth_keys) + e for a, w, e in zip(A, truth, noise, strict=True)]
     save_contours(tmp_path / "clip.json", frames, fps=12)
-    assert _run("capture-contours", tmp_path / "model.json", tmp_path / "clip.json", "--keys",
+    assert run_cli("capture-contours", tmp_path / "model.json", tmp_path / "clip.json", "--keys",
                 "-o", tmp_path / "motion.json") == 0
     found, fps, kind = load_keymotion(tmp_path / "motion.json")
     assert kind == "keys" and fps == 12
     np.testing.assert_allclose(found.weights, truth, atol=0.02)
-    assert _run("capture-contours", tmp_path / "model.json", tmp_path / "clip.json",
+    assert run_cli("capture-contours", tmp_path / "model.json", tmp_path / "clip.json",
                 "-o", tmp_path / "extended.json") == 0
     assert load_keymotion(tmp_path / "extended.json")[0].error.max() < 0.6
 
@@ -86,7 +78,7 @@ def test_the_commands_build_a_model_and_capture_contours(tmp_path, smooth_keys, 
 def test_bad_key_files_are_one_line_and_overwrite_nothing(tmp_path, capsys, content, message):
     (tmp_path / "keys.json").write_text(json.dumps(content))
     (tmp_path / "model.json").write_text("earlier")
-    code = _run("keyshapes", tmp_path / "keys.json", "-o", tmp_path / "model.json")
+    code = run_cli("keyshapes", tmp_path / "keys.json", "-o", tmp_path / "model.json")
     err = capsys.readouterr().err
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
     assert (tmp_path / "model.json").read_text() == "earlier"
@@ -110,11 +102,11 @@ def test_contours_captured_with_keys_retarget_onto_other_keys_and_onto_a_rigged_
     weights = [[1, 0, 0], [0.5, 0.5, 0], [0, 1, 0], [0, 0.5, 0.5], [0, 0, 1]]
     clip = [warp([[1, 0, 8 * t], [0, 1, 0]], w, outlines) for t, w in enumerate(weights)]
     save_contours(tmp_path / "clip.json", clip, fps=8)
-    assert _run("keyshapes", tmp_path / "keys.json", "-o", tmp_path / "model.json") == 0
-    assert _run("capture-contours", tmp_path / "model.json", tmp_path / "clip.json", "--keys",
+    assert run_cli("keyshapes", tmp_path / "keys.json", "-o", tmp_path / "model.json") == 0
+    assert run_cli("capture-contours", tmp_path / "model.json", tmp_path / "clip.json", "--keys",
                 "-o", tmp_path / "motion.json") == 0
     save_contours(tmp_path / "other.json", outlines * 0.5)
-    assert _run("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+    assert run_cli("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
                 "--onto", tmp_path / "other.json", "-o", tmp_path / "out.json") == 0
     shapes, fps, _ = load_contours(tmp_path / "out.json")
     assert fps == 8
@@ -123,11 +115,11 @@ def test_contours_captured_with_keys_retarget_onto_other_keys_and_onto_a_rigged_
     picture = np.zeros((400, 300, 4), np.uint8)
     picture[..., :3], picture[..., 3] = (90, 160, 220), 255
     save_png(tmp_path / "other.png", picture)
-    assert _run("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+    assert run_cli("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
                 "--onto", tmp_path / "other.json", "--drawing", tmp_path / "other.png",
                 "-o", tmp_path / "frames") == 0
     assert len(list((tmp_path / "frames").glob("*.png"))) == len(clip)
-    assert _run("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+    assert run_cli("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
                 "--project", tmp_path / "nowhere", "--poses", tmp_path / "poses.json",
                 "--drawing", tmp_path / "other.png", "-o", tmp_path / "frames2") == 2
     assert "--drawing goes with --onto" in capsys.readouterr().err
@@ -141,7 +133,7 @@ def test_contours_captured_with_keys_retarget_onto_other_keys_and_onto_a_rigged_
         timeline = toon.set_key(hero.skeleton, timeline, frame, Pose(pose))
     save_keyframes(tmp_path / "poses.json", hero.skeleton, timeline)
     toon.save_project(tmp_path / "hero", hero)
-    assert _run("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+    assert run_cli("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
                 "--project", tmp_path / "hero", "--poses", tmp_path / "poses.json",
                 "-o", tmp_path / "hero.json") == 0
     motion = load_motion(tmp_path / "hero.json")
@@ -151,7 +143,7 @@ def test_contours_captured_with_keys_retarget_onto_other_keys_and_onto_a_rigged_
     size = np.hypot(*np.ptp(hero.mesh.V[hero.mesh.boundary[0]], axis=0))
     shift = 16 * size / np.hypot(*np.ptp(outlines[0], axis=0))
     np.testing.assert_allclose(motion.positions[2] - [shift, 0], poses[1], atol=1e-4)
-    assert _run("animate", tmp_path / "hero", tmp_path / "hero.json", "-o", tmp_path / "hero.gif") == 0
+    assert run_cli("animate", tmp_path / "hero", tmp_path / "hero.json", "-o", tmp_path / "hero.gif") == 0
     assert "retargeted" in capsys.readouterr().out
 
 
@@ -168,9 +160,9 @@ def test_contours_of_any_count_direction_and_start_are_resampled_into_correspond
     ragged = json.loads((tmp_path / "ragged.json").read_text())
     ragged["contours"] = [outlines[0].tolist(), outlines[1][::2].tolist(), outlines[2][::-1].tolist()]
     (tmp_path / "ragged.json").write_text(json.dumps(ragged))
-    assert _run("keyshapes", tmp_path / "ragged.json", "-o", tmp_path / "m.json") == 2
+    assert run_cli("keyshapes", tmp_path / "ragged.json", "-o", tmp_path / "m.json") == 2
     x, y = outlines[0][0]
-    assert _run("keyshapes", tmp_path / "ragged.json", "-o", tmp_path / "m.json", "--points", "60",
+    assert run_cli("keyshapes", tmp_path / "ragged.json", "-o", tmp_path / "m.json", "--points", "60",
                 "--start", f"{x},{y}") == 0
     assert load_model(tmp_path / "m.json").keys.shape == (3, 60, 2)
 
@@ -187,8 +179,8 @@ def test_an_svg_files_shapes_are_contours_resampled_into_correspondence(tmp_path
     assert abs(keys[1][:, 0].mean() - 100) < 0.01  # the group's transform (10 px) applied
     np.testing.assert_allclose(keys[2][0], (100, 70), atol=1e-6)  # starts nearest (100, 0)
     np.testing.assert_allclose(keys[2].min(axis=0), (50, 70), atol=1e-6)
-    assert _run("keyshapes", tmp_path / "keys.svg", "-o", tmp_path / "model.json") == 0
+    assert run_cli("keyshapes", tmp_path / "keys.svg", "-o", tmp_path / "model.json") == 0
     assert load_model(tmp_path / "model.json").keys.shape == (3, 100, 2)  # 100 points by default
     (tmp_path / "bad.svg").write_text("<svg><not closed")
-    assert _run("keyshapes", tmp_path / "bad.svg", "-o", tmp_path / "model.json") == 2
+    assert run_cli("keyshapes", tmp_path / "bad.svg", "-o", tmp_path / "model.json") == 2
     assert "cannot read bad.svg as SVG" in capsys.readouterr().err

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
+from tests.conftest import run_cli
 from toonmotion import api
-from toonmotion.cli import main
 from toonmotion.errors import KeyShapeError, SkeletonError
 from toonmotion.io.keyshape_json import load_contours, save_contours
 from toonmotion.keyshape.line_of_action import (
@@ -25,14 +25,6 @@ from toonmotion.rig.kinematics import bone_angles
 from toonmotion.samples import sample_rig
 
 N = 40
-
-
-def _run(*argv):
-    try:
-        main([str(a) for a in argv])
-    except SystemExit as stop:
-        return 0 if stop.code is None else stop.code
-    return 0
 
 
 def _curve(x):
@@ -268,7 +260,7 @@ def test_the_command_retargets_a_lines_file_onto_the_sample_character(tmp_path, 
     lines, _, _ = _clip(key_lines, frames=6, seed=3)
     save_contours(tmp_path / "lines.json", lines[:, ::-1], fps=8, closed=False)  # drawn head to hip
     save_contours(tmp_path / "keys.json", key_lines[:, ::-1], closed=False)
-    assert _run("retarget-line", tmp_path / "lines.json", "--keys", tmp_path / "keys.json",
+    assert run_cli("retarget-line", tmp_path / "lines.json", "--keys", tmp_path / "keys.json",
                 "--project", tmp_path / "hero", "-o", tmp_path / "motion.json") == 0
     assert "retargeted 6 frames" in capsys.readouterr().out
     motion = load_motion(tmp_path / "motion.json")
@@ -276,9 +268,9 @@ def test_the_command_retargets_a_lines_file_onto_the_sample_character(tmp_path, 
     model = captured_lines(capture_lines(lines, key_lines), key_lines)
     np.testing.assert_allclose(motion.positions, retarget_line(model, hero.skeleton), atol=1e-5)
     # Frames as keys, another chain, and the motion renders.
-    assert _run("retarget-line", tmp_path / "lines.json", "--key-frames", "0,2,4", "--chain",
+    assert run_cli("retarget-line", tmp_path / "lines.json", "--key-frames", "0,2,4", "--chain",
                 "hip,torso,neck", "--project", tmp_path / "hero", "-o", tmp_path / "frames.json") == 0
-    assert _run("animate", tmp_path / "hero", tmp_path / "frames.json", "-o", tmp_path / "out.gif") == 0
+    assert run_cli("animate", tmp_path / "hero", tmp_path / "frames.json", "-o", tmp_path / "out.gif") == 0
     assert (tmp_path / "out.gif").stat().st_size > 0
 
 
@@ -294,7 +286,7 @@ def test_the_command_refuses_bad_input_in_one_line(tmp_path, hero, key_lines, ca
     save_contours(tmp_path / "keys.json", key_lines, closed=False)
     (tmp_path / "motion.json").write_text("earlier")
     argv = [str(tmp_path / "keys.json") if a == "KEYS" else a for a in extra]
-    code = _run("retarget-line", tmp_path / "lines.json", *argv, "--project", tmp_path / "hero",
+    code = run_cli("retarget-line", tmp_path / "lines.json", *argv, "--project", tmp_path / "hero",
                 "-o", tmp_path / "motion.json")
     err = capsys.readouterr().err
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
@@ -302,7 +294,7 @@ def test_the_command_refuses_bad_input_in_one_line(tmp_path, hero, key_lines, ca
 
 
 def test_the_commands_help_names_its_options(capsys):
-    assert _run("retarget-line", "--help") == 0
+    assert run_cli("retarget-line", "--help") == 0
     out = capsys.readouterr().out
     for option in ("--keys", "--key-frames", "--project", "--chain", "--direction", "--points", "-o"):
         assert option in out

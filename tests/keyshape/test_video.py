@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import shapely
 
+from tests.conftest import run_cli
 from toonmotion import api
-from toonmotion.cli import main
 from toonmotion.errors import KeyShapeError
 from toonmotion.io.keyshape_json import load_contours, load_keymotion, save_contours
 from toonmotion.keyshape.matte import fit_matte
@@ -166,12 +166,6 @@ def _folder(path, frames):
     return path
 
 
-def _run(*argv):
-    try:
-        main([str(a) for a in argv])
-    except SystemExit as stop:
-        return 0 if stop.code is None else stop.code
-    return 0
 
 
 def test_the_command_writes_shapes_motion_report_and_overlay(tmp_path, capsys):
@@ -179,7 +173,7 @@ def test_the_command_writes_shapes_motion_report_and_overlay(tmp_path, capsys):
     shapes, frames = _keys(hero)
     clip = _folder(tmp_path / "clip", hero.frames)
     save_contours(tmp_path / "keys.json", shapes)
-    code = _run("capture-video", clip, "--keys", tmp_path / "keys.json", "--key-frames",
+    code = run_cli("capture-video", clip, "--keys", tmp_path / "keys.json", "--key-frames",
                 ",".join(map(str, frames)), "-o", tmp_path / "tracked.json",
                 "--motion", tmp_path / "motion.json", "--report", tmp_path / "report.csv",
                 "--overlay", tmp_path / "overlay")
@@ -204,7 +198,7 @@ def test_the_command_refuses_bad_key_frames_in_one_line_and_keeps_what_was_saved
                            (["--key-frames", "0"], "names 1 frames for 2 outlines"),
                            ([], "key-frames"),
                            (["--key-frames", "0,4", "--pick", "5,5"], "either --keys")):
-        code = _run("capture-video", tmp_path / "clip.gif", "--keys", tmp_path / "keys.json", *extra,
+        code = run_cli("capture-video", tmp_path / "clip.gif", "--keys", tmp_path / "keys.json", *extra,
                     "-o", tmp_path / "tracked.json")
         err = capsys.readouterr().err
         assert code == 2 and len(err.strip().splitlines()) == 1 and message in err, err
@@ -215,7 +209,7 @@ def test_the_command_captures_a_picked_layer(tmp_path, capsys):
     hero = morphing_character(frames=12)
     clip = _folder(tmp_path / "clip", hero.frames)
     x, y = hero.contours[0].mean(axis=0) + [0, 10]
-    assert _run("capture-video", clip, "--pick", f"{x},{y}", "--points", "80",
+    assert run_cli("capture-video", clip, "--pick", f"{x},{y}", "--points", "80",
                 "-o", tmp_path / "tracked.json") == 0, capsys.readouterr().err
     data = json.loads((tmp_path / "tracked.json").read_text())
     assert len(data["contours"]) == 12 and len(data["contours"][0]) == 80

@@ -7,8 +7,9 @@ any occluder are 0 and the layer keeps its inner lines. The paper cuts the sum t
 pixels (eq. 16); a flat-coloured layer has no gradient inside, so its position lies in its
 outline, and the outline is seen from both sides here: the template holds a band round the
 layer, where everything counts, and inside the layer (away from the band) a pixel counts as
-much as the current frame's matte says it belongs to the layer (an occluder's pixels do not).
-Residuals are weighed by Huber's function besides.
+much as the current frame's matte says it belongs to the layer. Anywhere, a pixel counts as
+much as its colour is familiar (an occluder's is not). Residuals are weighed by Huber's
+function besides.
 
 *Key-images and eigen-images* (eq. 14-15). The key frames' shapes (contours in correspondence)
 are put in the first key's frame by their least-squares affine; every pair gets ARAP
@@ -18,9 +19,13 @@ points round it) and cross-dissolved. PCA over key and in-between images gives a
 and ``eigen`` eigen-images; each is scaled so the examples' coefficients span [-1, 1], and the
 shapes are regressed on the same coefficients, so every captured frame also has a shape.
 
-*Tracking.* Affine plus eigen weights by Gauss-Newton on eq. 15 (forward additive, the
-frame's gradients by Gaussian derivatives, sigma 1), coarse to fine over an image pyramid, each
-frame started from the previous one moved on at the same rate (the affines' constant velocity).
+*Tracking.* Each frame is started from the one before moved on at the same rate (the affines'
+constant velocity), from the one before, and from the affine that matches the layer's area
+moments; each start as it is and after a translation search on the pyramid's coarsest level,
+judged at full resolution. The best is refined there: affine plus eigen weights by
+Levenberg-Marquardt on eq. 15 (forward additive, the frame's gradients by Gaussian
+derivatives, sigma 1). The intermediate levels were measured to add time, not accuracy
+(docs/keyshapes.md). A layer more than ``LARGEST`` px across is captured on shrunk frames.
 """
 
 from __future__ import annotations
@@ -71,7 +76,8 @@ class ImageModel:
         The shape that goes with each eigen-image's weight: the shape at weights ``a`` is
         ``shape_mean + a @ shape_eigen``.
     levels : int
-        Pyramid levels used for tracking.
+        Pyramid levels: the coarsest (``levels - 1``) is where each start's translation is
+        searched, the layer about 8 px across there.
     """
 
     origin: FloatArray
@@ -105,7 +111,7 @@ class VideoCapture:
     residual : (T,) float
         Root-mean-square of the weighted residual at the finest level (layer-image units).
     iterations : (T,) int
-        Gauss-Newton steps, all levels together.
+        Levenberg-Marquardt steps, every start's and the refinement's together.
     """
 
     affine: FloatArray
