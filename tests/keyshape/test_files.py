@@ -143,6 +143,15 @@ def test_contours_captured_with_keys_retarget_onto_other_keys_and_onto_a_rigged_
     size = np.hypot(*np.ptp(hero.mesh.V[hero.mesh.boundary[0]], axis=0))
     shift = 16 * size / np.hypot(*np.ptp(outlines[0], axis=0))
     np.testing.assert_allclose(motion.positions[2] - [shift, 0], poses[1], atol=1e-4)
+    # A foot held in place on every frame: exactly there, the whole figure moved by as much.
+    assert run_cli("retarget-keyshapes", tmp_path / "motion.json", tmp_path / "model.json",
+                   "--project", tmp_path / "hero", "--poses", tmp_path / "poses.json",
+                   "--pin", "left_foot=100,280", "-o", tmp_path / "held.json") == 0
+    held = load_motion(tmp_path / "held.json")
+    foot = hero.skeleton.index("left_foot")
+    np.testing.assert_allclose(held.positions[:, foot], np.tile([100.0, 280.0], (5, 1)), atol=1e-9)
+    offset = held.positions - motion.positions
+    np.testing.assert_allclose(offset, np.broadcast_to(offset[:, :1], offset.shape), atol=1e-9)
     assert run_cli("animate", tmp_path / "hero", tmp_path / "hero.json", "-o", tmp_path / "hero.gif") == 0
     assert "retargeted" in capsys.readouterr().out
 

@@ -321,8 +321,8 @@ def animate_drawing(picture: NDArray[np.uint8], outline: ArrayLike, shapes: Arra
 
 
 def retarget_keyposes(capture: ContourCapture, input_keys: ArrayLike, skeleton: Skeleton,
-                      key_poses: Timeline, *, fps: float = 12.0,
-                      reference: ArrayLike | None = None) -> Motion:
+                      key_poses: Timeline, *, fps: float = 12.0, reference: ArrayLike | None = None,
+                      pin: tuple[str, dict[int, ArrayLike]] | None = None) -> Motion:
     """Replay captured key-shape motion on a rigged character's key poses, blending every bone's
     angle and length with the captured weights (the paper's articulated figures).
 
@@ -341,6 +341,9 @@ def retarget_keyposes(capture: ContourCapture, input_keys: ArrayLike, skeleton: 
     reference : (n, 2) float, optional
         The character's outline in its first key pose: its size and place carry the input's
         motion over (by default the first pose's joints, which span less than the drawing).
+    pin : (str, dict of int to (x, y)), optional
+        A joint (a foot) and its positions at chosen frames: the motion is moved by the least
+        translation per frame to put it there (blended between pinned frames, held beyond).
 
     Returns
     -------
@@ -370,6 +373,9 @@ def retarget_keyposes(capture: ContourCapture, input_keys: ArrayLike, skeleton: 
     """
     poses = np.stack([key.pose.positions for key in key_poses.keys])
     positions = retarget_poses(capture, input_keys, skeleton, poses, reference=reference)
+    if pin is not None:
+        joint, targets = pin
+        positions = pin_point(positions, skeleton.index(joint), targets)
     return Motion(skeleton=skeleton, positions=positions, fps=fps)
 
 

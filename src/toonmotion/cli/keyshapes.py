@@ -8,7 +8,7 @@ from typing import Annotated
 
 import numpy as np
 import typer
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion import api
 from toonmotion.cli import options
@@ -123,6 +123,11 @@ def retarget_keyshapes(
     poses: Annotated[Path | None, typer.Option(
         "--poses", help="Key-frames of the project's skeleton, one key per input key, in order.")
     ] = None,
+    pin: Annotated[str | None, typer.Option(
+        "--pin", help="With --project: hold a joint at a place, e.g. left_foot=140,280.")] = None,
+    pin_frames: Annotated[str | None, typer.Option(
+        "--pin-frames", help="With --pin: the frames it holds on, e.g. 0,12,24 \\[default: every frame].")
+    ] = None,
 ) -> None:
     """Replay captured key-shape motion on another character's key-shapes or key poses.
 
@@ -137,6 +142,8 @@ def retarget_keyshapes(
     flat = None if background is None else options.colour(background)
     if (onto is None) == (project is None or poses is None):
         raise SettingsError("give either --onto OUTKEYS.json, or --project PROJECT and --poses KEYS.json")
+    if pin is not None and project is None:
+        raise SettingsError("--pin goes with --project: it holds one of the character's joints")
     if drawing is not None and onto is None:
         raise SettingsError("--drawing goes with --onto: the picture is drawn in the first output key-shape")
     captured, fps, space = load_keymotion(motion_file)
@@ -159,7 +166,16 @@ def retarget_keyshapes(
     character = api.load_project(project)
     timeline = load_keyframes(poses, character.skeleton)
     outline = character.mesh.V[character.mesh.boundary[0]]  # the drawing's extent, at rest
-    motion = api.retarget_keyposes(captured, keys, character.skeleton, timeline, fps=fps, reference=outline)
+    held: tuple[str, dict[int, ArrayLike]] | None = None
+    if pin is not None:
+        joint, place = options.named_point(pin, "--pin")
+        held_on = (list(range(len(captured.affine))) if pin_frames is None
+                   else _frame_list(pin_frames, "--pin-frames"))
+        held = (joint, dict.fromkeys(held_on, place))
+    elif pin_frames is not None:
+        raise SettingsError("--pin-frames goes with --pin: say which joint is held where")
+    motion = api.retarget_keyposes(captured, keys, character.skeleton, timeline, fps=fps, reference=outline,
+                                   pin=held)
     save_motion(output, motion)
     typer.echo(f"retargeted {motion.frame_count} frames onto {project.name}'s {len(timeline.keys)} key poses "
                f"-> {output}")
@@ -247,13 +263,17 @@ def _opaque(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
     return np.dstack([rgb, np.full(rgb.shape[:2], 255, np.uint8)])
 
 
+def _frame_list(text: str, option: str) -> list[int]:
+    try:
+        return [int(f) for f in text.split(",")]
+    except ValueError:
+        raise SettingsError(f"{option} takes frame numbers separated by commas, got {text!r}") from None
+
+
 def _key_frames(text: str | None, count: int) -> list[int]:
     if text is None:
         raise SettingsError(f"--key-frames: say which frames the {count} outlines are drawn on, e.g. 0,8,16")
-    try:
-        frames = [int(f) for f in text.split(",")]
-    except ValueError:
-        raise SettingsError(f"--key-frames takes frame numbers separated by commas, got {text!r}") from None
+    frames = _frame_list(text, "--key-frames")
     if len(frames) != count:
         raise SettingsError(f"--key-frames names {len(frames)} frames for {count} outlines: one frame each")
     return frames
