@@ -27,6 +27,7 @@ from toonmotion.api.capture import track_footage
 from toonmotion.api.keyshapes import (
     animate_drawing,
     capture_contours,
+    capture_parts,
     capture_video,
     keyshape_sheet,
     keyshape_space,
@@ -34,6 +35,7 @@ from toonmotion.api.keyshapes import (
     retarget_keyposes,
     retarget_keyshapes,
     retarget_line_of_action,
+    retarget_parts,
 )
 from toonmotion.api.posing import (
     PosedFrame,
@@ -74,6 +76,7 @@ __all__ = [
     "animate_character",
     "animate_drawing",
     "capture_contours",
+    "capture_parts",
     "capture_video",
     "correct_regions",
     "delete_key",
@@ -92,6 +95,7 @@ __all__ = [
     "retarget_keyshapes",
     "pick_layer",
     "retarget_line_of_action",
+    "retarget_parts",
     "retime",
     "rig_again",
     "rig_image",

@@ -3,7 +3,7 @@ contour capture (docs/keyshapes.md)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -17,6 +17,8 @@ from toonmotion.keyshape.contour import capture_contours as _capture
 from toonmotion.keyshape.line_of_action import capture_lines, captured_lines, retarget_line
 from toonmotion.keyshape.matte import pick_layer as _pick_layer
 from toonmotion.keyshape.model import check_shapes
+from toonmotion.keyshape.parts import capture_parts as _capture_parts
+from toonmotion.keyshape.parts import retarget_parts as _retarget_parts
 from toonmotion.keyshape.retarget import pin as pin_point
 from toonmotion.keyshape.retarget import retarget_poses, retarget_shapes
 from toonmotion.keyshape.space import KeyShapeSpace, build_space
@@ -202,6 +204,86 @@ def pick_layer(frame: NDArray[np.uint8], point: ArrayLike, *, tolerance: int = 2
     (60, 2)
     """
     return _pick_layer(frame, point, tolerance=tolerance, points=points)
+
+
+def capture_parts(contours: ArrayLike, shapes: ArrayLike, parts: Mapping[str, Sequence[int]], *,
+                  lower: float = -0.5, upper: float = 1.5, support: int | None = None
+                  ) -> dict[str, ContourCapture]:
+    """Contour capture part by part (3.1.4): each part — a list of point numbers — of the
+    contours gets its own affine and key weights, as a character's legs, arms and head move
+    on their own.
+
+    Parameters
+    ----------
+    contours : (T, N, 2) float
+    shapes : (K, N, 2) float
+        Hand-picked key-shapes.
+    parts : mapping of str to sequence of int
+        Each part's points (at least 3; parts may share points; every point in one).
+    lower, upper : float
+        Each key's weight bounds.
+    support : int, optional
+        At most this many non-zero weights per part.
+
+    Returns
+    -------
+    dict of str to ContourCapture
+
+    Raises
+    ------
+    KeyShapeError
+        For a point in no part, a part of fewer than 3 points or naming a point out of range,
+        and as :func:`capture_contours`.
+
+    Examples
+    --------
+    >>> from toonmotion.keyshape.model import warp
+    >>> S = np.array([[(0.0, 0), (4, 0), (4, 4), (0, 4), (2, 8), (3, 6)],
+    ...               [(0.0, 0), (6, 0), (4, 4), (0, 4), (2, 12), (4, 7)]])
+    >>> frame = np.vstack([warp(np.eye(2, 3), [1, 0], S)[:4], warp(np.eye(2, 3), [0, 1], S)[4:]])
+    >>> found = capture_parts([frame], S, {"body": [0, 1, 2, 3], "head": [2, 3, 4, 5]})
+    >>> found["head"].weights.round(6).tolist()
+    [[0.0, 1.0]]
+    """
+    return _capture_parts(contours, shapes, parts, lower=lower, upper=upper, support=support)
+
+
+def retarget_parts(captures: Mapping[str, ContourCapture], input_keys: ArrayLike, output_keys: ArrayLike,
+                   input_parts: Mapping[str, Sequence[int]], output_parts: Mapping[str, Sequence[int]]
+                   ) -> NDArray[np.float64]:
+    """Replay part-by-part capture (:func:`capture_parts`) on output key-shapes split into the
+    same parts: each output part follows its input part, all placed by the whole keys' one map
+    (so the parts stay together); a point in several parts takes their mean.
+
+    Parameters
+    ----------
+    captures : mapping of str to ContourCapture
+    input_keys : (K, N, 2) float
+    output_keys : (K, M, 2) float
+    input_parts, output_parts : mapping of str to sequence of int
+        The same part names, each with its points in the input and in the output keys.
+
+    Returns
+    -------
+    (T, M, 2) float
+
+    Raises
+    ------
+    KeyShapeError
+        For parts that do not pair up, or as :func:`retarget_keyshapes`.
+
+    Examples
+    --------
+    >>> from toonmotion.keyshape.model import warp
+    >>> S = np.array([[(0.0, 0), (4, 0), (4, 4), (0, 4), (2, 8), (3, 6)],
+    ...               [(0.0, 0), (6, 0), (4, 4), (0, 4), (2, 12), (4, 7)]])
+    >>> parts = {"body": [0, 1, 2, 3], "head": [2, 3, 4, 5]}
+    >>> frame = np.vstack([warp(np.eye(2, 3), [1, 0], S)[:4], warp(np.eye(2, 3), [0, 1], S)[4:]])
+    >>> found = capture_parts([frame], S, parts)
+    >>> retarget_parts(found, S, S * 2, parts, parts).shape
+    (1, 6, 2)
+    """
+    return _retarget_parts(captures, input_keys, output_keys, input_parts, output_parts)
 
 
 def keyshape_sheet(space: KeyShapeSpace) -> NDArray[np.uint8]:

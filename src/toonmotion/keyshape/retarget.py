@@ -38,9 +38,12 @@ from toonmotion.rig.skeleton import Skeleton
 FloatArray = NDArray[np.float64]
 
 
-def retarget_shapes(capture: ContourCapture, input_keys: ArrayLike, output_keys: ArrayLike) -> FloatArray:
+def retarget_shapes(capture: ContourCapture, input_keys: ArrayLike, output_keys: ArrayLike, *,
+                    placing: ArrayLike | None = None) -> FloatArray:
     """The output shapes (T, M, 2): ``output_keys`` (K, M, 2) blended with the captured weights
     and moved as the input moved; ``input_keys`` (K, N, 2) are the keys the motion was captured with.
+    ``placing`` (3, 3) replaces ``C``, the map of the input's first key onto the output's (sub-parts
+    share their whole shapes' one).
 
     Examples
     --------
@@ -58,7 +61,7 @@ def retarget_shapes(capture: ContourCapture, input_keys: ArrayLike, output_keys:
     W = _weights(capture, len(S))
     if len(out) != len(S):
         raise KeyShapeError(f"pair every input key with an output key: {len(S)} inputs, {len(out)} outputs")
-    C = _placing(S[0], out[0])
+    C = place_onto(S[0], out[0]) if placing is None else np.asarray(placing, dtype=float)
     C_inv = np.linalg.inv(C)
     aligned = []
     for s_k, o_k in zip(S, out, strict=True):
@@ -87,7 +90,7 @@ def retarget_poses(capture: ContourCapture, input_keys: ArrayLike, skeleton: Ske
     roots = poses[:, skeleton.parents < 0]
     blended = positions_from_bones(skeleton, np.tensordot(W, roots, axes=1), W @ angles, W @ lengths)
     placed = poses[0] if reference is None else check_shapes(reference, what="the reference outline")[0]
-    return _moved(capture, _placing(S[0], placed), blended)
+    return _moved(capture, place_onto(S[0], placed), blended)
 
 
 def pin(points: ArrayLike, index: int, targets: Mapping[int, ArrayLike]) -> FloatArray:
@@ -125,7 +128,7 @@ def _weights(capture: ContourCapture, keys: int) -> FloatArray:
     return capture.weights
 
 
-def _placing(source: FloatArray, target: FloatArray) -> FloatArray:
+def place_onto(source: FloatArray, target: FloatArray) -> FloatArray:
     """The scale and translation (3, 3) taking ``source``'s centre and size onto ``target``'s."""
     scale = _size(target) / max(_size(source), 1e-9)
     C = np.eye(3)
