@@ -16,7 +16,7 @@ LAYERS = (
     {"cli", "web"},
     {"api"},
     {"io", "render", "testing", "samples", "sample_animation", "sample_cartoons"},
-    {"capture", "keyshape"},
+    {"capture", "keyshape", "proxy3d"},
     {"animate"},
     {"deform"},
     {"rig"},

@@ -88,3 +88,8 @@ class VideoReadError(ToonmotionError):
 class KeyShapeError(ToonmotionError):
     """Key-shapes or contours cannot be used: different point counts, too few points, collinear
     or non-finite points, a model or contour file that does not read."""
+
+
+class ProxyError(ToonmotionError):
+    """A 3D proxy cannot be built: markers that are not finite or repeat a name, no frames, a
+    motion prior that lacks markers or is too short to align, a camera that cannot see them."""

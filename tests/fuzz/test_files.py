@@ -410,3 +410,70 @@ def test_footage_files(valid, data):
         )
     finally:
         shutil.rmtree(work, ignore_errors=True)
+
+
+@given(data=st.data())
+def test_markers_json(tmp_path_factory, data):
+    """Markers files are read by the library (the proxy3d slice has no command yet): markers or a
+    one-line ProxyError; a spoil every reader must refuse is refused."""
+    from toonmotion.errors import ProxyError
+    from toonmotion.io.markers_json import load_markers, save_markers
+    from toonmotion.proxy3d.markers import Markers
+
+    folder = tmp_path_factory.mktemp("markers")
+    valid = Markers(("hips", "knee", "foot"), np.arange(18.0).reshape(3, 3, 2) * 7.5, fps=12)
+    save_markers(folder / "valid.json", valid)
+    document = json.loads((folder / "valid.json").read_text())
+    text, must_refuse, what = data.draw(spoiled_json(document), label="spoiled")
+    (folder / "markers.json").write_text(text)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            markers = load_markers(folder / "markers.json")
+    except ProxyError as error:
+        TALLY["markers json", "refused"] += 1
+        assert "\n" not in str(error)
+        return
+    TALLY["markers json", "accepted"] += 1
+    assert not must_refuse, f"accepted a markers file that should have been refused ({what})"
+    assert markers.positions.shape == (markers.frame_count, len(markers.names), 2)
+    assert np.all(np.isfinite(markers.positions))
+
+
+@given(data=st.data())
+def test_markers_csv(tmp_path_factory, data):
+    """Markers CSV with a cell replaced, a row dropped or repeated, or the text cut: markers or a
+    one-line ProxyError; a coordinate that is not a finite number is refused."""
+    from toonmotion.errors import ProxyError
+    from toonmotion.io.markers_json import load_markers
+
+    rows = [["frame", "marker", "x", "y"]] + [[str(t), name, str(1.5 * t), str(-2.0 * t)]
+                                              for t in range(3) for name in ("hips", "knee")]
+    how = data.draw(st.sampled_from(["cell", "cell", "drop", "repeat", "cut"]), label="how")
+    must_refuse = False
+    if how == "cell":
+        r, c = data.draw(st.integers(0, len(rows) - 1)), data.draw(st.integers(0, 3))
+        new = data.draw(st.sampled_from(BVH_TOKENS + ["hips,knee", '"', "\u00e9"]))
+        must_refuse = r > 0 and c >= 2 and not _finite(new)
+        rows[r][c] = new
+    elif how == "drop":
+        del rows[data.draw(st.integers(0, len(rows) - 1))]
+    elif how == "repeat":
+        r = data.draw(st.integers(0, len(rows) - 1))
+        rows.insert(r, list(rows[r]))
+    text = "\n".join(",".join(row) for row in rows) + "\n"
+    if how == "cut":
+        text = text[: data.draw(st.integers(0, len(text)))]
+    path = tmp_path_factory.mktemp("markers_csv") / "markers.csv"
+    path.write_text(text)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            markers = load_markers(path)
+    except ProxyError as error:
+        TALLY["markers csv", "refused"] += 1
+        assert "\n" not in str(error)
+        return
+    TALLY["markers csv", "accepted"] += 1
+    assert not must_refuse, "a markers CSV with a coordinate that is no finite number was accepted"
+    assert np.all(np.isfinite(markers.positions))

@@ -1,0 +1,296 @@
+"""The motion prior (section 3.1.2): a motion-capture segment's joints matched to the markers.
+
+A :class:`Prior` is the 3D counterpart of :class:`~toonmotion.proxy3d.markers.Markers`: the
+same names, in the same order, with 3D positions ``(T, N, 3)`` and the marker hierarchy read from
+the mocap skeleton (each marker's parent is the nearest of its joint's ancestors that is also a
+marker). It is built from a BVH clip (:func:`prior_from_bvh`), whose joints are matched to
+the markers by name: a marker called after one of the package's standard joints (``hips``,
+``left_elbow``, ..., :data:`~toonmotion.capture.mocap.STANDARD_JOINTS`) finds its joint through
+the CMU, FAIR, Mixamo and Rokoko naming conventions (:func:`~toonmotion.capture.mocap.pick_joints`);
+any other marker must be named like a joint of the clip or mapped to one explicitly.
+
+Frames: positions are turned so that the clip's up axis is +Y (a rotation; right-handed, like
+BVH), in the clip's own units; nothing is scaled. :func:`resample_prior` brings a prior to the
+drawing's frame rate by linear interpolation of positions between frames (joint rotations are
+not interpolated; at mocap rates of 30-120 fps a frame's chord is short and the error small).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from toonmotion import limits
+from toonmotion.capture.bvh_kinematics import BvhClip, forward_kinematics
+from toonmotion.capture.mocap import STANDARD_JOINTS, pick_joints
+from toonmotion.errors import MotionError, ProxyError
+from toonmotion.geometry.arrays import frame_rate, frozen_array
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+# Rotations taking each signed world axis to +Y (row vectors: p @ M.T); proper rotations only.
+_TO_Y_UP = {
+    "+y": np.eye(3),
+    "-y": np.diag([1.0, -1.0, -1.0]),                               # 180 degrees about X
+    "+z": np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]]),          # -90 degrees about X
+    "-z": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),          # +90 degrees about X
+    "+x": np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]),          # +90 degrees about Z
+    "-x": np.array([[0.0, 1, 0], [-1, 0, 0], [0, 0, 1]]),          # -90 degrees about Z
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Prior:
+    """A 3D motion prior matched to the markers.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The markers' names, in the markers' column order.
+    parents : (N,) int
+        Each marker's parent marker (index into ``names``), -1 for a root; from the mocap
+        skeleton's hierarchy.
+    positions : (T, N, 3) float
+        World positions, right-handed, +Y up, in the mocap's units.
+    fps : float
+        Frames per second.
+    joints : tuple of str
+        The mocap joint each marker was matched to (for reports).
+
+    Construction copies the arrays (read-only) and raises :class:`ProxyError` unless the
+    positions are finite ``(T, N, 3)`` with ``T >= 1`` and the parents a forest over the names.
+    """
+
+    names: tuple[str, ...]
+    parents: NDArray[np.int64]
+    positions: NDArray[np.float64]
+    fps: float
+    joints: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        names = tuple(self.names)
+        N = len(names)
+        if N == 0 or len(set(names)) != N:
+            raise ProxyError("a prior needs distinct marker names, at least one")
+        parents = frozen_array(self.parents, dtype=np.int64, shape=(N,), name="the prior's parents",
+                               error=ProxyError)
+        if np.any((parents < -1) | (parents >= N)) or np.any(parents == np.arange(N)):
+            raise ProxyError("the prior's parents must be -1 or the index of another marker")
+        _depths(parents)  # refuses a cycle
+        positions = frozen_array(self.positions, dtype=np.float64, name="the prior's positions",
+                                 error=ProxyError, finite=True)
+        if positions.ndim != 3 or positions.shape[1:] != (N, 3) or len(positions) == 0:
+            raise ProxyError(f"a prior needs positions of shape (frames, {N}, 3), got {positions.shape}")
+        joints = tuple(self.joints) or names
+        if len(joints) != N:
+            raise ProxyError(f"a prior needs one mocap joint name per marker, got {len(joints)} for {N}")
+        object.__setattr__(self, "names", names)
+        object.__setattr__(self, "parents", parents)
+        object.__setattr__(self, "positions", positions)
+        object.__setattr__(self, "fps", frame_rate(self.fps, name="the prior's fps", error=ProxyError))
+        object.__setattr__(self, "joints", joints)
+
+    @property
+    def frame_count(self) -> int:
+        """Number of frames, ``T``."""
+        return len(self.positions)
+
+    @property
+    def limbs(self) -> NDArray[np.int64]:
+        """Limbs as ``(parent, child)`` marker indices, ``(K, 2)``, parents before children.
+
+        A limb is a marker with its parent; the order is by depth from the roots, so a limb's
+        parent limb comes before it.
+        """
+        child = [int(c) for c in _parents_first(self.parents) if self.parents[c] >= 0]
+        return np.array([[self.parents[c], c] for c in child], dtype=np.int64).reshape(-1, 2)
+
+
+def prior_from_bvh(
+    clip: BvhClip,
+    names: Sequence[str],
+    *,
+    joint_map: Mapping[str, str] | None = None,
+    up: str | None = None,
+    start: int = 0,
+    stop: int | None = None,
+) -> Prior:
+    """Match a BVH clip's joints to markers and read their 3D positions.
+
+    Parameters
+    ----------
+    clip : BvhClip
+        From :func:`toonmotion.io.bvh.load_bvh`.
+    names : sequence of str
+        The markers' names (``Markers.names``): each is looked up in ``joint_map``, else, when it
+        is a standard joint name, by the naming conventions, else as a joint name of the clip.
+    joint_map : dict, optional
+        Marker name -> mocap joint name, for markers named otherwise.
+    up : {"x", "y", "z", "-x", "-y", "-z"}, optional
+        The clip's up axis. Default: the axis along which the head is farthest above the feet
+        (when the clip's standard joints can be found), else +Y, BVH's usual.
+    start, stop : int
+        The segment of the clip to use, as a slice of its frames (CMU clips open with a
+        T-pose frame: ``start=1`` leaves it out).
+
+    Returns
+    -------
+    Prior
+        At the clip's frame rate; resample it with :func:`resample_prior`.
+
+    Raises
+    ------
+    ProxyError
+        Some markers have no joint in the clip (the message names them and lists the joints),
+        two markers map to one joint, the map names a joint the clip lacks, or the segment is
+        empty.
+
+    Examples
+    --------
+    >>> clip = BvhClip(names=("Hips", "Knee", "Knee_end"), parents=np.array([-1, 0, 1]),
+    ...                offsets=np.array([[0.0, 0, 0], [0, -5, 0], [0, -5, 0]]),
+    ...                channels=(("Xposition", "Yposition", "Zposition"), ("Xrotation",), ()),
+    ...                motion=np.array([[0, 10, 0, 0], [1, 10, 0, 90]]), frame_time=0.1)
+    >>> prior = prior_from_bvh(clip, ["pelvis", "foot"], joint_map={"pelvis": "Hips", "foot": "Knee_end"})
+    >>> prior.parents.tolist(), prior.positions[1].round(9).tolist()
+    ([-1, 0], [[1.0, 10.0, 0.0], [1.0, 5.0, -5.0]])
+    """
+    names = [str(n) for n in names]
+    joint_map = dict(joint_map or {})
+    unknown = [j for j in joint_map.values() if j not in clip.names]
+    if unknown:
+        raise ProxyError(f"the joint map names {unknown[0]!r}, which the mocap clip does not have; its "
+                         f"joints are: {', '.join(clip.names)}")
+    standard = _standard_picks(clip)
+    found: list[int | None] = []
+    for name in names:
+        if name in joint_map:
+            found.append(clip.names.index(joint_map[name]))
+        elif name in standard:
+            found.append(standard[name])
+        elif name in clip.names:
+            found.append(clip.names.index(name))
+        else:
+            found.append(None)
+    missing = [n for n, j in zip(names, found, strict=True) if j is None]
+    if missing:
+        raise ProxyError(
+            f"the motion prior lacks the marker{'s' if len(missing) > 1 else ''} {', '.join(missing)}: name "
+            f"markers after standard joints ({', '.join(STANDARD_JOINTS)}) or the clip's joints "
+            f"({', '.join(clip.names)}), or map them to joints"
+        )
+    index = [int(j) for j in found if j is not None]
+    if len(set(index)) != len(index):
+        twice = next(j for j in index if index.count(j) > 1)
+        both = [n for n, j in zip(names, index, strict=True) if j == twice]
+        raise ProxyError(f"markers {both[0]!r} and {both[1]!r} both match the mocap joint "
+                         f"{clip.names[twice]!r}; map each marker to its own joint")
+    segment = range(clip.frame_count)[start:stop]
+    if len(segment) == 0:
+        raise ProxyError(f"the prior's segment {start}:{stop} holds none of the clip's {clip.frame_count} "
+                         "frames")
+    every = forward_kinematics(clip)
+    axis = _auto_up(every, standard) if up is None else _axis(up)
+    positions = every[segment.start:segment.stop][:, index] @ _TO_Y_UP[axis].T
+    return Prior(names=tuple(names), parents=_marker_parents(clip.parents, index), positions=positions,
+                 fps=clip.fps, joints=tuple(clip.names[j] for j in index))
+
+
+def resample_prior(prior: Prior, fps: float) -> Prior:
+    """The prior at another frame rate, by linear interpolation of positions between frames.
+
+    Frame ``k`` of the result is the prior at time ``k / fps``, for every such time within the
+    prior's duration ``(T - 1) / prior.fps``.
+
+    Examples
+    --------
+    >>> p = Prior(("a",), [-1], np.array([[[0.0, 0, 0]], [[1.0, 0, 0]], [[2.0, 0, 0]]]), fps=4)
+    >>> r = resample_prior(p, 8)
+    >>> r.positions[:, 0, 0].tolist(), r.fps
+    ([0.0, 0.5, 1.0, 1.5, 2.0], 8.0)
+    """
+    rate = frame_rate(fps, name="the drawing's fps", error=ProxyError)
+    duration = (prior.frame_count - 1) / prior.fps
+    count = int(np.floor(duration * rate + 1e-9)) + 1
+    limits.check("frames", count, "the resampled prior's frame count")
+    times = np.arange(count) * (prior.fps / rate)  # in the prior's frames
+    return Prior(prior.names, prior.parents, sample_frames(prior.positions, times), rate, prior.joints)
+
+
+def sample_frames(positions: ArrayLike, times: ArrayLike) -> NDArray[np.float64]:
+    """``positions`` ``(T, ...)`` at fractional frame numbers ``times`` ``(n,)``, linearly.
+
+    Times are clamped to ``[0, T - 1]``.
+
+    >>> sample_frames(np.array([0.0, 10.0, 20.0]), [0.25, 1.5, 9]).tolist()
+    [2.5, 15.0, 20.0]
+    """
+    P = np.asarray(positions, dtype=float)
+    t = np.clip(np.asarray(times, dtype=float), 0, len(P) - 1)
+    below = np.minimum(np.floor(t).astype(np.int64), len(P) - 1)
+    above = np.minimum(below + 1, len(P) - 1)
+    w = (t - below).reshape((-1,) + (1,) * (P.ndim - 1))
+    return P[below] * (1 - w) + P[above] * w
+
+
+# -- helpers ---------------------------------------------------------------------------------
+
+
+def _standard_picks(clip):
+    try:
+        return pick_joints(clip.names, clip.parents)
+    except MotionError:
+        return {}  # the clip does not follow a known convention: only its own names match
+
+
+def _auto_up(world, standard):
+    """The signed axis along which the head is farthest above the feet over the clip (as
+    :func:`toonmotion.capture.mocap.project_orthographic` finds it); +Y without standard joints."""
+    if not standard:
+        return "+y"
+    feet = world[:, [standard["left_foot"], standard["right_foot"]]].mean(axis=1)
+    rise = (world[:, standard["head"]] - feet).mean(axis=0)
+    axis = int(np.argmax(np.abs(rise)))
+    return ("+" if rise[axis] >= 0 else "-") + "xyz"[axis]
+
+
+def _axis(value):
+    text = str(value).strip().lower()
+    if text.lstrip("+-") not in _AXES or text.count("-") + text.count("+") > 1:
+        raise ProxyError(f"up must be one of x, y, z, -x, -y, -z, got {value!r}")
+    return ("-" if text.startswith("-") else "+") + text.lstrip("+-")
+
+
+def _marker_parents(joint_parents, index):
+    """Each marker's nearest ancestor joint that is also a marker (as a marker index), or -1."""
+    marker_of = {j: m for m, j in enumerate(index)}
+    parents = []
+    for j in index:
+        p = int(joint_parents[j])
+        while p >= 0 and p not in marker_of:
+            p = int(joint_parents[p])
+        parents.append(marker_of.get(p, -1))
+    return np.array(parents, dtype=np.int64)
+
+
+def _depths(parents):
+    """Each marker's number of ancestors; ProxyError on a cycle."""
+    depth = np.full(len(parents), -1)
+    for m in range(len(parents)):
+        chain, p = [m], int(parents[m])
+        while p >= 0 and depth[p] < 0:
+            if p in chain:
+                raise ProxyError("the prior's parents form a cycle; a marker cannot be its own ancestor")
+            chain.append(p)
+            p = int(parents[p])
+        base = depth[p] if p >= 0 else -1
+        for k, c in enumerate(reversed(chain)):
+            depth[c] = base + 1 + k
+    return depth
+
+
+def _parents_first(parents):
+    """Marker indices ordered by depth (stable), so every parent comes before its children."""
+    return np.argsort(_depths(parents), kind="stable")
