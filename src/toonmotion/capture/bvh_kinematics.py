@@ -120,6 +120,31 @@ def forward_kinematics(clip: BvhClip) -> NDArray[np.float64]:
     >>> forward_kinematics(clip).round(12)[0].tolist()
     [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
     """
+    return _world(clip)[0]
+
+
+def world_rotations(clip: BvhClip) -> NDArray[np.float64]:
+    """Every joint's rotation from the world frame at every frame, ``(T, J, 3, 3)``.
+
+    A joint's rotation turns its children's offsets into the world (identity for a joint with
+    no rotation channel under none that turns).
+
+    >>> clip = BvhClip(names=("root", "root_end"), parents=np.array([-1, 0]),
+    ...                offsets=np.array([[0.0, 0, 0], [1, 0, 0]]),
+    ...                channels=(("Zrotation",), ()), motion=np.array([[90.0]]), frame_time=0.04)
+    >>> (world_rotations(clip)[0, 1] @ [1.0, 0, 0]).round(12).tolist()
+    [0.0, 1.0, 0.0]
+    """
+    world_R = _world(clip)[1]
+    out = np.tile(np.eye(3), (clip.frame_count, len(clip.names), 1, 1))
+    for j, R in enumerate(world_R):
+        if R is not None:
+            out[:, j] = R
+    return out
+
+
+def _world(clip):
+    """World positions ``(T, J, 3)`` and each joint's world rotation (None: not turned)."""
     local_R, local_t = _local_transforms(clip)
     world_R: list[NDArray[np.float64] | None] = []  # None: not turned from the world frame
     world_p = np.empty((clip.frame_count, len(clip.names), 3))
@@ -134,7 +159,7 @@ def forward_kinematics(clip: BvhClip) -> NDArray[np.float64]:
             t = world_p[:, p] + t
         world_R.append(R)
         world_p[:, j] = t
-    return world_p
+    return world_p, world_R
 
 
 def _local_transforms(

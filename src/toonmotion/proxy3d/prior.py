@@ -10,9 +10,10 @@ the CMU, FAIR, Mixamo and Rokoko naming conventions (:func:`~toonmotion.capture.
 any other marker must be named like a joint of the clip or mapped to one explicitly.
 
 Frames: positions are turned so that the clip's up axis is +Y (a rotation; right-handed, like
-BVH), in the clip's own units; nothing is scaled. :func:`resample_prior` brings a prior to the
-drawing's frame rate by linear interpolation of positions between frames (joint rotations are
-not interpolated; at mocap rates of 30-120 fps a frame's chord is short and the error small).
+BVH), in the clip's own units; :func:`prior_in_metres` converts them and puts the ground at
+Y = 0. :func:`resample_prior` brings a prior to the drawing's frame rate by linear interpolation
+of positions between frames, and of the joints' turns by normalised quaternion interpolation (at
+mocap rates of 30-120 fps a frame's chord is short and the error small).
 """
 
 from __future__ import annotations
@@ -22,9 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
 from toonmotion import limits
-from toonmotion.capture.bvh_kinematics import BvhClip, forward_kinematics
+from toonmotion.capture.bvh_kinematics import BvhClip, forward_kinematics, world_rotations
 from toonmotion.capture.mocap import STANDARD_JOINTS, pick_joints
 from toonmotion.errors import MotionError, ProxyError
 from toonmotion.geometry.arrays import frame_rate, frozen_array
@@ -58,6 +60,11 @@ class Prior:
         Frames per second.
     joints : tuple of str
         The mocap joint each marker was matched to (for reports).
+    turns : (T, N, 4) float or None
+        For each marker, the world rotation (a unit quaternion ``(x, y, z, w)``) of the mocap
+        joint that turns it: its joint's parent joint, or a root's own. It carries the twist
+        about a limb that positions cannot show (the skeleton proxy's yaw, 3.4.3). None for a
+        prior built from positions alone.
 
     Construction copies the arrays (read-only) and raises :class:`ProxyError` unless the
     positions are finite ``(T, N, 3)`` with ``T >= 1`` and the parents a forest over the names.
@@ -68,6 +75,7 @@ class Prior:
     positions: NDArray[np.float64]
     fps: float
     joints: tuple[str, ...] = ()
+    turns: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         names = tuple(self.names)
@@ -91,6 +99,13 @@ class Prior:
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "fps", frame_rate(self.fps, name="the prior's fps", error=ProxyError))
         object.__setattr__(self, "joints", joints)
+        if self.turns is not None:
+            turns = frozen_array(self.turns, dtype=np.float64, name="the prior's turns", error=ProxyError,
+                                 finite=True)
+            if turns.shape != positions.shape[:2] + (4,):
+                raise ProxyError(f"a prior's turns must have shape {positions.shape[:2] + (4,)}, got "
+                                 f"{turns.shape}")
+            object.__setattr__(self, "turns", turns)
 
     @property
     def frame_count(self) -> int:
@@ -193,9 +208,13 @@ def prior_from_bvh(
                          "frames")
     every = forward_kinematics(clip)
     axis = _auto_up(every, standard) if up is None else _axis(up)
-    positions = every[segment.start:segment.stop][:, index] @ _TO_Y_UP[axis].T
+    to_up = _TO_Y_UP[axis]
+    positions = every[segment.start:segment.stop][:, index] @ to_up.T
+    turning = [int(clip.parents[j]) if clip.parents[j] >= 0 else j for j in index]
+    world = world_rotations(clip)[segment.start:segment.stop][:, turning]
+    turns = Rotation.from_matrix(to_up @ world.reshape(-1, 3, 3)).as_quat().reshape(world.shape[:2] + (4,))
     return Prior(names=tuple(names), parents=_marker_parents(clip.parents, index), positions=positions,
-                 fps=clip.fps, joints=tuple(clip.names[j] for j in index))
+                 fps=clip.fps, joints=tuple(clip.names[j] for j in index), turns=turns)
 
 
 def resample_prior(prior: Prior, fps: float) -> Prior:
@@ -216,7 +235,27 @@ def resample_prior(prior: Prior, fps: float) -> Prior:
     count = int(np.floor(duration * rate + 1e-9)) + 1
     limits.check("frames", count, "the resampled prior's frame count")
     times = np.arange(count) * (prior.fps / rate)  # in the prior's frames
-    return Prior(prior.names, prior.parents, sample_frames(prior.positions, times), rate, prior.joints)
+    return at_times(prior, times, rate)
+
+
+def at_times(prior: Prior, times: ArrayLike, fps: float) -> Prior:
+    """The prior at fractional frame numbers ``times``, as a prior at ``fps``.
+
+    Positions are interpolated linearly, turns by normalised linear interpolation of quaternions
+    (each frame's taken on the same side as the previous one's).
+
+    >>> p = Prior(("a",), [-1], np.array([[[0.0, 0, 0]], [[2.0, 0, 0]]]), fps=4)
+    >>> at_times(p, [0.5], 4).positions.tolist()
+    [[[1.0, 0.0, 0.0]]]
+    """
+    turns = None
+    if prior.turns is not None:
+        q = prior.turns.copy()
+        for t in range(1, len(q)):  # q and -q are one rotation: keep neighbours on one side
+            q[t] *= np.where((q[t] * q[t - 1]).sum(-1) < 0, -1.0, 1.0)[:, None]
+        turns = sample_frames(q, times)
+        turns /= np.linalg.norm(turns, axis=-1, keepdims=True)
+    return Prior(prior.names, prior.parents, sample_frames(prior.positions, times), fps, prior.joints, turns)
 
 
 def sample_frames(positions: ArrayLike, times: ArrayLike) -> NDArray[np.float64]:
@@ -294,3 +333,50 @@ def _depths(parents):
 def _parents_first(parents):
     """Marker indices ordered by depth (stable), so every parent comes before its children."""
     return np.argsort(_depths(parents), kind="stable")
+
+
+# Metres per unit of the units motion-capture files are written in; "cmu" is the CMU database's
+# BVH unit (its ASF length scale 0.45: 1/0.45 inch).
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "inch": 0.0254, "cmu": 0.0254 / 0.45}
+# What a standing adult's markers span from the lowest to the highest (ankle to head joint),
+# metres: the height the unit guess aims at.
+STANDING_SPAN = 1.5
+
+
+def prior_in_metres(prior: Prior, units: float | str | None = None) -> tuple[Prior, float]:
+    """The prior in metres with its ground at Y = 0, and the metres per unit used.
+
+    BVH files do not say their unit. ``units`` gives it: metres per unit, or a name from
+    :data:`UNITS`. Without it, the unit is guessed from the markers' vertical span (the median over
+    frames of the highest minus the lowest marker): the named unit that makes that span
+    nearest :data:`STANDING_SPAN` metres, if within 25 % of it; otherwise the prior is scaled to
+    that span exactly (a figure of unknown units, or not a standing human -- give ``units``).
+    The ground is the lowest marker over the whole clip, moved to Y = 0.
+
+    Examples
+    --------
+    >>> p = Prior(("foot", "head"), [-1, 0], [[[0.0, 10, 0], [0, 160, 0]]], fps=12)
+    >>> m, unit = prior_in_metres(p)
+    >>> unit, m.positions[0].round(9).tolist()
+    (0.01, [[0.0, 0.0, 0.0], [0.0, 1.5, 0.0]])
+    >>> prior_in_metres(p, "inch")[1]
+    0.0254
+    """
+    if units is None:
+        span = float(np.median(np.ptp(prior.positions[..., 1], axis=1)))
+        if not span > 0:
+            raise ProxyError("the prior's markers have no height to guess its units from; give the units")
+        unit, fit = min(((u, abs(np.log(span * u / STANDING_SPAN))) for u in UNITS.values()),
+                        key=lambda a: a[1])
+        scale = unit if fit <= np.log(1.25) else STANDING_SPAN / span
+    elif isinstance(units, str):
+        if units not in UNITS:
+            raise ProxyError(f"unknown units {units!r}; give metres per unit or one of {', '.join(UNITS)}")
+        scale = UNITS[units]
+    else:
+        scale = float(units)
+        if not (np.isfinite(scale) and scale > 0):
+            raise ProxyError(f"units must be a positive number of metres per unit, got {units!r}")
+    positions = prior.positions * scale
+    positions[..., 1] -= positions[..., 1].min()
+    return Prior(prior.names, prior.parents, positions, prior.fps, prior.joints, prior.turns), scale

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from toonmotion.errors import ProxyError
 from toonmotion.proxy3d.descriptor import descriptor_features
 from toonmotion.proxy3d.markers import Markers
-from toonmotion.proxy3d.prior import Prior, resample_prior, sample_frames
+from toonmotion.proxy3d.prior import Prior, at_times, resample_prior
 
 # A drawn frame may stand for at most this many prior frames on average, and the other way round
 # (the prior's length after resampling to the drawing's rate): beyond it the prior is too short.
@@ -244,8 +244,7 @@ def warp_prior(prior: Prior, alignment: Alignment, fps: float) -> Prior:
     [0.0, 1.5]
     """
     at_rate = resample_prior(prior, fps)
-    return Prior(prior.names, prior.parents, sample_frames(at_rate.positions, alignment.frames), at_rate.fps,
-                 prior.joints)
+    return at_times(at_rate, alignment.frames, at_rate.fps)
 
 
 def _features(values, what):
