@@ -1,0 +1,256 @@
+"""Lifting a drawn animation into 3D, end to end (sections 3.1-3.4).
+
+markers + prior (metres, ground at Y = 0) -> time alignment (DTW, 3.1.2) -> orthographic view
+(given, or searched: 3.1.3) -> perspective camera per frame (3.3) -> single-point proxies
+(3.4.1) -> collision volumes, when drawn frames are given (3.4.2) -> skeleton (3.4.3) ->
+:class:`~toonmotion.proxy3d.proxy.Proxy`.
+
+Without a view, the timing and the view depend on each other (DTW compares poses seen through a
+camera; the view search compares aligned poses): we align through the front view, search the
+view, align again through it and search once more.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from toonmotion.errors import ProxyError
+from toonmotion.progress import Progress
+from toonmotion.proxy3d.camera_fit import CameraWeights, estimate_camera
+from toonmotion.proxy3d.markers import Markers
+from toonmotion.proxy3d.orthographic import camera as orthographic_camera
+from toonmotion.proxy3d.orthographic import find_view, view_cost
+from toonmotion.proxy3d.points import point_proxies
+from toonmotion.proxy3d.prior import Prior, prior_in_metres
+from toonmotion.proxy3d.proxy import Proxy
+from toonmotion.proxy3d.skeleton import SkeletonWeights, skeleton_proxy
+from toonmotion.proxy3d.timewarp import align_prior, warp_prior
+from toonmotion.proxy3d.volumes import collision_radii, drawn_widths
+
+# The default image, when neither frames nor a size are given: the markers' extent from the
+# origin, plus this fraction.
+MARGIN = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class LiftReport:
+    """What lifting found and how long it took.
+
+    Attributes
+    ----------
+    azimuth, elevation : float
+        The orthographic view, degrees; ``view_found`` says whether it was searched.
+    view_cost : float
+        :func:`~toonmotion.proxy3d.orthographic.view_cost` of the view (0 perfect, 4 reversed).
+    twin : tuple of float or None
+        The searched view's mirror twin ``(azimuth, elevation, cost)``.
+    units : float
+        Metres per unit of the prior.
+    prior_frames : (T,) float
+        The prior frame (at the drawing's rate) shown at each drawn frame.
+    alignment_cost : float
+        The DTW path's cost.
+    camera_px : float
+        Mean distance, pixels, between the drawn markers and the prior's seen through the
+        estimated camera (what eq. 2 leaves).
+    reproj_px : float
+        Largest distance between a point proxy's projection and its drawn marker.
+    capped : (T, K) bool or None
+        Limb widths whose walk found no boundary (an override may be wanted).
+    warped : Prior
+        The time-aligned prior in metres.
+    times_ms : dict
+        Milliseconds per stage: align, camera, points, volumes, skeleton.
+    left_out : tuple of str
+        A motion's joints that were not lifted (no joint of the prior matches them).
+    """
+
+    azimuth: float
+    elevation: float
+    view_found: bool
+    view_cost: float
+    twin: tuple[float, float, float] | None
+    units: float
+    prior_frames: NDArray[np.float64]
+    alignment_cost: float
+    camera_px: float
+    reproj_px: float
+    capped: NDArray[np.bool_] | None
+    warped: Prior
+    times_ms: dict[str, float] = field(default_factory=dict)
+    left_out: tuple[str, ...] = ()
+
+
+def lift(
+    markers: Markers,
+    prior: Prior,
+    *,
+    view: tuple[float, float] | None = None,
+    focal: float | None = None,
+    size: tuple[int, int] | None = None,
+    frames: ArrayLike | None = None,
+    widths: Mapping[tuple[int, str], tuple[float, float]] | None = None,
+    units: float | str | None = None,
+    band: float = 0.1,
+    relative: bool = False,
+    upper: Sequence[str] | None = None,
+    extra: Sequence[Prior] = (),
+    camera_weights: CameraWeights | None = None,
+    skeleton_weights: SkeletonWeights | None = None,
+    smooth: float = 1.0,
+    progress: Progress | None = None,
+) -> tuple[Proxy, LiftReport]:
+    """Lift drawn markers into a 3D proxy with a motion-capture prior.
+
+    Parameters
+    ----------
+    markers : Markers
+        The drawn markers, pixels (x right, y down).
+    prior : Prior
+        Matched to the markers (:func:`~toonmotion.proxy3d.prior.prior_from_bvh`), in its own
+        units and frame rate.
+    view : (azimuth, elevation), optional
+        The orthographic view in degrees (3.1.3); searched when not given.
+    focal : float, optional
+        Focal length in pixels; default the image's diagonal (a 53-degree diagonal field of
+        view, a "normal" lens).
+    size : (width, height), optional
+        The image size in pixels; default the frames' size, else the markers' extent from the
+        origin plus 5 %.
+    frames : (T, H, W, 3) uint8, optional
+        The drawn frames, for the limbs' widths (collision volumes); without them the proxy has
+        no volumes.
+    widths : dict, optional
+        Width overrides ``(frame, limb) -> (w1,
+                                            w2)`` pixels (:func:`~toonmotion.proxy3d.volumes.drawn_widths`).
+    units : float or str, optional
+        Metres per prior unit (:func:`~toonmotion.proxy3d.prior.prior_in_metres`).
+    band : float
+        The DTW band (:func:`~toonmotion.proxy3d.timewarp.dtw`).
+    relative : bool
+        Relative pose descriptors for the alignment.
+    upper : sequence of str, optional
+        Upper-body markers, when the skeleton's structure does not tell them.
+    extra : sequence of Prior
+        Other clips for the skeleton's PCA subspace (same names; their own units are guessed).
+    camera_weights, skeleton_weights : optional
+        Eq. 2's and eq. 16's weights.
+    smooth : float
+        Eq. 5's weight against eq. 4's (:func:`~toonmotion.proxy3d.points.point_proxies`).
+    progress : callable, optional
+        ``progress(stage, done, total)``.
+
+    Returns
+    -------
+    proxy : Proxy
+    report : LiftReport
+
+    Raises
+    ------
+    ProxyError
+        Markers and prior that do not match, a prior too short to align, frames that do not fit
+        the markers, a camera that cannot see them.
+    """
+    times: dict[str, float] = {}
+    clock = time.perf_counter()
+    in_metres, unit = prior_in_metres(prior, units)
+    image_frames = None if frames is None else np.asarray(frames)
+    if image_frames is not None and (image_frames.ndim != 4 or len(image_frames) != markers.frame_count):
+        raise ProxyError(f"the drawn frames must be one image per marker frame ({markers.frame_count}), got "
+                         f"{'shape ' + str(image_frames.shape)}")
+    width, height = _image_size(markers, size, image_frames)
+    f = float(np.hypot(width, height)) if focal is None else float(focal)
+    if not (np.isfinite(f) and f > 0):
+        raise ProxyError(f"the focal length must be a positive number of pixels, got {focal!r}")
+
+    found = view is None
+    twin = None
+    if view is None:
+        azimuth, elevation = 0.0, 0.0
+        for _ in range(2):
+            alignment = align_prior(markers, in_metres, orthographic_camera(azimuth, elevation), band=band,
+                                    relative=relative)
+            fit = find_view(markers, warp_prior(in_metres, alignment, markers.fps))
+            azimuth, elevation, twin = fit.azimuth, fit.elevation, fit.twin
+    else:
+        azimuth, elevation = (float(v) for v in view)
+    R = orthographic_camera(azimuth, elevation)
+    alignment = align_prior(markers, in_metres, R, band=band, relative=relative)
+    warped = warp_prior(in_metres, alignment, markers.fps)
+    cost = view_cost(markers, warped, azimuth, elevation)
+    times["align"] = _since(clock)
+
+    clock = time.perf_counter()
+    camera = estimate_camera(markers, warped, azimuth=azimuth, elevation=elevation, focal=f, width=width,
+                             height=height, weights=camera_weights, progress=progress)
+    camera_px = float(np.linalg.norm(camera.project(warped.positions) - markers.positions, axis=-1).mean())
+    times["camera"] = _since(clock)
+
+    clock = time.perf_counter()
+    points = point_proxies(camera, markers, warped, smooth_weight=smooth)
+    reproj = float(np.linalg.norm(camera.project(points) - markers.positions, axis=-1).max())
+    times["points"] = _since(clock)
+
+    clock = time.perf_counter()
+    limbs = warped.limbs
+    radii = capped = None
+    if image_frames is not None:
+        drawn, capped = drawn_widths(image_frames, markers, limbs, widths=_limb_widths(widths, warped))
+        radii = collision_radii(camera, markers, points, limbs, drawn)
+    times["volumes"] = _since(clock)
+
+    clock = time.perf_counter()
+    chosen_upper = None
+    if upper is not None:
+        chosen_upper = np.array([n in set(upper) for n in warped.names])
+        unknown = sorted(set(upper) - set(warped.names))
+        if unknown:
+            raise ProxyError(f"upper body names {unknown[0]!r}, which is not a marker")
+    others = [prior_in_metres(p)[0] for p in extra]
+    skeleton = skeleton_proxy(markers, warped, R, upper=chosen_upper, extra=others, weights=skeleton_weights)
+    times["skeleton"] = _since(clock)
+
+    proxy = Proxy(names=markers.names, parents=warped.parents, fps=markers.fps, camera=camera, points=points,
+                  radii=radii, skeleton=skeleton.positions, rest=skeleton.rest,
+                  limb_rotations=skeleton.rotations)
+    report = LiftReport(azimuth=azimuth, elevation=elevation, view_found=found, view_cost=cost, twin=twin,
+                        units=unit, prior_frames=alignment.frames, alignment_cost=alignment.cost,
+                        camera_px=camera_px, reproj_px=reproj, capped=capped, warped=warped, times_ms=times)
+    return proxy, report
+
+
+def _image_size(markers, size, frames):
+    if size is not None:
+        w, h = size
+        if not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= 1 for v in (w, h)):
+            raise ProxyError(f"the image size must be two whole numbers of pixels, got {size!r}")
+        return int(w), int(h)
+    if frames is not None:
+        return int(frames.shape[2]), int(frames.shape[1])
+    top = markers.positions.max(axis=(0, 1))
+    if np.any(top <= 0):
+        raise ProxyError("the markers lie left of or above the image's origin; give the image size")
+    w, h = np.ceil(top * (1 + MARGIN)).astype(int)
+    return int(w), int(h)
+
+
+def _limb_widths(widths, prior):
+    """``(frame, marker) -> widths`` as ``(frame, limb) -> widths``."""
+    ending = {prior.names[c]: k for k, (_, c) in enumerate(prior.limbs)}
+    out = {}
+    for (frame, name), pair in (widths or {}).items():
+        if name not in ending:
+            raise ProxyError(f"a width override names {name!r}, which ends no limb; limbs end at: "
+                             f"{', '.join(ending)}")
+        out[int(frame), ending[name]] = pair
+    return out
+
+
+def _since(start):
+    return round(1000 * (time.perf_counter() - start), 2)
+

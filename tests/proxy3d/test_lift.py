@@ -1,0 +1,128 @@
+"""Lifting end to end (toonmotion.proxy3d.lift, skeleton; sections 3.3-3.4, the paper's section 5 in short).
+
+The CMU walk is the truth, seen by a still perspective camera; other CMU clips are the priors.
+"""
+
+import numpy as np
+import pytest
+
+from tests.proxy3d.conftest import clip_path
+from toonmotion.capture.mocap import STANDARD_JOINTS
+from toonmotion.errors import ProxyError
+from toonmotion.io.bvh import load_bvh
+from toonmotion.proxy3d.camera import PerspectiveCamera
+from toonmotion.proxy3d.descriptor import upper_body
+from toonmotion.proxy3d.lift import lift
+from toonmotion.proxy3d.markers import Markers
+from toonmotion.proxy3d.orthographic import view_direction
+from toonmotion.proxy3d.prior import Prior, prior_from_bvh, prior_in_metres, resample_prior
+from toonmotion.proxy3d.skeleton import limb_lengths
+
+FOCAL, IMAGE = 1000.0, (960, 720)
+
+
+@pytest.fixture(scope="module")
+def truth():
+    clip = load_bvh(clip_path("cmu_07_01_walk.bvh"))
+    return resample_prior(prior_in_metres(prior_from_bvh(clip, STANDARD_JOINTS, start=1))[0], 24)
+
+
+def _camera(truth, view=(30.0, 10.0)):
+    middle = truth.positions.reshape(-1, 3).mean(axis=0)
+    ext = np.concatenate([np.radians([*view, 0.0]), middle + 7 * view_direction(*view)])
+    return PerspectiveCamera(FOCAL, *IMAGE, np.tile(ext, (truth.frame_count, 1)))
+
+
+def _prior(name):
+    return prior_from_bvh(load_bvh(clip_path(name)), STANDARD_JOINTS, start=1)
+
+
+def _drawn(truth, cam, noise=0.0, squash=0.0, seed=0):
+    rng = np.random.default_rng(seed)
+    P = truth.positions.copy()
+    for p, c in truth.limbs:  # squash and stretch, rebuilt from the root
+        scale = 1 + squash * np.sin(rng.uniform(0, 6.3) + rng.uniform(0.1, 0.4) * np.arange(len(P)))
+        P[:, c] = P[:, p] + scale[:, None] * (truth.positions[:, c] - truth.positions[:, p])
+    return Markers(truth.names, cam.project(P) + rng.normal(0, noise, P.shape[:2] + (2,)), fps=truth.fps), P
+
+
+def test_the_truth_as_prior_gives_the_truth_back(truth):
+    """View searched, camera estimated: depths within 1e-6 m, the skeleton within the subspace's reach."""
+    cam = _camera(truth)
+    drawn, _ = _drawn(truth, cam)
+    proxy, report = lift(drawn, truth, focal=FOCAL, size=IMAGE, units=1.0)
+    assert np.abs(proxy.camera.depth(proxy.points) - cam.depth(truth.positions)).max() <= 1e-6
+    assert report.camera_px < 1e-6 and report.reproj_px < 1e-6
+    assert np.abs(proxy.skeleton - truth.positions).max() < 0.1  # P = 20 of 48 dimensions
+
+
+@pytest.mark.parametrize("case", [
+    ("cmu_07_01_walk.bvh", 0.0, 0.0), ("cmu_02_03_run.bvh", 0.0, 0.0), ("cmu_16_07_jump.bvh", 2.0, 0.1),
+    ("cmu_jumping_jacks.bvh", 1.0, 0.1),
+])
+def test_points_reproject_and_skeleton_limbs_keep_their_lengths(truth, case):
+    name, noise, squash = case
+    cam = _camera(truth)
+    drawn, _ = _drawn(truth, cam, noise, squash)
+    prior = _prior(name)
+    longest = int(2 * truth.frame_count * prior.fps / truth.fps)
+    prior = Prior(prior.names, prior.parents, prior.positions[:longest], prior.fps, prior.joints,
+                  prior.turns[:longest])
+    proxy, report = lift(drawn, prior, focal=FOCAL, size=IMAGE)
+    seen = proxy.camera.project(proxy.points)
+    assert np.linalg.norm(seen - drawn.positions, axis=-1).max() <= 0.5  # every frame, every marker
+    lengths = limb_lengths(proxy.skeleton, proxy.limbs)
+    assert np.ptp(lengths, axis=0).max() <= 1e-6
+    L = proxy.limbs
+    assert np.allclose(proxy.limb_vectors(), proxy.skeleton[:, L[:, 1]] - proxy.skeleton[:, L[:, 0]],
+                       atol=1e-9)
+
+
+def test_the_skeleton_takes_the_drawing_s_upper_body_and_keeps_the_prior_s_legs(truth):
+    """Fig. 22: with the run as the prior, the skeleton's upper body is nearer the walk than the prior's,
+    its lower body about as near (poses compared root-relative, in camera axes)."""
+    cam = _camera(truth)
+    drawn, _ = _drawn(truth, cam)
+    proxy, report = lift(drawn, _prior("cmu_02_03_run.bvh"), focal=FOCAL, size=IMAGE)
+    root = int(np.flatnonzero(truth.parents < 0)[0])
+
+    def pose(camera, P):
+        seen = camera.to_camera(P)
+        return seen - seen[:, root:root + 1]
+
+    target = pose(cam, truth.positions)
+    upper = upper_body(truth)
+
+    def rms(P, which):
+        return float(np.sqrt(((pose(proxy.camera, P)[:, which] - target[:, which]) ** 2).sum(-1).mean()))
+
+    assert rms(proxy.skeleton, upper) < 0.9 * rms(report.warped.positions, upper)
+    assert rms(proxy.skeleton, ~upper) < 1.05 * rms(report.warped.positions, ~upper)
+
+
+def test_the_view_is_found_within_a_few_degrees(truth):
+    cam = _camera(truth, (-50.0, 15.0))
+    drawn, _ = _drawn(truth, cam)
+    _, report = lift(drawn, truth, focal=FOCAL, size=IMAGE)
+    found = view_direction(report.azimuth, report.elevation)
+    assert np.degrees(np.arccos(found @ view_direction(-50,
+                                                       15))) < 3.0  # orthographic stand-in for perspective
+
+
+def test_bad_input_is_refused_in_one_line(truth):
+    cam = _camera(truth)
+    drawn, _ = _drawn(truth, cam)
+    cases = [
+        (lambda: lift(Markers(drawn.names, drawn.positions[:5], fps=24), truth, view=(30, 10)), "too long"),
+        (lambda: lift(drawn, Prior(truth.names, truth.parents, truth.positions[:10], fps=24), view=(30, 10)),
+         "too short"),
+        (lambda: lift(drawn, truth, view=(30, 10), frames=np.zeros((3, 10, 10, 3), np.uint8)),
+         "one image per"),
+        (lambda: lift(drawn, truth, view=(30, 10), focal=-1.0, size=IMAGE), "focal"),
+        (lambda: lift(drawn, truth, view=(30, 10), size=(0, 10)), "image size"),
+        (lambda: lift(drawn, truth, view=(30, 10), units="furlong"), "units"),
+    ]
+    for call, match in cases:
+        with pytest.raises(ProxyError, match=match) as caught:
+            call()
+        assert "\n" not in str(caught.value)
