@@ -414,7 +414,7 @@ def test_footage_files(valid, data):
 
 @given(data=st.data())
 def test_markers_json(tmp_path_factory, data):
-    """Markers files are read by the library (the proxy3d slice has no command yet): markers or a
+    """Markers files are read by the library (as `toonmotion lift` reads them): markers or a
     one-line ProxyError; a spoil every reader must refuse is refused."""
     from toonmotion.errors import ProxyError
     from toonmotion.io.markers_json import load_markers, save_markers
@@ -477,3 +477,37 @@ def test_markers_csv(tmp_path_factory, data):
     TALLY["markers csv", "accepted"] += 1
     assert not must_refuse, "a markers CSV with a coordinate that is no finite number was accepted"
     assert np.all(np.isfinite(markers.positions))
+
+
+@given(data=st.data())
+def test_proxy_json(tmp_path_factory, data):
+    """Proxy files are read by the library: a proxy or a one-line ProxyError; a spoil every reader
+    must refuse is refused; whatever is accepted saves and loads back unchanged."""
+    from tests.proxy3d.synthetic_proxy import synthetic_proxy
+    from toonmotion.errors import ProxyError
+    from toonmotion.io.proxy_json import load_proxy, save_proxy
+
+    folder = tmp_path_factory.mktemp("proxy")
+    valid = synthetic_proxy({"hips": None, "knee": "hips", "foot": "knee", "hat": None}, frames=2)
+    save_proxy(folder / "valid.json", valid)
+    document = json.loads((folder / "valid.json").read_text())
+    text, must_refuse, what = data.draw(spoiled_json(document), label="spoiled")
+    (folder / "proxy.json").write_text(text)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            proxy = load_proxy(folder / "proxy.json")
+    except ProxyError as error:
+        TALLY["proxy json", "refused"] += 1
+        assert "\n" not in str(error)
+        return
+    TALLY["proxy json", "accepted"] += 1
+    assert not must_refuse, f"accepted a proxy file that should have been refused ({what})"
+    T, N, K = proxy.frame_count, len(proxy.names), len(proxy.limbs)
+    assert proxy.points.shape == proxy.skeleton.shape == (T, N, 3)
+    assert proxy.limb_rotations.shape == (T, K, 4) and proxy.rest.shape == (K, 3)
+    assert np.all(np.isfinite(proxy.points)) and np.all(np.isfinite(proxy.skeleton))
+    save_proxy(folder / "again.json", proxy)
+    again = load_proxy(folder / "again.json")
+    for field in ("points", "skeleton", "rest", "limb_rotations"):
+        assert getattr(again, field).tobytes() == getattr(proxy, field).tobytes()

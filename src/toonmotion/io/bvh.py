@@ -1,14 +1,21 @@
 """Biovision ``.bvh`` motion capture files: a joint hierarchy and one row of channels per frame.
 
-:func:`load_bvh` only reads: it returns a :class:`~toonmotion.capture.bvh_kinematics.BvhClip`
-of plain arrays, and :func:`toonmotion.capture.bvh_kinematics.forward_kinematics` turns that
-into joint positions (the module states what the channels mean).
+:func:`load_bvh` returns a :class:`~toonmotion.capture.bvh_kinematics.BvhClip` of plain arrays,
+and :func:`toonmotion.capture.bvh_kinematics.forward_kinematics` turns that into joint
+positions (the module states what the channels mean). :func:`save_bvh` writes a clip back.
 
 Reading conventions:
 
 - Channel names are matched case-insensitively; any order of the six is allowed, per joint.
 - ``End Site`` blocks are joints with no channels, named ``<parent>_end``. A joint with no
   OFFSET line sits at its parent.
+
+Writing conventions: joints depth first (each joint's children in the clip's order), one tab of
+indent per level; a childless joint without channels whose name is the one the reader would give
+an End Site there is written as an End Site, any other joint as ROOT or JOINT with its CHANNELS
+line (``CHANNELS 0`` when it has none). Every number is written by ``repr``, the shortest text
+that reads back as the same float, so a clip in depth-first order (every clip :func:`load_bvh`
+returns is) reads back bit for bit.
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ import numpy as np
 from toonmotion import limits
 from toonmotion.capture.bvh_kinematics import BvhClip
 from toonmotion.errors import MotionError
+from toonmotion.io.atomic import write_text
 
 AXES = "XYZ"
 CHANNEL_NAMES = tuple(f"{a}{kind}" for kind in ("position", "rotation") for a in AXES)
@@ -61,6 +69,126 @@ def load_bvh(path: str | os.PathLike[str]) -> BvhClip:
     except UnicodeDecodeError:
         raise MotionError(f"{path} is not a BVH file: it is not text") from None
     return _parse(text.splitlines(), str(path))
+
+
+def save_bvh(path: str | os.PathLike[str], clip: BvhClip) -> None:
+    """Write ``clip`` to ``path`` as a ``.bvh`` file, atomically.
+
+    Several roots, End Sites and any channel order per joint are kept; :func:`load_bvh` reads
+    back the same names, parents, offsets, channels, motion and frame time, bit for bit, when the
+    clip lists its joints depth first (a joint's subtree right after it), as every file does.
+    Another order is written depth first and reads back in that order.
+
+    Raises
+    ------
+    MotionError
+        No joints, a name BVH cannot hold (empty, used twice, with whitespace other than single
+        spaces inside, or a ``{`` word), an unknown or repeated channel, a value that is not finite, or
+        a frame time that is not a positive number of seconds.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> clip = BvhClip(names=("hips", "knee", "knee_end"), parents=np.array([-1, 0, 1]),
+    ...                offsets=np.array([[0.0, 0, 0], [0, -0.4, 0], [0, -0.45, 1e-17]]),
+    ...                channels=(("Xposition", "Yposition", "Zposition"), ("Xrotation",), ()),
+    ...                motion=np.array([[0.0, 0.9, 0.0, 12.5], [0.1, 0.9, 0.0, 1 / 3]]), frame_time=1 / 30)
+    >>> path = Path(tempfile.mkdtemp()) / "clip.bvh"
+    >>> save_bvh(path, clip)
+    >>> print(path.read_text(), end="")  # doctest: +NORMALIZE_WHITESPACE
+    HIERARCHY
+    ROOT hips
+    {
+    \tOFFSET 0.0 0.0 0.0
+    \tCHANNELS 3 Xposition Yposition Zposition
+    \tJOINT knee
+    \t{
+    \t\tOFFSET 0.0 -0.4 0.0
+    \t\tCHANNELS 1 Xrotation
+    \t\tEnd Site
+    \t\t{
+    \t\t\tOFFSET 0.0 -0.45 1e-17
+    \t\t}
+    \t}
+    }
+    MOTION
+    Frames: 2
+    Frame Time: 0.03333333333333333
+    0.0 0.9 0.0 12.5
+    0.1 0.9 0.0 0.3333333333333333
+    >>> back = load_bvh(path)
+    >>> back.names == clip.names and np.array_equal(back.motion, clip.motion)
+    True
+    """
+    write_text(path, _bvh_text(clip))
+
+
+def _bvh_text(clip):
+    """The text of a BVH file holding ``clip``."""
+    names, J = clip.names, len(clip.names)
+    if J == 0:
+        raise MotionError("a BVH clip to write has no joints; BVH needs at least one ROOT")
+    for name in names:
+        if not isinstance(name, str) or name != " ".join(name.split()) or not name or "{" in name.split():
+            raise MotionError(f"joint name {name!r} cannot be written to BVH: a name must be words separated "
+                              "by single spaces, none of them '{'")
+    if len(set(names)) != J:
+        twice = next(n for n in names if names.count(n) > 1)
+        raise MotionError(f"joint name {twice!r} is used twice; BVH joint names must be unique")
+    for name, channels in zip(names, clip.channels, strict=True):
+        if any(c not in CHANNEL_NAMES for c in channels) or len(set(channels)) != len(channels):
+            raise MotionError(f"joint {name!r} has channels {' '.join(channels)}; BVH channels are "
+                              f"{', '.join(CHANNEL_NAMES)}, each at most once per joint")
+    if not (np.isfinite(clip.offsets).all() and np.isfinite(clip.motion).all()):
+        raise MotionError("a BVH clip to write has an offset or a channel value that is not finite")
+    if not (np.isfinite(clip.frame_time) and clip.frame_time > 0):
+        raise MotionError(f"a BVH clip's frame time must be a number of seconds > 0, got {clip.frame_time!r}")
+    children = [[] for _ in range(J)]
+    for j, p in enumerate(clip.parents):
+        if p >= 0:
+            children[p].append(j)
+    order, depth = [], {}
+    for root in np.flatnonzero(clip.parents < 0):
+        stack = [(int(root), 0)]
+        while stack:
+            j, d = stack.pop()
+            order.append(j)
+            depth[j] = d
+            stack.extend((c, d + 1) for c in reversed(children[j]))
+    ends = _end_sites(clip, order, children)
+    lines = ["HIERARCHY"]
+    closing = []  # (depth, joint) of the open blocks
+    for j in order:
+        d = depth[j]
+        while closing and closing[-1] >= d:
+            lines.append("\t" * closing.pop() + "}")
+        tab = "\t" * d
+        head = "End Site" if j in ends else ("ROOT " if clip.parents[j] < 0 else "JOINT ") + names[j]
+        lines += [tab + head, tab + "{", tab + "\tOFFSET " + " ".join(map(repr, clip.offsets[j].tolist()))]
+        if j not in ends:
+            listed = "".join(f" {c}" for c in clip.channels[j])
+            lines.append(f"{tab}\tCHANNELS {len(clip.channels[j])}{listed}")
+        closing.append(d)
+    lines += ["\t" * d + "}" for d in reversed(closing)]
+    starts = np.cumsum([0] + [len(c) for c in clip.channels])
+    columns = [k for j in order for k in range(starts[j], starts[j + 1])]
+    lines += ["MOTION", f"Frames: {clip.frame_count}", f"Frame Time: {clip.frame_time!r}"]
+    lines += [" ".join(map(repr, row)) for row in clip.motion[:, columns].tolist()]
+    return "\n".join(lines) + "\n"
+
+
+def _end_sites(clip, order, children):
+    """The joints to write as End Sites: childless, without channels, and named as the reader
+    would name them there (``<parent>_end``, a number added if taken)."""
+    ends = {j for j in order if clip.parents[j] >= 0 and not children[j] and not clip.channels[j]}
+    place = {j: n for n, j in enumerate(order)}
+    while True:  # each pass drops the joints the reader would name otherwise; names settle
+        read = _name_end_sites([None if j in ends else clip.names[j] for j in order],
+                               [place[clip.parents[j]] if clip.parents[j] >= 0 else -1 for j in order])
+        wrong = {j for j, name in zip(order, read, strict=True) if j in ends and name != clip.names[j]}
+        if not wrong:
+            return ends
+        ends -= wrong
 
 
 # -- parsing ---------------------------------------------------------------------------------

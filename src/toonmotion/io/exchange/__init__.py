@@ -1,0 +1,1 @@
+"""Exchange formats for other tools: glTF (binary ``.glb``) export of 3D proxies."""

@@ -1,0 +1,279 @@
+"""GLB export of a proxy (toonmotion.io.exchange.proxy_gltf), read back and evaluated.
+
+The file is read with pygltflib and its scene evaluated here at every keyframe (node transforms
+``T R S`` composed from the root, morph weights, skinning, the camera's projection): it must
+reproduce the proxy to float32 precision. The Khronos validator checks the file itself.
+"""
+
+import json
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pygltflib as gl
+import pytest
+from scipy.spatial.transform import Rotation
+
+from tests.proxy3d.synthetic_proxy import BRANCHING, FOREST, synthetic_proxy
+from toonmotion.errors import ProxyError
+from toonmotion.io.bvh import save_bvh
+from toonmotion.io.exchange.proxy_gltf import save_proxy_glb
+from toonmotion.proxy3d.proxy import Proxy
+from toonmotion.proxy3d.skeleton_bvh import limb_tree, skeleton_clip
+
+ROOT = Path(__file__).resolve().parents[2]
+VALIDATE = Path(__file__).with_name("validate_gltf.mjs")
+# float32 storage: positions to this many metres, pixels to this many.
+METRES, PIXELS = 1e-5, 1e-3
+
+
+class Scene:
+    """A .glb read back: accessors as arrays, and the nodes' world matrices at each keyframe."""
+
+    def __init__(self, path):
+        self.gltf = gl.GLTF2.load_binary(path)
+        self.blob = self.gltf.binary_blob()
+        self.by_name = {}
+        for i, node in enumerate(self.gltf.nodes):
+            self.by_name.setdefault(node.name, []).append(i)
+        (animation,) = self.gltf.animations
+        self.tracks = {}
+        for channel in animation.channels:
+            sampler = animation.samplers[channel.sampler]
+            assert sampler.interpolation == "LINEAR"
+            self.times = self.read(sampler.input)[:, 0]
+            self.tracks[channel.target.node, channel.target.path] = self.read(sampler.output)
+        self.parent = {c: i for i, node in enumerate(self.gltf.nodes) for c in node.children}
+
+    def read(self, index):
+        accessor = self.gltf.accessors[index]
+        view = self.gltf.bufferViews[accessor.bufferView]
+        dtype = {5126: np.float32, 5123: np.uint16, 5125: np.uint32}[accessor.componentType]
+        width = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}[accessor.type]
+        assert view.byteStride is None
+        start = view.byteOffset + (accessor.byteOffset or 0)
+        data = np.frombuffer(self.blob, dtype=dtype, count=accessor.count * width, offset=start)
+        return data.reshape(accessor.count, width).astype(np.float64 if dtype == np.float32 else np.int64)
+
+    def node(self, name):
+        (index,) = self.by_name[name]
+        return index
+
+    def value(self, node, path, t):
+        if (node, path) in self.tracks:
+            track = self.tracks[node, path]
+            return track.reshape(len(self.times), -1)[t]
+        static = getattr(self.gltf.nodes[node], path)
+        default = {"translation": [0, 0, 0], "rotation": [0, 0, 0, 1], "scale": [1, 1, 1]}[path]
+        return np.array(default if static is None else static, dtype=float)
+
+    def local(self, node, t):
+        M = np.eye(4)
+        turn = Rotation.from_quat(self.value(node, "rotation", t)).as_matrix()
+        M[:3, :3] = turn * self.value(node, "scale", t)  # R @ diag(scale)
+        M[:3, 3] = self.value(node, "translation", t)
+        return M
+
+    def world(self, node, t):
+        M = self.local(node, t)
+        while node in self.parent:
+            node = self.parent[node]
+            M = self.local(node, t) @ M
+        return M
+
+    def at(self, name, t, local_point=(0, 0, 0)):
+        return (self.world(self.node(name), t) @ [*local_point, 1])[:3]
+
+    def weights(self, node, t):
+        return self.tracks[node, "weights"].reshape(len(self.times), -1)[t]
+
+
+@pytest.fixture(scope="module", params=["branching", "forest"])
+def exported(request, tmp_path_factory):
+    proxy = synthetic_proxy(BRANCHING if request.param == "branching" else FOREST, frames=8, seed=5)
+    path = tmp_path_factory.mktemp("glb") / "proxy.glb"
+    save_proxy_glb(path, proxy)
+    return proxy, Scene(path)
+
+
+def test_one_key_per_frame_at_frame_over_fps(exported):
+    proxy, scene = exported
+    assert np.array_equal(scene.times, (np.arange(proxy.frame_count) / proxy.fps).astype(np.float32))
+    assert all(len(track) % proxy.frame_count == 0 for track in scene.tracks.values())
+
+
+def test_skeleton_joints_reproduce_the_skeleton(exported):
+    proxy, scene = exported
+    tree = limb_tree(proxy)
+    error = max(np.abs(scene.at(tree.names[tree.markers[n]], t) - proxy.skeleton[t, n]).max()
+                for t in range(proxy.frame_count) for n in range(len(proxy.names)))
+    assert error < METRES, f"skeleton joints off by {error:.3g} m"
+    # The same joints, names and offsets as the BVH clip.
+    clip = skeleton_clip(proxy)
+    for j, name in enumerate(clip.names):
+        node = scene.gltf.nodes[scene.node(name)]
+        if clip.parents[j] >= 0:
+            assert scene.gltf.nodes[scene.parent[scene.node(name)]].name == clip.names[clip.parents[j]]
+            assert np.allclose(node.translation, clip.offsets[j], rtol=0, atol=0)
+
+
+def test_the_skin_moves_each_limb_with_its_joint(exported):
+    proxy, scene = exported
+    tree = limb_tree(proxy)
+    (skin,) = scene.gltf.skins
+    (mesh_node,) = [n for n in scene.gltf.nodes if n.skin is not None]
+    assert mesh_node.translation is None and mesh_node.rotation is None  # a root with no transform
+    primitive = scene.gltf.meshes[mesh_node.mesh].primitives[0]
+    V = scene.read(primitive.attributes.POSITION)
+    joints = scene.read(primitive.attributes.JOINTS_0)
+    weights = scene.read(primitive.attributes.WEIGHTS_0)
+    assert np.all(weights == [1, 0, 0, 0])
+    ibm = scene.read(skin.inverseBindMatrices).reshape(-1, 4, 4).transpose(0, 2, 1)
+    assert len(ibm) == len(skin.joints)
+    # Octahedra in the tree's order of limb joints: the first vertex at the limb's start, the last
+    # at its end; every vertex bound to its limb's joint.
+    limb_joints = np.flatnonzero(tree.limbs >= 0)
+    assert len(V) == 6 * len(limb_joints)
+    for t in range(proxy.frame_count):
+        for i, j in enumerate(limb_joints):
+            p, c = proxy.limbs[tree.limbs[j]]
+            assert np.all(joints[6 * i:6 * i + 6, 0] == skin.joints.index(scene.node(tree.names[j])))
+            M = scene.world(skin.joints[joints[6 * i, 0]], t) @ ibm[joints[6 * i, 0]]
+            skinned = (M @ np.c_[V[6 * i:6 * i + 6], np.ones(6)].T).T[:, :3]
+            assert np.abs(skinned[0] - proxy.skeleton[t, p]).max() < METRES
+            assert np.abs(skinned[5] - proxy.skeleton[t, c]).max() < METRES
+
+
+def test_cylinders_span_their_markers_with_their_radii(exported):
+    proxy, scene = exported
+    for k, (p, c) in enumerate(proxy.limbs):
+        node = scene.node(f"cylinder/{proxy.names[p]}-{proxy.names[c]}")
+        primitive = scene.gltf.meshes[scene.gltf.nodes[node].mesh].primitives[0]
+        base = scene.read(primitive.attributes.POSITION)
+        targets = [scene.read(target["POSITION"]) for target in primitive.targets]
+        bottom, top = (np.flatnonzero(np.abs(target).sum(1) > 0) for target in targets)
+        assert len(bottom) == len(top) >= 8
+        for t in range(proxy.frame_count):
+            M = scene.world(node, t)
+            w = scene.weights(node, t)
+            assert np.abs(w - proxy.radii[t, k]).max() < METRES
+            V = base + w[0] * targets[0] + w[1] * targets[1]
+            world = (M @ np.c_[V, np.ones(len(V))].T).T[:, :3]
+            ends = proxy.cylinders[t, k]
+            assert np.abs(M @ [0, 0, 0, 1] - [*ends[0], 1]).max() < METRES
+            assert np.abs(M @ [0, 1, 0, 1] - [*ends[1], 1]).max() < METRES
+            axis = (ends[1] - ends[0]) / np.linalg.norm(ends[1] - ends[0])
+            for ring, centre, radius in zip((bottom, top), ends, proxy.radii[t, k], strict=True):
+                offsets = world[ring] - centre
+                assert np.abs(np.linalg.norm(offsets, axis=1) - radius).max() < METRES
+                assert np.abs(offsets @ axis).max() < METRES  # the ring is square to the limb
+
+
+def test_spheres_and_points_follow_the_markers(exported):
+    proxy, scene = exported
+    sphere_radii = proxy.sphere_radii
+    for n, name in enumerate(proxy.names):
+        sphere = scene.node(f"sphere/{name}")
+        V = scene.read(scene.gltf.meshes[scene.gltf.nodes[sphere].mesh].primitives[0].attributes.POSITION)
+        for t in range(proxy.frame_count):
+            assert np.abs(scene.at(f"point/{name}", t) - proxy.points[t, n]).max() < METRES
+            world = (scene.world(sphere, t) @ np.c_[V, np.ones(len(V))].T).T[:, :3]
+            distance = np.linalg.norm(world - proxy.points[t, n], axis=1)
+            assert np.abs(distance - sphere_radii[t, n]).max() < METRES
+
+
+def test_the_camera_sees_points_where_the_proxy_camera_projects_them(exported):
+    proxy, scene = exported
+    node = scene.node("camera")
+    camera = scene.gltf.cameras[scene.gltf.nodes[node].camera]
+    assert camera.type == "perspective"
+    yfov, aspect = camera.perspective.yfov, camera.perspective.aspectRatio
+    W, H = proxy.camera.width, proxy.camera.height
+    assert aspect == W / H
+    expected = proxy.camera.project(proxy.points)
+    worst = 0.0
+    for t in range(proxy.frame_count):
+        view = np.linalg.inv(scene.world(node, t))
+        P = (view @ np.c_[proxy.points[t], np.ones(len(proxy.names))].T).T[:, :3]
+        assert np.all(P[:, 2] < 0)  # glTF cameras look down their -Z
+        ndc = P[:, :2] / -P[:, 2:] / np.tan(yfov / 2) / [aspect, 1]
+        pixels = np.stack([(ndc[:, 0] + 1) / 2 * W, (1 - ndc[:, 1]) / 2 * H], axis=1)
+        worst = max(worst, np.abs(pixels - expected[t]).max())
+    assert worst < PIXELS, f"the glTF camera is {worst:.3g} px off"
+
+
+def test_no_limbs_no_radii_and_one_frame(tmp_path):
+    proxy = synthetic_proxy({"ball": None}, frames=1, radii=False)
+    save_proxy_glb(tmp_path / "ball.glb", proxy)
+    scene = Scene(tmp_path / "ball.glb")
+    assert not scene.gltf.skins and "collision" not in scene.by_name
+    assert np.abs(scene.at("ball", 0) - proxy.skeleton[0, 0]).max() < METRES
+    assert np.abs(scene.at("point/ball", 0) - proxy.points[0, 0]).max() < METRES
+    if _validator():
+        report = _issues(tmp_path / "ball.glb")
+        assert report["numErrors"] == 0 and report["numWarnings"] == 0, report["messages"][:10]
+
+
+def test_values_beyond_float32_are_refused_and_nothing_is_written(tmp_path):
+    proxy = synthetic_proxy({"ball": None}, frames=1, radii=False)
+    far = Proxy(proxy.names, proxy.parents, proxy.fps, proxy.camera, points=proxy.points + 1e39, radii=None,
+                skeleton=proxy.skeleton, rest=proxy.rest, limb_rotations=proxy.limb_rotations)
+    with pytest.raises(ProxyError, match="32-bit floats"):
+        save_proxy_glb(tmp_path / "far.glb", far)
+    assert list(tmp_path.iterdir()) == []
+
+
+# -- the Khronos validator and Blender -----------------------------------------------------------
+
+
+def _validator():
+    """True when node and node_modules/gltf-validator are there; skip (fail under CI=true) if not."""
+    missing = None
+    if shutil.which("node") is None:
+        missing = "node is not installed"
+    elif not (ROOT / "node_modules" / "gltf-validator").is_dir():
+        missing = "node_modules/gltf-validator is not installed (make test runs npm ci)"
+    if missing is None:
+        return True
+    if os.environ.get("CI") == "true":
+        pytest.fail(f"the glTF validator is missing under CI: {missing}")
+    return False
+
+
+def _issues(path):
+    done = subprocess.run(["node", str(VALIDATE), str(path)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+@pytest.mark.parametrize("radii", [True, False], ids=["radii", "no radii"])
+def test_khronos_validator_finds_no_errors(tmp_path, radii):
+    if not _validator():
+        pytest.skip("the glTF validator is not installed: run make test (npm ci)")
+    path = tmp_path / "proxy.glb"
+    save_proxy_glb(path, synthetic_proxy(FOREST, frames=5, radii=radii, gimbal=True))
+    report = _issues(path)
+    assert report["numErrors"] == 0 and report["numWarnings"] == 0, (
+        f"{report['numErrors']} errors, {report['numWarnings']} warnings: {report['messages'][:10]}")
+
+
+@pytest.mark.skipif(shutil.which("blender") is None, reason="Blender is not installed")
+def test_blender_imports_the_glb_and_the_bvh(tmp_path):
+    proxy = synthetic_proxy(FOREST, frames=4)
+    save_proxy_glb(tmp_path / "proxy.glb", proxy)
+    save_bvh(tmp_path / "proxy.bvh", skeleton_clip(proxy))
+    script = (
+        "import bpy\n"
+        "bpy.ops.wm.read_homefile(use_empty=True)\n"
+        f"bpy.ops.import_scene.gltf(filepath={str(tmp_path / 'proxy.glb')!r})\n"
+        f"bpy.ops.import_anim.bvh(filepath={str(tmp_path / 'proxy.bvh')!r})\n"
+        "armatures = [o for o in bpy.data.objects if o.type == 'ARMATURE']\n"
+        "print('ARMATURES', len(armatures), 'CAMERAS', len(bpy.data.cameras))\n"
+    )
+    done = subprocess.run(["blender", "-b", "--factory-startup", "--python-expr", script],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "ARMATURES 2 CAMERAS 1" in done.stdout
