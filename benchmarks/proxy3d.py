@@ -1,24 +1,34 @@
-"""3D proxies (Jain et al. 2012) on real motion capture; JSON lines.
+"""3D proxies (Jain et al. 2012) on real motion capture, after the paper's section 5; JSON lines.
 
-    python benchmarks/proxy3d.py [--input BVH] [--prior BVH ...] [--view=AZ,EL] [--repeat N]
+    python benchmarks/proxy3d.py [--input BVH] [--prior BVH ...] [--view AZ,EL] [--noise PX]
+                                 [--squash FRACTION] [--repeat N] [--no-scale]
 
 Line 1 times dynamic time warping (section 3.1.2) of 1,000 x 1,000 frames of real pose
 descriptors (the input clip and the first prior, each seen from the view and resampled to 1,000
 frames) within a 10% Sakoe-Chiba band: toonmotion's vectorised NumPy implementation against
-dtaidistance's C one (the library toonmotion uses), best of ``--repeat`` runs each, on one core:
+dtaidistance's C one (the library toonmotion uses), best of ``--repeat`` runs each, on one core.
 
-  dtw, frames, band, ours_ms, library_ms, ratio (ours over library), same_path
+Then one line per prior (default: the input itself, then every other CMU clip beside it; any BVH
+clip works as input or prior). The input clip (default: the CMU walk in ../shared/data/mocap, its
+T-pose frame left out, at 24 fps) is the ground truth: it is seen by a still perspective camera
+(``--view``, 7 m from the walk's middle, focal 1,000 px, 960 x 720), optionally with Gaussian
+noise on the markers (``--noise`` px) and every limb scaled per frame by up to ``--squash`` (a
+drawing's squash and stretch, rebuilt from the root). It is lifted with the prior (its first
+``2 x`` the input's duration at most; the view searched, the focal length given) and compared:
 
-Then one line per prior: the input clip (default: the CMU walk in ../shared/data/mocap, its
-T-pose frame left out, at 24 fps) is projected through the orthographic camera ``--view`` into
-2D markers; the prior (default: every other CMU clip there) is aligned to them in time through
-that camera, and the camera's angles are then searched from scratch on the aligned prior:
+  input, prior, frames, prior_frames, noise_px, squash, view_found, facing_deg (how far the
+  prior faces from the input about the vertical; the view found differs by about that),
+  z_err_mean (mean |depth| error of the single-point proxies against the drawn truth, metres,
+  each in its own camera: the paper's fig. 19), reproj_px (largest distance of a point proxy's
+  projection from its marker), camera_px (what the camera fit leaves), skeleton_rms_upper,
+  prior_rms_upper, skeleton_rms_lower, prior_rms_lower (RMS distance, metres, of the skeleton
+  proxy's and the time-aligned prior's joints from the truth's, in camera coordinates: the
+  paper's fig. 22), limb_len_spread (largest change of a skeleton limb's length over the clip),
+  align_ms, camera_ms, points_ms, volumes_ms, skeleton_ms (the whole clip)
 
-  input, prior, frames, prior_frames, align_ms, dtw_cost, view, found, error_deg (angle between
-  the true and found view directions), facing_deg (how far the prior's figure faces from the
-  input's, about the vertical: angles are in each clip's own world, so a prior facing elsewhere
-  shifts the azimuth found by about this much), twin (the found view's planar twin and its
-  cost), cost, view_ms
+The last line times 1,000 frames x 24 markers (the input's first 24 joints apart from their
+parents, End Sites if need be; resampled; itself as the prior; view given): points_ms (goal
+<= 1,000) and skeleton_ms (goal <= 5,000), on one core.
 """
 
 import os
@@ -36,15 +46,20 @@ import numpy as np  # noqa: E402
 from toonmotion.capture.mocap import STANDARD_JOINTS  # noqa: E402
 from toonmotion.errors import ToonmotionError  # noqa: E402
 from toonmotion.io.bvh import load_bvh  # noqa: E402
-from toonmotion.proxy3d.descriptor import descriptor_features  # noqa: E402
+from toonmotion.proxy3d.camera import PerspectiveCamera  # noqa: E402
+from toonmotion.proxy3d.descriptor import descriptor_features, upper_body  # noqa: E402
+from toonmotion.proxy3d.lift import lift  # noqa: E402
 from toonmotion.proxy3d.markers import Markers  # noqa: E402
-from toonmotion.proxy3d.orthographic import camera, find_view, view_direction  # noqa: E402
-from toonmotion.proxy3d.prior import prior_from_bvh, resample_prior, sample_frames  # noqa: E402
-from toonmotion.proxy3d.timewarp import align_prior, dtw, warp_prior  # noqa: E402
+from toonmotion.proxy3d.orthographic import camera, view_direction  # noqa: E402
+from toonmotion.proxy3d.prior import Prior, prior_from_bvh, prior_in_metres, resample_prior, sample_frames  # noqa: E402
+from toonmotion.proxy3d.timewarp import dtw  # noqa: E402
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
 DEFAULT_INPUT = DEFAULT_DIR / "cmu_07_01_walk.bvh"
 FPS = 24.0
+DISTANCE = 7.0  # metres from the camera to the input's middle
+FOCAL = 1000.0
+IMAGE = (960, 720)
 
 
 def load_prior(path):
@@ -82,44 +97,123 @@ def facing(prior):
     return float(np.degrees(np.arctan2(-left[2], left[0])))  # facing = left x up
 
 
-def view_line(source, prior, view, input_name, prior_name):
-    R = camera(*view)
-    drawn = Markers(source.names, 5 * source.positions @ R.T + [320, 240], fps=source.fps)
-    align_ms, found = best_ms(lambda: align_prior(drawn, prior, R), 1)
-    warped = warp_prior(prior, found, drawn.fps)
-    view_ms, fit = best_ms(lambda: find_view(drawn, warped), 1)
-    error = np.degrees(np.arccos(np.clip(view_direction(*view) @ view_direction(fit.azimuth, fit.elevation),
-                                         -1, 1)))
-    return {"input": input_name, "prior": prior_name, "frames": drawn.frame_count,
-            "prior_frames": prior.frame_count, "align_ms": round(align_ms, 1),
-            "dtw_cost": round(found.cost, 3),
-            "view": list(view), "found": [round(fit.azimuth, 2), round(fit.elevation, 2)],
-            "error_deg": round(float(error), 2),
-            "facing_deg": round((facing(prior) - facing(source) + 180) % 360 - 180, 2),
-            "twin": [round(v, 3) for v in fit.twin],
-            "cost": round(fit.cost, 4), "view_ms": round(view_ms, 1)}
+def truth_camera(truth, view, frames):
+    """A still camera ``DISTANCE`` m from the clip's middle, looking at it from ``view``."""
+    middle = truth.positions.reshape(-1, 3).mean(axis=0)
+    centre = middle + DISTANCE * view_direction(*view)
+    ext = np.tile(np.concatenate([np.radians([view[0], view[1], 0.0]), centre]), (frames, 1))
+    return PerspectiveCamera(FOCAL, *IMAGE, ext)
+
+
+def squashed(truth, amount, rng):
+    """The truth with every limb scaled per frame by up to ``amount``, rebuilt from the roots."""
+    if amount == 0:
+        return truth.positions
+    P = truth.positions
+    out = P.copy()
+    T = len(P)
+    for p, c in truth.limbs:
+        phase, speed = rng.uniform(0, 2 * np.pi), rng.uniform(0.1, 0.4)
+        scale = 1 + amount * np.sin(phase + speed * np.arange(T))
+        out[:, c] = out[:, p] + scale[:, None] * (P[:, c] - P[:, p])
+    return out
+
+
+def relative(P, root):
+    return P - P[:, root:root + 1]
+
+
+def rms(a, b, which):
+    return round(float(np.sqrt(((a[:, which] - b[:, which]) ** 2).sum(-1).mean())), 4)
+
+
+def lift_line(truth, prior, view, input_name, prior_name, noise, squash, seed=0):
+    rng = np.random.default_rng(seed)
+    true_cam = truth_camera(truth, view, truth.frame_count)
+    drawn3d = squashed(truth, squash, rng)
+    x = true_cam.project(drawn3d) + rng.normal(0, noise, (truth.frame_count, len(truth.names), 2))
+    drawn = Markers(truth.names, x, fps=truth.fps)
+    longest = int(2 * truth.frame_count * prior.fps / truth.fps)
+    proxy, report = lift(drawn, Prior(prior.names, prior.parents, prior.positions[:longest], prior.fps,
+                                      prior.joints, None if prior.turns is None else prior.turns[:longest]),
+                         focal=FOCAL, size=IMAGE, units=1.0)
+    z = np.abs(proxy.camera.depth(proxy.points) - true_cam.depth(drawn3d)).mean()
+    # Poses compared in camera axes, each relative to its root (pelvis): the camera's and the root's
+    # placement are z_err's business; this is the pose's.
+    root = int(np.flatnonzero(truth.parents < 0)[0])
+    seen_truth = relative(true_cam.to_camera(truth.positions), root)
+    seen_skeleton = relative(proxy.camera.to_camera(proxy.skeleton), root)
+    seen_prior = relative(proxy.camera.to_camera(report.warped.positions), root)
+    upper = upper_body(truth)
+    lower = ~upper
+    L = proxy.limbs
+    lengths = np.linalg.norm(proxy.skeleton[:, L[:, 1]] - proxy.skeleton[:, L[:, 0]], axis=-1)
+    t = report.times_ms
+    return {"input": input_name, "prior": prior_name, "frames": truth.frame_count,
+            "prior_frames": int(min(longest, prior.frame_count)), "noise_px": noise, "squash": squash,
+            "view_found": [round(report.azimuth, 2), round(report.elevation, 2)],
+            "facing_deg": round((facing(prior) - facing(truth) + 180) % 360 - 180, 2),
+            "z_err_mean": round(float(z), 4), "reproj_px": float(f"{report.reproj_px:.3g}"),
+            "camera_px": round(report.camera_px, 2),
+            "skeleton_rms_upper": rms(seen_skeleton, seen_truth, upper),
+            "prior_rms_upper": rms(seen_prior, seen_truth, upper),
+            "skeleton_rms_lower": rms(seen_skeleton, seen_truth, lower),
+            "prior_rms_lower": rms(seen_prior, seen_truth, lower),
+            "limb_len_spread": float(f"{np.ptp(lengths, axis=0).max():.3g}"),
+            "align_ms": t["align"], "camera_ms": t["camera"], "points_ms": t["points"],
+            "volumes_ms": t["volumes"], "skeleton_ms": t["skeleton"]}
+
+
+def scale_line(path, view, frames=1000, markers=24):
+    """1,000 frames x 24 markers: the input's own first joints (End Sites left out), itself the prior."""
+    clip = load_bvh(path)
+    # Joints apart from their parent (CMU has joints at their parent's place), End Sites last.
+    apart = [j for j in range(len(clip.names))
+             if clip.parents[j] < 0 or np.linalg.norm(clip.offsets[j]) > 1e-9]
+    apart.sort(key=lambda j: clip.names[j].endswith("_end"))
+    names = [clip.names[j] for j in apart][:markers]
+    start = 1 if Path(path).name.startswith("cmu") else 0
+    own = prior_in_metres(prior_from_bvh(clip, names, start=start))[0]
+    duration = (own.frame_count - 1) / own.fps
+    truth = resample_prior(own, (frames - 1) / duration)
+    truth = Prior(truth.names, truth.parents, truth.positions[:frames], truth.fps, truth.joints,
+                  truth.turns[:frames])
+    cam = truth_camera(truth, view, truth.frame_count)
+    drawn = Markers(truth.names, cam.project(truth.positions), fps=truth.fps)
+    proxy, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, units=1.0)
+    t = report.times_ms
+    return {"scale": "points and skeleton", "frames": truth.frame_count, "markers": len(names),
+            "points_ms": t["points"], "points_goal_ms": 1000, "skeleton_ms": t["skeleton"],
+            "skeleton_goal_ms": 5000, "camera_ms": t["camera"], "align_ms": t["align"],
+            "reproj_px": float(f"{report.reproj_px:.3g}")}
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--input", type=Path, default=DEFAULT_INPUT, help="The clip drawn (projected).")
     parser.add_argument("--prior", type=Path, nargs="*", default=None,
-                        help="Prior clips (default: the other CMU clips beside the input).")
+                        help="Prior clips (default: the input, then the other CMU clips beside it).")
     parser.add_argument("--view", default="30,10", help="The true azimuth,elevation in degrees.")
+    parser.add_argument("--noise", type=float, default=0.0, help="Gaussian noise on the markers, px.")
+    parser.add_argument("--squash", type=float, default=0.0, help="Limb length change per frame, up to.")
     parser.add_argument("--repeat", type=int, default=5, help="DTW timing runs; the best counts.")
+    parser.add_argument("--no-scale", action="store_true", help="Leave out the 1,000-frame timing line.")
     args = parser.parse_args()
     view = tuple(float(v) for v in args.view.split(","))
-    priors = args.prior or sorted(p for p in args.input.parent.glob("cmu_*.bvh") if p != args.input)
-    source = resample_prior(load_prior(args.input), FPS)
-    loaded = [(p, resample_prior(load_prior(p), FPS)) for p in priors]
-    print(json.dumps(dtw_line(source, loaded[0][1] if loaded else source, camera(*view), args.repeat)),
-          flush=True)
+    others = sorted(p for p in args.input.parent.glob("cmu_*.bvh") if p != args.input)
+    priors = args.prior or [args.input, *others]
+    truth = resample_prior(prior_in_metres(load_prior(args.input))[0], FPS)
+    loaded = [(p, prior_in_metres(load_prior(p))[0]) for p in priors]
+    first = resample_prior(loaded[0][1], FPS) if loaded else truth
+    print(json.dumps(dtw_line(truth, first, camera(*view), args.repeat)), flush=True)
     for path, prior in loaded:
         try:
-            line = view_line(source, prior, view, args.input.stem, path.stem)
-        except ToonmotionError as error:  # a prior too short or too long to align, say
+            line = lift_line(truth, prior, view, args.input.stem, path.stem, args.noise, args.squash)
+        except ToonmotionError as error:  # a prior too short to align, say
             line = {"input": args.input.stem, "prior": path.stem, "error": str(error)}
         print(json.dumps(line), flush=True)
+    if not args.no_scale:
+        print(json.dumps(scale_line(args.input, view)), flush=True)
 
 
 if __name__ == "__main__":

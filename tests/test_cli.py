@@ -136,7 +136,8 @@ def _options(command):
 
 COMMANDS = ("rig", "show", "sample", "pose", "sketch", "animate", "filter", "depth", "correct", "undo",
             "redo", "track", "retarget", "keyshapes", "capture-contours", "retarget-keyshapes",
-            "retarget-line", "capture-video", "edits", "remesh", "tune", "edit")
+            "retarget-line", "capture-video", "lift", "proxy-export", "proxy-preview", "edits", "remesh",
+            "tune", "edit")
 
 
 def test_every_command_is_in_the_readme_command_reference():

@@ -45,6 +45,7 @@ from toonmotion.api.posing import (
     rotate_joint,
     sketch_pose,
 )
+from toonmotion.api.proxy3d import lift_proxy, preview_proxy
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
 from toonmotion.capture.footage import Capture, suggest_joints
 from toonmotion.capture.retarget import retarget
@@ -54,6 +55,9 @@ from toonmotion.io.project import load_project, save_project
 from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.keyshape.space import KeyShapeSpace
 from toonmotion.keyshape.video import VideoCapture
+from toonmotion.proxy3d.lift import LiftReport
+from toonmotion.proxy3d.markers import Markers
+from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.sequence import write_animation
 from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.sketch import SketchMatch
@@ -68,6 +72,9 @@ __all__ = [
     "Motion",
     "PosedFrame",
     "KeyShapeSpace",
+    "LiftReport",
+    "Markers",
+    "Proxy",
     "RigSettings",
     "SameDepthOverlap",
     "SketchMatch",
@@ -84,10 +91,12 @@ __all__ = [
     "filter_motion",
     "keyshape_sheet",
     "keyshape_space",
+    "lift_proxy",
     "load_project",
     "move_key",
     "pose_character",
     "pose_view",
+    "preview_proxy",
     "redo_edits",
     "render_pose",
     "retarget",

@@ -4,7 +4,8 @@ One module per command group registers its commands on the shared Typer ``app``:
 :mod:`~toonmotion.cli.rigging` (rig, show, sample, remesh), :mod:`~toonmotion.cli.animation`
 (pose, animate, filter), :mod:`~toonmotion.cli.editing` (depth, correct, undo, redo, edits, tune)
 and :mod:`~toonmotion.cli.capture` (track, retarget), :mod:`~toonmotion.cli.keyshapes`
-(keyshapes, capture-contours). Errors the user can fix print one line,
+(keyshapes, capture-contours), :mod:`~toonmotion.cli.proxy3d` (lift, proxy-export,
+proxy-preview). Errors the user can fix print one line,
 ``toonmotion: error: ...``, and exit with status 2 (:func:`~toonmotion.cli.app.main`).
 """
 
@@ -19,8 +20,10 @@ from toonmotion.cli import capture  # isort: split
 
 from toonmotion.cli import keyshapes  # isort: split
 
+from toonmotion.cli import proxy3d  # isort: split
+
 from toonmotion.cli import editor  # isort: split
 
 from toonmotion.cli.app import app, main
 
-__all__ = ["animation", "app", "capture", "editing", "editor", "keyshapes", "main", "rigging"]
+__all__ = ["animation", "app", "capture", "editing", "editor", "keyshapes", "main", "proxy3d", "rigging"]
