@@ -68,6 +68,7 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/edit.py
 	$(BIN)/python benchmarks/track.py
 	$(BIN)/python benchmarks/editor.py
+	$(BIN)/python benchmarks/proxy3d.py
 
 clean:
 	rm -rf $(VENV) demo node_modules

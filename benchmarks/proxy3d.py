@@ -43,29 +43,27 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from toonmotion.capture.mocap import STANDARD_JOINTS  # noqa: E402
 from toonmotion.errors import ToonmotionError  # noqa: E402
-from toonmotion.io.bvh import load_bvh  # noqa: E402
-from toonmotion.proxy3d.camera import PerspectiveCamera  # noqa: E402
-from toonmotion.proxy3d.descriptor import descriptor_features, upper_body  # noqa: E402
+from toonmotion.proxy3d.descriptor import descriptor_features  # noqa: E402
 from toonmotion.proxy3d.lift import lift  # noqa: E402
 from toonmotion.proxy3d.markers import Markers  # noqa: E402
-from toonmotion.proxy3d.orthographic import camera, view_direction  # noqa: E402
-from toonmotion.proxy3d.prior import Prior, prior_from_bvh, prior_in_metres, resample_prior, sample_frames  # noqa: E402
+from toonmotion.proxy3d.orthographic import camera  # noqa: E402
+from toonmotion.proxy3d.prior import sample_frames  # noqa: E402
 from toonmotion.proxy3d.timewarp import dtw  # noqa: E402
+from toonmotion.testing.mocap_proxy import (  # noqa: E402
+    FOCAL,
+    IMAGE,
+    facing_difference,
+    first_frames,
+    lift_scores,
+    load_prior,
+    many_markers,
+    truth_camera,
+)
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
 DEFAULT_INPUT = DEFAULT_DIR / "cmu_07_01_walk.bvh"
 FPS = 24.0
-DISTANCE = 7.0  # metres from the camera to the input's middle
-FOCAL = 1000.0
-IMAGE = (960, 720)
-
-
-def load_prior(path):
-    clip = load_bvh(path)
-    # CMU clips open with a T-pose frame the motion jumps away from.
-    return prior_from_bvh(clip, STANDARD_JOINTS, start=1 if Path(path).name.startswith("cmu") else 0)
 
 
 def best_ms(run, repeat):
@@ -90,99 +88,21 @@ def dtw_line(source, prior, R, repeat, frames=1000, band=0.1):
             "same_path": bool(np.array_equal(ours.path, theirs.path))}
 
 
-def facing(prior):
-    """Mean horizontal facing, degrees about +Y from +Z: perpendicular to the hip line."""
-    P = prior.positions
-    left = (P[:, prior.names.index("left_hip")] - P[:, prior.names.index("right_hip")]).mean(axis=0)
-    return float(np.degrees(np.arctan2(-left[2], left[0])))  # facing = left x up
-
-
-def truth_camera(truth, view, frames):
-    """A still camera ``DISTANCE`` m from the clip's middle, looking at it from ``view``."""
-    middle = truth.positions.reshape(-1, 3).mean(axis=0)
-    centre = middle + DISTANCE * view_direction(*view)
-    ext = np.tile(np.concatenate([np.radians([view[0], view[1], 0.0]), centre]), (frames, 1))
-    return PerspectiveCamera(FOCAL, *IMAGE, ext)
-
-
-def squashed(truth, amount, rng):
-    """The truth with every limb scaled per frame by up to ``amount``, rebuilt from the roots."""
-    if amount == 0:
-        return truth.positions
-    P = truth.positions
-    out = P.copy()
-    T = len(P)
-    for p, c in truth.limbs:
-        phase, speed = rng.uniform(0, 2 * np.pi), rng.uniform(0.1, 0.4)
-        scale = 1 + amount * np.sin(phase + speed * np.arange(T))
-        out[:, c] = out[:, p] + scale[:, None] * (P[:, c] - P[:, p])
-    return out
-
-
-def relative(P, root):
-    return P - P[:, root:root + 1]
-
-
-def rms(a, b, which):
-    return round(float(np.sqrt(((a[:, which] - b[:, which]) ** 2).sum(-1).mean())), 4)
-
-
-def lift_line(truth, prior, view, input_name, prior_name, noise, squash, seed=0):
-    rng = np.random.default_rng(seed)
-    true_cam = truth_camera(truth, view, truth.frame_count)
-    drawn3d = squashed(truth, squash, rng)
-    x = true_cam.project(drawn3d) + rng.normal(0, noise, (truth.frame_count, len(truth.names), 2))
-    drawn = Markers(truth.names, x, fps=truth.fps)
-    longest = int(2 * truth.frame_count * prior.fps / truth.fps)
-    proxy, report = lift(drawn, Prior(prior.names, prior.parents, prior.positions[:longest], prior.fps,
-                                      prior.joints, None if prior.turns is None else prior.turns[:longest]),
-                         focal=FOCAL, size=IMAGE, units=1.0)
-    z = np.abs(proxy.camera.depth(proxy.points) - true_cam.depth(drawn3d)).mean()
-    # Poses compared in camera axes, each relative to its root (pelvis): the camera's and the root's
-    # placement are z_err's business; this is the pose's.
-    root = int(np.flatnonzero(truth.parents < 0)[0])
-    seen_truth = relative(true_cam.to_camera(truth.positions), root)
-    seen_skeleton = relative(proxy.camera.to_camera(proxy.skeleton), root)
-    seen_prior = relative(proxy.camera.to_camera(report.warped.positions), root)
-    upper = upper_body(truth)
-    lower = ~upper
-    L = proxy.limbs
-    lengths = np.linalg.norm(proxy.skeleton[:, L[:, 1]] - proxy.skeleton[:, L[:, 0]], axis=-1)
-    t = report.times_ms
-    return {"input": input_name, "prior": prior_name, "frames": truth.frame_count,
-            "prior_frames": int(min(longest, prior.frame_count)), "noise_px": noise, "squash": squash,
-            "view_found": [round(report.azimuth, 2), round(report.elevation, 2)],
-            "facing_deg": round((facing(prior) - facing(truth) + 180) % 360 - 180, 2),
-            "z_err_mean": round(float(z), 4), "reproj_px": float(f"{report.reproj_px:.3g}"),
-            "camera_px": round(report.camera_px, 2),
-            "skeleton_rms_upper": rms(seen_skeleton, seen_truth, upper),
-            "prior_rms_upper": rms(seen_prior, seen_truth, upper),
-            "skeleton_rms_lower": rms(seen_skeleton, seen_truth, lower),
-            "prior_rms_lower": rms(seen_prior, seen_truth, lower),
-            "limb_len_spread": float(f"{np.ptp(lengths, axis=0).max():.3g}"),
-            "align_ms": t["align"], "camera_ms": t["camera"], "points_ms": t["points"],
-            "volumes_ms": t["volumes"], "skeleton_ms": t["skeleton"]}
+def lift_line(truth, prior, view, input_name, prior_name, noise, squash):
+    longest = first_frames(prior, int(2 * truth.frame_count * prior.fps / truth.fps))
+    scores = lift_scores(truth, longest, view, noise=noise, squash=squash)
+    return {"input": input_name, "prior": prior_name, "frames": scores.pop("frames"),
+            "prior_frames": longest.frame_count, "noise_px": noise, "squash": squash,
+            "facing_deg": round(facing_difference(prior, truth), 2), **scores}
 
 
 def scale_line(path, view, frames=1000, markers=24):
-    """1,000 frames x 24 markers: the input's own first joints (End Sites left out), itself the prior."""
-    clip = load_bvh(path)
-    # Joints apart from their parent (CMU has joints at their parent's place), End Sites last.
-    apart = [j for j in range(len(clip.names))
-             if clip.parents[j] < 0 or np.linalg.norm(clip.offsets[j]) > 1e-9]
-    apart.sort(key=lambda j: clip.names[j].endswith("_end"))
-    names = [clip.names[j] for j in apart][:markers]
-    start = 1 if Path(path).name.startswith("cmu") else 0
-    own = prior_in_metres(prior_from_bvh(clip, names, start=start))[0]
-    duration = (own.frame_count - 1) / own.fps
-    truth = resample_prior(own, (frames - 1) / duration)
-    truth = Prior(truth.names, truth.parents, truth.positions[:frames], truth.fps, truth.joints,
-                  truth.turns[:frames])
-    cam = truth_camera(truth, view, truth.frame_count)
-    drawn = Markers(truth.names, cam.project(truth.positions), fps=truth.fps)
-    proxy, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, units=1.0)
+    """1,000 frames x 24 markers of the input's own joints, itself the prior, the view given."""
+    truth = many_markers(path, frames, markers)
+    drawn = Markers(truth.names, truth_camera(truth, view).project(truth.positions), fps=truth.fps)
+    _, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, units=1.0)
     t = report.times_ms
-    return {"scale": "points and skeleton", "frames": truth.frame_count, "markers": len(names),
+    return {"scale": "points and skeleton", "frames": truth.frame_count, "markers": len(truth.names),
             "points_ms": t["points"], "points_goal_ms": 1000, "skeleton_ms": t["skeleton"],
             "skeleton_goal_ms": 5000, "camera_ms": t["camera"], "align_ms": t["align"],
             "reproj_px": float(f"{report.reproj_px:.3g}")}
@@ -202,9 +122,9 @@ def main():
     view = tuple(float(v) for v in args.view.split(","))
     others = sorted(p for p in args.input.parent.glob("cmu_*.bvh") if p != args.input)
     priors = args.prior or [args.input, *others]
-    truth = resample_prior(prior_in_metres(load_prior(args.input))[0], FPS)
-    loaded = [(p, prior_in_metres(load_prior(p))[0]) for p in priors]
-    first = resample_prior(loaded[0][1], FPS) if loaded else truth
+    truth = load_prior(args.input, FPS)
+    loaded = [(p, load_prior(p)) for p in priors]
+    first = load_prior(loaded[0][0], FPS) if loaded else truth
     print(json.dumps(dtw_line(truth, first, camera(*view), args.repeat)), flush=True)
     for path, prior in loaded:
         try:

@@ -126,8 +126,8 @@ def lift(
         The drawn frames, for the limbs' widths (collision volumes); without them the proxy has
         no volumes.
     widths : dict, optional
-        Width overrides ``(frame, limb) -> (w1,
-                                            w2)`` pixels (:func:`~toonmotion.proxy3d.volumes.drawn_widths`).
+        Width overrides ``(frame, marker) -> (w1, w2)`` pixels
+        (:func:`~toonmotion.proxy3d.volumes.drawn_widths`).
     units : float or str, optional
         Metres per prior unit (:func:`~toonmotion.proxy3d.prior.prior_in_metres`).
     band : float
