@@ -182,11 +182,15 @@ def interpolate_pose(skeleton: Skeleton, a: Pose, b: Pose, t: float) -> Pose:
     angle_b, length_b = bone_angles(skeleton, pb)
     angle = lerp_angle(angle_a, angle_b, t)
     length = (1 - t) * length_a + t * length_b
-    roots = (1 - t) * pa + t * pb  # only its root rows are used
+    roots = pa + t * (pb - pa)  # only its root rows are used
     parent, child = skeleton.bones.T
-    offsets = (1 - t) * (pa[child] - pa[parent]) + t * (pb[child] - pb[parent])
+    offset_a, offset_b = pa[child] - pa[parent], pb[child] - pb[parent]
+    offsets = offset_a + t * (offset_b - offset_a)
     directed = (length_a > MIN_BONE_LENGTH) & (length_b > MIN_BONE_LENGTH)
-    positions = positions_from_bones(skeleton, roots, angle, length, offsets=offsets, given=~directed)
+    # A bone the same in both keys keeps its offset exactly (not rebuilt from its angle and length,
+    # which rounds differently from one maths library to another).
+    same = np.all(offset_a == offset_b, axis=1)
+    positions = positions_from_bones(skeleton, roots, angle, length, offsets=offsets, given=~directed | same)
     return Pose(positions=positions)
 
 

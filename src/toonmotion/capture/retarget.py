@@ -151,4 +151,9 @@ def _pose_frames(target, S, match, turn, stretch, scale, rest_angle, rest_length
         if followed[b] is None:
             angle[:, b] = rest_angle[b] + total_turn[:, parent]
         total_turn[:, child] = angle[:, b] - rest_angle[b]
-    return positions_from_bones(target, roots, angle, rest_length * stretch)
+    # A bone not turned or stretched on a frame keeps its rest offset exactly (rebuilding it from
+    # its angle and length rounds differently from one maths library to another).
+    parent, child = target.bones.T
+    rest = target.positions[child] - target.positions[parent]
+    still = (angle == rest_angle) & (stretch == 1)
+    return positions_from_bones(target, roots, angle, rest_length * stretch, offsets=rest, given=still)

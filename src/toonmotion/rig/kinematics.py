@@ -161,8 +161,9 @@ def positions_from_bones(
         Every bone's angle (radians) and length (pixels), in the order of ``skeleton.bones``.
     offsets : (..., b, 2) float, optional
         Child minus parent, for the bones ``given`` marks.
-    given : (b,) bool, optional
-        Bones whose offset is taken from ``offsets``; give both or neither.
+    given : (b,) or (..., b) bool, optional
+        Bones whose offset is taken from ``offsets`` (per pose, if it has leading axes); give both
+        or neither.
 
     Returns
     -------
@@ -196,10 +197,10 @@ def positions_from_bones(
         raise PoseError("give both offsets and the mask of bones they are given for, or neither")
     if offsets is not None:
         D, mask = np.asarray(offsets, dtype=float), np.asarray(given, dtype=bool)
-        if D.ndim < 2 or D.shape[-2:] != (b, 2) or mask.shape != (b,):
-            raise PoseError(f"bone offsets must have shape (..., {b}, 2) and their mask ({b},), "
+        if D.ndim < 2 or D.shape[-2:] != (b, 2) or mask.ndim < 1 or mask.shape[-1] != b:
+            raise PoseError(f"bone offsets must have shape (..., {b}, 2) and their mask (..., {b}), "
                             f"got {D.shape} and {mask.shape}")
-        step = np.where(mask[:, None], D, step)
+        step = np.where(mask[..., None], D, step)
     out = np.empty(np.broadcast_shapes(R.shape[:-2], step.shape[:-2]) + (k, 2))
     out[..., root_rows, :] = R
     for row, (parent, child) in enumerate(bones):  # child order: parents come first
