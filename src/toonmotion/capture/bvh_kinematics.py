@@ -190,3 +190,25 @@ def _local_transforms(
         for n, j in enumerate(joints):
             R[j] = np.ascontiguousarray(matrices[:, n])
     return R, t
+
+
+def name_end_sites(names: list[str | None], parents: list[int]) -> list[str]:
+    """Name each End Site (None) ``<parent>_end``, with a number added if the name is taken.
+
+    The BVH reader names End Sites so, and the writers of BVH clips follow it.
+
+    >>> name_end_sites(["hand", None, "hand_end", None], [-1, 0, 0, 0])
+    ['hand', 'hand_end2', 'hand_end', 'hand_end3']
+    """
+    taken = {n for n in names if n is not None}
+    out: list[str] = []
+    for name, parent in zip(names, parents, strict=True):
+        if name is None:
+            base = f"{out[parent]}_end"
+            name, n = base, 1
+            while name in taken:
+                n += 1
+                name = f"{base}{n}"
+            taken.add(name)
+        out.append(name)
+    return out

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from toonmotion import limits
-from toonmotion.capture.bvh_kinematics import BvhClip
+from toonmotion.capture.bvh_kinematics import BvhClip, name_end_sites
 from toonmotion.errors import MotionError
 from toonmotion.io.atomic import write_text
 
@@ -183,7 +183,7 @@ def _end_sites(clip, order, children):
     ends = {j for j in order if clip.parents[j] >= 0 and not children[j] and not clip.channels[j]}
     place = {j: n for n, j in enumerate(order)}
     while True:  # each pass drops the joints the reader would name otherwise; names settle
-        read = _name_end_sites([None if j in ends else clip.names[j] for j in order],
+        read = name_end_sites([None if j in ends else clip.names[j] for j in order],
                                [place[clip.parents[j]] if clip.parents[j] >= 0 else -1 for j in order])
         wrong = {j for j, name in zip(order, read, strict=True) if j in ends and name != clip.names[j]}
         if not wrong:
@@ -326,23 +326,7 @@ def _hierarchy(tokens, where):
         )
     if not names:
         raise MotionError(f"{where}: the HIERARCHY has no ROOT joint")
-    return _name_end_sites(names, parents), parents, offsets, channels
-
-
-def _name_end_sites(names, parents):
-    """Name each End Site ``<parent>_end``, with a number added if that name is taken."""
-    taken = {n for n in names if n is not None}
-    out = []
-    for name, parent in zip(names, parents, strict=True):
-        if name is None:
-            base = f"{out[parent]}_end"
-            name, n = base, 1
-            while name in taken:
-                n += 1
-                name = f"{base}{n}"
-            taken.add(name)
-        out.append(name)
-    return out
+    return name_end_sites(names, parents), parents, offsets, channels
 
 
 def _motion(lines, motion_at, width, where):

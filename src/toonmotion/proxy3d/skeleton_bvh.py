@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from toonmotion.capture.bvh_kinematics import BvhClip
+from toonmotion.capture.bvh_kinematics import BvhClip, name_end_sites
 from toonmotion.geometry.arrays import frozen_array
 from toonmotion.proxy3d.proxy import Proxy
 
@@ -161,7 +161,7 @@ def limb_tree(proxy: Proxy) -> LimbTree:
                     markers[c] = j + 1  # the first limb starting at c comes next, at c
             else:
                 markers[c] = add(None, j, proxy.rest[k], -1)
-    return LimbTree(tuple(_name_end_sites(names, parents)), np.array(parents),
+    return LimbTree(tuple(name_end_sites(names, parents)), np.array(parents),
                     np.array(offsets).reshape(-1, 3), np.array(limbs), markers)
 
 
@@ -217,19 +217,3 @@ def _euler_degrees(quaternions: NDArray[np.float64]) -> NDArray[np.float64]:
         # rotation: the joint's positions do not change.
         warnings.filterwarnings("ignore", message="Gimbal lock detected", category=UserWarning)
         return Rotation.from_quat(quaternions).as_euler(EULER_ORDER, degrees=True)
-
-
-def _name_end_sites(names: list[str | None], parents: list[int]) -> list[str]:
-    """Name each End Site (None) ``<parent>_end``, with a number added if taken, as the BVH reader does."""
-    taken = {n for n in names if n is not None}
-    out: list[str] = []
-    for name, parent in zip(names, parents, strict=True):
-        if name is None:
-            base = f"{out[parent]}_end"
-            name, n = base, 1
-            while name in taken:
-                n += 1
-                name = f"{base}{n}"
-            taken.add(name)
-        out.append(name)
-    return out
