@@ -494,6 +494,25 @@ def test_animate_exaggerated_saves_a_motion_that_filter_and_animate_read(posable
     assert Image.open(out).n_frames == 37
 
 
+def test_animate_saves_the_motion_as_its_frames_show_it(posable, tmp_path):
+    from toonmotion.io.frames import load_frames
+    from toonmotion.io.motion_json import load_motion
+
+    frames, seen, canvas = tmp_path / "frames", tmp_path / "seen.json", tmp_path / "canvas.json"
+    assert _run("animate", posable / "hero", posable / "keys.json", "-o", frames, "--size", "120x160",
+                "--save-frame-motion", seen, "--save-motion", canvas) == 0
+    pictures = load_frames(frames, alpha=True)[0]
+    a, b = load_motion(seen), load_motion(canvas)
+    # One scale and offset take the drawing's pixels to the frames'.
+    scale = np.ptp(a.positions[..., 0]) / np.ptp(b.positions[..., 0])
+    np.testing.assert_allclose(a.positions, scale * b.positions + (a.positions - scale * b.positions)[0, 0],
+                               atol=1e-9)
+    # The joints lie on the drawn figure in the frames (inside its opaque pixels).
+    col, row = np.rint(a.positions[..., 0]).astype(int), np.rint(a.positions[..., 1]).astype(int)
+    on_figure = pictures[np.arange(len(pictures))[:, None], row, col, 3] > 0
+    assert on_figure.mean() > 0.95
+
+
 def test_filter_only_chosen_joints(posable, tmp_path):
     from toonmotion.io.motion_json import load_motion
 

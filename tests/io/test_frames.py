@@ -7,7 +7,7 @@ import pytest
 from PIL import Image
 
 from toonmotion.errors import ToonmotionError, VideoReadError
-from toonmotion.io.frames import load_frames
+from toonmotion.io.frames import lay_on, load_frames
 from toonmotion.io.image import save_png
 from toonmotion.io.video import save_animation
 
@@ -78,6 +78,26 @@ def test_alpha_is_dropped(tmp_path):
     frames, _ = load_frames(tmp_path)
     assert frames.shape == (1, 4, 5, 3)
     assert (frames == [10, 20, 30]).all()
+
+
+def test_alpha_is_kept_when_asked_and_videos_are_opaque(tmp_path):
+    rgba = np.zeros((4, 5, 4), np.uint8)
+    rgba[..., :3] = (10, 20, 30)
+    rgba[0, 0, 3] = 255
+    rgba[1, 1, 3] = 100
+    save_png(tmp_path / "a_1.png", rgba)
+    frames, _ = load_frames(tmp_path, alpha=True)
+    assert frames.shape == (1, 4, 5, 4) and np.array_equal(frames[0], rgba)
+    # Laid on white: opaque pixels keep their colour, transparent ones are white.
+    laid = lay_on(frames)
+    assert laid[0, 0, 0].tolist() == [10, 20, 30] and laid[0, 3, 3].tolist() == [255, 255, 255]
+    assert laid[0, 1, 1].tolist() == [round(100 / 255 * c + 155 / 255 * 255) for c in (10, 20, 30)]
+    truth = _frames(3)
+    save_animation(tmp_path / "clip.gif", _rgba(truth), fps=10)
+    save_animation(tmp_path / "clip.mp4", _rgba(truth), fps=10)
+    for name in ("clip.gif", "clip.mp4"):
+        frames, _ = load_frames(tmp_path / name, alpha=True)
+        assert frames.shape == (3, H, W, 4) and (frames[..., 3] == 255).all()
 
 
 @pytest.mark.parametrize("pattern", ["f_%04d.png", "f_{:04d}.png", "f_%d.png"])

@@ -22,7 +22,15 @@ from __future__ import annotations
 from toonmotion.animate.animation import Animation, SameDepthOverlap, exaggerate, same_depth_overlaps
 from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
-from toonmotion.api.animation import animate_character, delete_key, filter_motion, move_key, retime, set_key
+from toonmotion.api.animation import (
+    animate_character,
+    delete_key,
+    filter_motion,
+    motion_in_frames,
+    move_key,
+    retime,
+    set_key,
+)
 from toonmotion.api.capture import track_footage
 from toonmotion.api.keyshapes import (
     animate_drawing,
@@ -93,6 +101,7 @@ __all__ = [
     "keyshape_space",
     "lift_proxy",
     "load_project",
+    "motion_in_frames",
     "move_key",
     "pose_character",
     "pose_view",

@@ -17,6 +17,7 @@ from toonmotion.animate.timeline import Keyframe, Timeline, make_timeline
 from toonmotion.deform.deformer import Deformer, DeformSettings
 from toonmotion.deform.tuning import TuningEdit
 from toonmotion.errors import KeyframeError
+from toonmotion.render.sequence import frame_transform
 from toonmotion.rig.character import Character
 from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
@@ -249,3 +250,41 @@ def retime(skeleton: Skeleton, timeline: Timeline, *, fps: float | None = None,
     """
     return make_timeline(skeleton, timeline.keys, fps=timeline.fps if fps is None else fps,
                          ease=timeline.ease if ease is None else ease)
+
+
+def motion_in_frames(character: Character, animation: Animation, *,
+                     size: tuple[int, int] | None = None) -> Motion:
+    """The animation's joints in the pixels of the frames :func:`write_animation` writes.
+
+    An animation's motion is in the drawing's pixels (it replays on the character); its frames
+    show a view that holds every frame, scaled to ``size``. This is the motion as the frames show
+    it: what tracking the frames would find, and what ``lift`` needs beside them.
+
+    Parameters
+    ----------
+    character : Character
+    animation : Animation
+        From :func:`animate_character`.
+    size : (int, int), optional
+        The frames' ``(width, height)``, as given to :func:`write_animation`.
+
+    Returns
+    -------
+    Motion
+        Its skeleton's rest pose and every frame mapped by the same scale and offset.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> hero = sample_rig()
+    >>> animation = animate_character(hero, sample_keyframes(hero.skeleton, fps=4.0))
+    >>> seen = motion_in_frames(hero, animation, size=(80, 100))
+    >>> bool(seen.positions[..., 0].max() < 80 and seen.positions[..., 1].max() < 100)
+    True
+    """
+    scale, offset = frame_transform(character, animation, size=size)
+    motion = animation.motion
+    skeleton = Skeleton(names=motion.skeleton.names, parents=motion.skeleton.parents.copy(),
+                        positions=motion.skeleton.positions * scale + offset)
+    return Motion(skeleton, motion.positions * scale + offset, fps=motion.fps)

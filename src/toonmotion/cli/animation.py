@@ -117,7 +117,11 @@ def animate(
     sigma: options.Sigma = 3.0,
     shift: options.Shift = 0.0,
     save_motion_to: Annotated[Path | None, typer.Option(
-        "--save-motion", help="Also write the joint positions of every frame (.json).")] = None,
+        "--save-motion", help="Also write the joint positions of every frame, in the drawing's pixels "
+        "(.json: a motion that replays on the character).")] = None,
+    save_frame_motion_to: Annotated[Path | None, typer.Option(
+        "--save-frame-motion", help="Also write the joint positions in the written frames' pixels (.json: "
+        "what tracking the frames finds; what 'lift' needs beside them).")] = None,
     solve_inbetweens: Annotated[bool, typer.Option(
         "--solve-inbetweens", help="Run stage two on every frame, not only the keys.")] = False,
     no_area: options.NoArea = False,
@@ -130,8 +134,9 @@ def animate(
     --exaggerate runs the cartoon filter over every bone's angle and length and the root's path.
     """
     kind = animation_format(output)
-    if save_motion_to is not None:
-        options.suffix(save_motion_to, ".json", "a motion file")
+    for path in (save_motion_to, save_frame_motion_to):
+        if path is not None:
+            options.suffix(path, ".json", "a motion file")
     character = api.load_project(project)
     exaggeration = options.filter_settings(exaggerate, sigma, shift)
     settings = options.deform_settings(no_area, stage_one_only, weights, joint_width)
@@ -153,11 +158,14 @@ def animate(
     )
     if save_motion_to is not None:
         save_motion(save_motion_to, animation.motion)
+    if save_frame_motion_to is not None:
+        save_motion(save_frame_motion_to, api.motion_in_frames(character, animation, size=options.size(size)))
     typer.echo(
         f"animated {what}"
         + (f", exaggerated (A={exaggerate:g})" if exaggeration else "")
         + f": {count} frames at {animation.motion.fps:g} fps, {out_size[0]}x{out_size[1]} -> {output}"
         + (f" (motion -> {save_motion_to})" if save_motion_to is not None else "")
+        + (f" (motion in the frames -> {save_frame_motion_to})" if save_frame_motion_to is not None else "")
     )
     solved = zip(animation.keys, animation.solved, strict=True)
     report_overlaps(character, [(key.frame, result.U) for key, result in solved], keys=True)

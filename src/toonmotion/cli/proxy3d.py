@@ -16,7 +16,7 @@ from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
 from toonmotion.io.bvh import load_bvh, save_bvh
 from toonmotion.io.exchange.proxy_gltf import save_proxy_glb
-from toonmotion.io.frames import load_frames
+from toonmotion.io.frames import lay_on, load_frames
 from toonmotion.io.markers_json import load_markers
 from toonmotion.io.motion_json import is_motion_file, load_motion
 from toonmotion.io.proxy_json import load_proxy, save_proxy
@@ -80,7 +80,7 @@ def lift_command(
     clip = load_bvh(prior)
     pictures = None
     if frames is not None:
-        pictures, _ = load_frames(frames)
+        pictures = lay_on(load_frames(frames, alpha=True)[0])  # transparent PNGs on white
     with options.progress("lifting") as report:
         proxy, found = api.lift_proxy(
             markers, clip, joint_map=_pairs(joint_map, "--map"), segment=_segment(segment),
@@ -142,7 +142,7 @@ def proxy_preview(
     """Draw a 3D proxy from its camera over the drawing, beside a side view, as a video."""
     animation_format(output)
     proxy = load_proxy(source)
-    pictures = None if frames is None else load_frames(frames)[0]
+    pictures = None if frames is None else lay_on(load_frames(frames, alpha=True)[0])
     count = _write_preview(output, proxy, pictures)
     typer.echo(f"previewed {count} frames -> {output}")
 

@@ -55,7 +55,7 @@ _PATTERN_FIELD = re.compile(r"%0?\d*d|\{[^{}]*\}")
 
 
 def load_frames(path: str | os.PathLike[str], *, max_frames: int | None = None,
-                max_pixels: int | None = None) -> tuple[NDArray[np.uint8], float | None]:
+                max_pixels: int | None = None, alpha: bool = False) -> tuple[NDArray[np.uint8], float | None]:
     """Read a video, an animated image, a folder of numbered images or a file pattern.
 
     Parameters
@@ -67,11 +67,13 @@ def load_frames(path: str | os.PathLike[str], *, max_frames: int | None = None,
         Refuse sequences of more frames than this (:class:`VideoReadError`).
     max_pixels : int
         Refuse sequences whose frames hold more pixels than this together, ``T * h * w``.
+    alpha : bool
+        Keep the images' alpha: frames are RGBA, opaque where the file has no alpha (videos).
 
     Returns
     -------
-    frames : (T, h, w, 3) uint8
-        RGB frames, T >= 1; alpha is dropped.
+    frames : (T, h, w, 3) uint8, or (T, h, w, 4) with ``alpha``
+        RGB frames, T >= 1; alpha is dropped unless asked for.
     fps : float or None
         Frames per second from the video's metadata or the animation's frame durations; None
         for image folders and patterns, and when the file does not say.
@@ -96,15 +98,19 @@ def load_frames(path: str | os.PathLike[str], *, max_frames: int | None = None,
         raise ValueError(f"max_pixels must be a positive whole number, got {max_pixels!r}")
     limits = _Limits(max_frames, max_pixels)
     path = Path(path)
+    channels = 4 if alpha else 3
     if _PATTERN_FIELD.search(path.name):
-        return _load_files(_pattern_files(path), str(path), limits), None
+        return _load_files(_pattern_files(path), str(path), limits, channels), None
     if path.is_dir():
-        return _load_files(_folder_files(path), str(path), limits), None
+        return _load_files(_folder_files(path), str(path), limits, channels), None
     if not path.is_file():
         raise VideoReadError(f"cannot read {path}: no such file or folder")
     if path.suffix.lower() in ANIMATED_SUFFIXES:
-        return _load_animated(path, limits)
-    return _load_video(path, limits)
+        return _load_animated(path, limits, channels)
+    frames, fps = _load_video(path, limits)
+    if alpha:
+        frames = np.concatenate([frames, np.full(frames.shape[:3] + (1,), 255, np.uint8)], axis=3)
+    return frames, fps
 
 
 class _Limits:
@@ -177,14 +183,14 @@ def _pattern_files(pattern):
     return [p for _, _, p in sorted(numbered)]
 
 
-def _load_files(files, name, limits):
-    first = _read_image(files[0])
+def _load_files(files, name, limits, channels):
+    first = _read_image(files[0], channels)
     h, w = first.shape[:2]
     limits.check(name, len(files), w, h)
-    frames = np.empty((len(files), h, w, 3), np.uint8)
+    frames = np.empty((len(files), h, w, channels), np.uint8)
     frames[0] = first
     for i, file in enumerate(files[1:], start=1):
-        image = _read_image(file)
+        image = _read_image(file, channels)
         if image.shape[:2] != (h, w):
             raise VideoReadError(
                 f"frame {file.name} is {image.shape[1]}x{image.shape[0]} but the first frame "
@@ -194,9 +200,9 @@ def _load_files(files, name, limits):
     return frames
 
 
-def _read_image(file):
+def _read_image(file, channels):
     try:
-        return load_image(file)[..., :3]
+        return load_image(file)[..., :channels]
     except (ImageReadError, ImageTooLargeError) as error:
         raise VideoReadError(str(error)) from None
 
@@ -204,7 +210,7 @@ def _read_image(file):
 # --- animated images (Pillow) --------------------------------------------------------------------
 
 
-def _load_animated(path, limits):
+def _load_animated(path, limits, channels):
     try:
         image = open_image(path, max_pixels=min(limits.max_pixels, resource_limits.current().image_pixels))
     except ImageTooLargeError as error:
@@ -219,7 +225,7 @@ def _load_animated(path, limits):
         try:  # Pillow counts frames by reading past each one: a damaged file can fail here too
             limits.check(path.name, getattr(image, "n_frames", 1), w, h)
             for frame in ImageSequence.Iterator(image):
-                frames.append(np.asarray(frame.convert("RGB")))
+                frames.append(np.asarray(frame.convert("RGBA" if channels == 4 else "RGB")))
                 durations.append(frame.info.get("duration") or 0)
         except (OSError, EOFError, SyntaxError, ValueError, IndexError, struct.error) as error:
             raise VideoReadError(
@@ -236,7 +242,7 @@ def _load_animated(path, limits):
         fps = 1000.0 * count / float(durations.sum())
     else:
         repeats, fps = np.ones(len(frames), int), None
-    out = np.empty((int(repeats.sum()), h, w, 3), np.uint8)
+    out = np.empty((int(repeats.sum()), h, w, channels), np.uint8)
     at = 0
     for frame, n in zip(frames, repeats, strict=True):
         out[at : at + n] = frame
@@ -308,3 +314,16 @@ def _ffmpeg_reason(error, path):
     for prefix in (str(path), path.name):
         reason = reason.replace(f"{prefix}: ", "")
     return reason[:160]
+
+
+def lay_on(frames: NDArray[np.uint8],
+           background: tuple[int, int, int] = (255, 255, 255)) -> NDArray[np.uint8]:
+    """RGBA frames (or one frame) laid on a background colour, RGB; RGB frames are returned as they are.
+
+    >>> lay_on(np.array([[[0, 0, 0, 0], [0, 0, 0, 255]]], np.uint8)).tolist()
+    [[[255, 255, 255], [0, 0, 0]]]
+    """
+    if frames.shape[-1] == 3:
+        return frames
+    a = frames[..., 3:] / 255.0
+    return np.round(a * frames[..., :3] + (1 - a) * np.asarray(background, dtype=np.float64)).astype(np.uint8)

@@ -13,6 +13,7 @@ from toonmotion.deform.depth import draw_order
 from toonmotion.io.video import save_animation
 from toonmotion.progress import Progress
 from toonmotion.render.frame import check_overlays, fit_view, natural_size, render_frame
+from toonmotion.render.raster import view_transform
 from toonmotion.rig.character import Character
 
 Colour = tuple[int, int, int]
@@ -24,6 +25,14 @@ WHITE = (255, 255, 255)
 def animation_view(character: Character, animation: Animation) -> View:
     """One view holding the drawing's canvas and every frame's mesh, so the camera stays still."""
     return fit_view(character, [U for _, U in animation.meshes])
+
+
+def frame_transform(character: Character, animation: Animation, *,
+                    size: tuple[int, int] | None = None) -> tuple[float, NDArray[np.float64]]:
+    """``(scale, offset)`` taking drawing points to the pixels of the frames :func:`write_animation`
+    writes with this ``size``: ``frame point = scale * drawing point + offset``."""
+    view = animation_view(character, animation)
+    return view_transform(view, natural_size(view, size=size))
 
 
 def render_animation(
