@@ -93,3 +93,9 @@ class KeyShapeError(ToonmotionError):
 class ProxyError(ToonmotionError):
     """A 3D proxy cannot be built: markers that are not finite or repeat a name, no frames, a
     motion prior that lacks markers or is too short to align, a camera that cannot see them."""
+
+
+class SceneError(ToonmotionError):
+    """A 3D scene cannot be built, rendered or composited: an element held at a marker the proxy
+    lacks, frames whose count or size differ from the proxy's, primitives that are not finite, a
+    missing physics engine."""

@@ -1,0 +1,490 @@
+"""Spheres and capsules seen through a :class:`PerspectiveCamera`: colour, depth and coverage.
+
+Simulated 3D elements (balloons, balls, strings) are rendered per frame from the estimated
+camera, to be depth-composited with the drawing. Each primitive is ray-cast exactly, and the
+nearest hit per pixel is kept (a z-buffer: the order of the primitives does not matter). For
+speed the primitives of a kind are cast together in NumPy, and only at the pixels they may
+cover: within the screen box of their bounding spheres, on each row the pixels between the two
+roots of a quadratic in the ray's x (a sphere, or the infinite cylinder round a capsule's axis),
+with a pixel of margin. Spheres and capsules that reach behind the camera are cast over the
+whole image, and only hits in front count.
+
+Conventions: 3D is right-handed, +Y up, metres; pictures are RGB, y down. Pixel ``(i, j)`` (row,
+column) is sampled at its centre, ``(j, i)`` in the camera's pixel coordinates (toonmotion's
+convention: a pixel's centre is at whole numbers, as the drawn markers are), so its ray is
+``camera.rays`` of that point. The depth of a hit is ``z_c``, its distance along the
+camera's axis (what :meth:`PerspectiveCamera.depth` gives), not along the ray: rays are scaled to
+unit depth, so a hit's ray parameter is its depth. Hits at depth ``MIN_DEPTH`` or less are not
+seen; a camera inside a primitive sees its inside. A capsule is the set of points within its
+radius of the segment ``ab``: a cylinder with hemispherical caps.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import cv2
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from toonmotion.errors import SceneError
+from toonmotion.geometry.arrays import frozen_array
+from toonmotion.proxy3d.camera import MIN_DEPTH, PerspectiveCamera
+
+SHADINGS = ("flat", "smooth", "toon")
+GREY = (180, 180, 180)
+LIGHT = (-0.4, 0.8, 0.45)
+# Smooth and toon shading: AMBIENT + (1 - AMBIENT) * max(0, n . l), toon in TOON_BANDS levels.
+AMBIENT = 0.35
+TOON_BANDS = 3
+
+
+@dataclass(frozen=True, eq=False)
+class Layer:
+    """What a camera sees of some primitives on one frame; every array is read-only.
+
+    Attributes
+    ----------
+    colour : (H, W, 3) uint8
+        Shaded RGB where a primitive is seen, black elsewhere.
+    depth : (H, W) float64
+        Depth (metres along the camera's axis) of the nearest surface, ``inf`` where nothing.
+    coverage : (H, W) bool
+        The occlusion map: True where any primitive is seen.
+    ids : (H, W) int32
+        Index of the primitive seen, spheres first and then capsules, -1 where nothing.
+    """
+
+    colour: NDArray[np.uint8]
+    depth: NDArray[np.float64]
+    coverage: NDArray[np.bool_]
+    ids: NDArray[np.int32]
+
+
+def render_primitives(camera: PerspectiveCamera, frame: int, *, spheres: ArrayLike | None = None,
+                      capsules: ArrayLike | None = None, colours: ArrayLike | None = None,
+                      shading: str = "toon", light: ArrayLike = LIGHT) -> Layer:
+    """Ray-cast spheres and capsules through ``camera`` on ``frame``, nearest hit per pixel.
+
+    Parameters
+    ----------
+    camera : PerspectiveCamera
+        The whole image, ``camera.width`` x ``camera.height``, is rendered.
+    frame : int
+        The camera's frame, ``0 <= frame < camera.frame_count``.
+    spheres : (S, 4) float, optional
+        Centre x, y, z and radius, metres.
+    capsules : (C, 7) float, optional
+        End ``a`` (3), end ``b`` (3) and radius, metres; ``a == b`` is a sphere.
+    colours : (S + C, 3) uint8, optional
+        RGB per primitive, spheres then capsules; default a neutral grey.
+    shading : {"flat", "smooth", "toon"}
+        ``"flat"``: the colour as is; ``"smooth"``: Lambert with ambient light,
+        ``AMBIENT + (1 - AMBIENT) * max(0, n . l)``; ``"toon"``: that in three bands (a cel look).
+    light : (3,) float
+        Direction towards the light in the world; normalised here.
+
+    Returns
+    -------
+    Layer
+
+    Raises
+    ------
+    SceneError
+        A frame the camera does not have, an unknown shading, arrays of the wrong shape,
+        non-finite values, negative radii, colours that are not 0-255, a zero light direction.
+
+    Examples
+    --------
+    A unit sphere 5 m ahead of a camera 40 x 30 pixels, whose pixel (15, 20)'s ray is the
+    camera's axis:
+
+    >>> cam = PerspectiveCamera(100.0, 40, 30, [[0, 0, 0, 0, 0, 5]])
+    >>> layer = render_primitives(cam, 0, spheres=[[0, 0, 0, 1]], shading="flat")
+    >>> float(layer.depth[15, 20]), int(layer.ids[15, 20]), layer.colour[15, 20].tolist()
+    (4.0, 0, [180, 180, 180])
+    >>> bool(layer.coverage[0, 0]), float(layer.depth[0, 0]), int(layer.ids[0, 0])
+    (False, inf, -1)
+    """
+    if shading not in SHADINGS:
+        raise SceneError(f"shading must be one of {', '.join(SHADINGS)}; got {shading!r}")
+    t = _frame(camera, frame)
+    S = _primitives(spheres, 4, "spheres", "(S, 4): centre x, y, z and radius")
+    C = _primitives(capsules, 7, "capsules", "(C, 7): end a x, y, z, end b x, y, z and radius")
+    rgb = _colours(colours, len(S) + len(C))
+    R, centre = camera.rotations[t], camera.centres[t]
+    z = _ZBuffer(camera, R @ _light(light), rgb, shading)
+    a, b = _to_camera(C[:, 0:3], R, centre), _to_camera(C[:, 3:6], R, centre)
+    point = np.all(C[:, 0:3] == C[:, 3:6], axis=1)  # a capsule whose ends coincide is a sphere
+    ids = np.arange(len(S) + len(C), dtype=np.int32)
+    # Rays that miss give NaN roots (square roots of negative numbers): they fail every test.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        _spheres(z, np.concatenate([ids[:len(S)], ids[len(S):][point]]),
+                 np.concatenate([_to_camera(S[:, :3], R, centre), a[point]]),
+                 np.concatenate([S[:, 3], C[point, 6]]))
+        _capsules(z, ids[len(S):][~point], a[~point], b[~point], C[~point, 6])
+    return z.layer()
+
+
+class _Rows(NamedTuple):
+    """One entry per primitive and image row of its box."""
+
+    prim: NDArray[np.intp]  # the primitive, an index into its batch
+    y: NDArray[np.float64]  # the row's rays' y (x_c / z_c)
+    start: NDArray[np.intp]  # flat index of the row's first pixel
+    j0: NDArray[np.intp]  # the box's columns, j0:j1
+    j1: NDArray[np.intp]
+
+
+class _ZBuffer:
+    """The image's buffers, flat, and each pixel column's and row's ray in the camera's frame.
+
+    Primitives are drawn in batches: :meth:`rows` and :meth:`pixels` list the pixels each may
+    cover, the caller finds its depth there, :meth:`keep` keeps the nearest hits.
+    """
+
+    def __init__(self, camera, light, rgb, shading):
+        f, W, H = camera.focal, camera.width, camera.height
+        self.focal, self.width, self.height, self.shading = f, W, H, shading
+        self.light = tuple(light.tolist())
+        # A pixel's ray in the camera's frame is (x[j], y[i], 1): unit depth, as camera.rays gives.
+        self.x = (np.arange(W) - W / 2) / f
+        self.y = (np.arange(H) - H / 2) / f
+        self.depth = np.full(H * W, np.inf)
+        self.ids = np.full(H * W, -1, np.int32)
+        # RGBA bytes packed in one uint32 per pixel: one scatter per hit.
+        self.colour = np.zeros(H * W, np.uint32)
+        self.rgb = rgb.astype(np.float64)
+        # Where R, G and B sit in a packed pixel: its bytes in memory are R, G, B, A.
+        self.shifts = (0, 8, 16) if sys.byteorder == "little" else (24, 16, 8)
+        # Flat: one level; toon: a level per band, the top one twice (n.l = 1 gives band index 3).
+        band = np.minimum(np.arange(TOON_BANDS + 1), TOON_BANDS - 1) / (TOON_BANDS - 1)
+        levels = np.ones(1) if shading == "flat" else AMBIENT + (1 - AMBIENT) * band
+        palette = np.zeros((len(rgb), len(levels), 4), np.uint8)
+        palette[..., :3] = np.rint(self.rgb[:, None, :] * levels[:, None])
+        self.levels = len(levels)
+        self.palette = palette.view(np.uint32).ravel()  # primitive k, level l at k * levels + l
+
+    def box(self, extent):
+        """Rows ``i0:i1`` and columns ``j0:j1`` whose centres may fall in ``extent`` (pixels), or None.
+
+        No extent: the whole image.
+        """
+        if extent is None:
+            return 0, self.height, 0, self.width
+        x0, x1, y0, y1 = extent
+        # Pixel j's centre is j; a pixel of margin for rounding. Clamp before int().
+        j0 = max(0, math.floor(min(max(x0, -2.0), self.width + 2.0)) - 1)
+        j1 = min(self.width, math.ceil(min(max(x1, -2.0), self.width + 2.0)) + 2)
+        i0 = max(0, math.floor(min(max(y0, -2.0), self.height + 2.0)) - 1)
+        i1 = min(self.height, math.ceil(min(max(y1, -2.0), self.height + 2.0)) + 2)
+        return (i0, i1, j0, j1) if i0 < i1 and j0 < j1 else None
+
+    def rows(self, boxes):
+        """The rows of each primitive's box (None: nothing to draw), as :class:`_Rows`; None if none."""
+        live = [k for k, box in enumerate(boxes) if box is not None]
+        if not live:
+            return None
+        i0, i1, j0, j1 = np.array([boxes[k] for k in live]).T
+        n = i1 - i0
+        i = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n - i0, n)
+        return _Rows(np.repeat(live, n), self.y[i], i * self.width, np.repeat(j0, n), np.repeat(j1, n))
+
+    def pixels(self, rows, alpha, beta, gamma, bounded):
+        """The pixels whose rays ``(x, y, 1)`` may have ``alpha x^2 + beta x + gamma >= 0`` on each row.
+
+        The coefficients hold one value per row. Where the row is ``bounded`` (``alpha`` clearly
+        negative) its pixels are those between the roots, with a pixel of margin; elsewhere the
+        whole row of the box. A superset, to be tested exactly: returns each pixel's entry in
+        ``rows``, its ray's x and its flat index, or None.
+        """
+        disc = beta * beta - 4 * alpha * gamma
+        root = np.sqrt(np.maximum(disc, 0.0))
+        # Column j's ray has x = (j - half) / f: the roots as columns, clamped before int().
+        half, scale = self.width / 2, self.focal / (2 * alpha)
+        j0, j1 = rows.j0, rows.j1
+        lo = np.minimum(np.maximum((root - beta) * scale + half, j0 - 1.0), j1 + 1.0)
+        hi = np.minimum(np.maximum((root + beta) * -scale + half, j0 - 1.0), j1 + 1.0)
+        first = np.where(bounded, np.maximum(np.ceil(lo) - 1, j0), j0).astype(np.intp)
+        last = np.where(bounded, np.minimum(np.floor(hi) + 1, j1 - 1), j1 - 1).astype(np.intp)
+        counts = np.maximum(last - first + 1, 0) * ((disc >= 0) | ~bounded)
+        total = int(counts.sum())
+        if total == 0:
+            return None
+        # Each row's run of columns, one after another.
+        row = np.repeat(np.arange(len(counts)), counts)
+        j = np.arange(total) + (first - (np.cumsum(counts) - counts))[row]
+        return row, self.x[j], rows.start[row] + j
+
+    def keep(self, flat, depth, lit, ids):
+        """Keep the hits at pixels ``flat`` nearer than what is there (NaN depth: no hit).
+
+        ``lit`` is ``n . l`` with the unit normal that faces the camera (None for flat shading);
+        ``ids`` are the hits' primitives. Several hits may share a pixel: the nearest is kept.
+        """
+        np.fmin.at(self.depth, flat, depth)
+        win = np.flatnonzero(depth == self.depth[flat])
+        flat, ids = flat[win], ids[win]
+        self.ids[flat] = ids
+        if self.shading == "flat":
+            self.colour[flat] = self.palette[ids]
+            return
+        lit = np.maximum(lit[win], 0.0)
+        if self.shading == "toon":
+            self.colour[flat] = self.palette[ids * self.levels + (lit * TOON_BANDS).astype(np.intp)]
+        else:
+            value = AMBIENT + (1 - AMBIENT) * lit
+            packed = np.zeros(len(flat), np.uint32)
+            for channel, shift in enumerate(self.shifts):
+                packed |= np.rint(self.rgb[:, channel][ids] * value).astype(np.uint32) << shift
+            self.colour[flat] = packed
+
+    def layer(self):
+        """The buffers as a :class:`Layer` of read-only ``(H, W)`` arrays."""
+        H, W = self.height, self.width
+        ids = self.ids.reshape(H, W)
+        rgb = cv2.cvtColor(self.colour.view(np.uint8).reshape(H, W, 4), cv2.COLOR_RGBA2RGB)
+        layer = Layer(colour=np.asarray(rgb, np.uint8), depth=self.depth.reshape(H, W), coverage=ids >= 0,
+                      ids=ids)
+        for array in (layer.colour, layer.depth, layer.coverage, layer.ids):
+            array.setflags(write=False)
+        return layer
+
+
+def _sphere_extent(z, m, r):
+    """Pixel bounds ``(x0, x1, y0, y1)`` of a sphere wholly in front of the camera; None otherwise."""
+    mx, my, mz = m
+    if mz <= r:
+        return None
+    # Tangent planes through the camera: x_c / z_c on the sphere spans (mx mz -+ r rho) / (mz^2 - r^2).
+    den = mz * mz - r * r
+    rho_x, rho_y = math.sqrt(mx * mx + den), math.sqrt(my * my + den)
+    f, w, h = z.focal, z.width / 2, z.height / 2
+    return (f * (mx * mz - r * rho_x) / den + w, f * (mx * mz + r * rho_x) / den + w,
+            f * (my * mz - r * rho_y) / den + h, f * (my * mz + r * rho_y) / den + h)
+
+
+def _sphere_roots(xs, dd, mx, row_term, c, far=True):
+    """The depths where rays ``(xs, y, 1)`` enter and (if ``far``) leave a sphere ``m``; NaN: miss.
+
+    ``|t d - m|^2 = r^2`` gives ``t = (d.m -+ sqrt((d.m)^2 - c d.d)) / d.d`` with ``c = |m|^2 - r^2``;
+    ``dd`` is ``d.d`` and ``d.m = mx xs + row_term``, ``row_term = my y + mz``.
+    """
+    b = mx * xs + row_term
+    s = np.sqrt(b * b - dd * c)
+    return (b - s) / dd, ((b + s) / dd if far else None)
+
+
+def _spheres(z, ids, m, r):
+    """Ray-cast spheres ``ids`` (centres ``m`` (n, 3) in the camera's frame, radii ``r``)."""
+    boxes = [z.box(_sphere_extent(z, c, s)) if s > 0 and c[2] + s > MIN_DEPTH else None
+             for c, s in zip(m.tolist(), r.tolist(), strict=True)]  # radius 0, or wholly behind: unseen
+    rows = z.rows(boxes)
+    if rows is None:
+        return
+    # Per row: the ray (x, y, 1) meets the sphere where |m x d|^2 <= r^2 |d|^2, a quadratic in x.
+    y, (mx, my, mz), radius = rows.y, m[rows.prim].T, r[rows.prim]
+    r2, mm = radius * radius, mx * mx + my * my + mz * mz
+    alpha = r2 - my * my - mz * mz
+    # (alpha clearly negative: the roots' rounding errors are far below a pixel)
+    pixels = z.pixels(rows, alpha, 2 * mx * (mz + my * y), (r2 - mx * mx) * (1 + y * y) - (my - mz * y) ** 2,
+                      alpha < -1e-3 * (mm + r2))
+    if pixels is None:
+        return
+    row, xs, flat = pixels
+    behind = bool(np.any(mz - radius <= MIN_DEPTH))  # one reaches behind the camera: see its far side
+    depth, far = _sphere_roots(xs, xs * xs + (1 + y * y)[row], mx[row], (my * y + mz)[row], (mm - r2)[row],
+                               far=behind)
+    if behind:  # where the near side is behind the camera (inside the sphere, or it is cut by its plane)
+        inside = ~(depth > MIN_DEPTH)
+        depth = np.where(inside, np.where(far > MIN_DEPTH, far, np.nan), depth)
+    lit = None
+    if z.shading != "flat":
+        # n . l with n = (t d - m) / r, turned round where the inside is seen.
+        lx, ly, lz = z.light
+        lit = (depth * (lx * xs + (ly * y + lz)[row]) - (lx * mx + ly * my + lz * mz)[row]) / radius[row]
+        if behind:
+            lit = np.where(inside, -lit, lit)
+    z.keep(flat, depth, lit, ids[rows.prim][row])
+
+
+def _capsules(z, ids, a, b, r):
+    """Ray-cast capsules ``ids`` (ends ``a != b`` (n, 3) in the camera's frame, radii ``r``)."""
+    seen = (r > 0) & (np.maximum(a[:, 2], b[:, 2]) + r > MIN_DEPTH)
+    front = np.minimum(a[:, 2], b[:, 2]) - r > MIN_DEPTH  # wholly in front: the camera is outside
+    for group, in_front in ((seen & front, True), (seen & ~front, False)):
+        if group.any():
+            _capsule_batch(z, ids[group], a[group], b[group], r[group], in_front)
+
+
+def _capsule_batch(z, ids, a, b, r, in_front):
+    """Ray-cast capsules all wholly ``in_front`` of the camera, or all not."""
+    boxes = []
+    for p, q, s in zip(a.tolist(), b.tolist(), r.tolist(), strict=True):
+        ep, eq = _sphere_extent(z, p, s), _sphere_extent(z, q, s)
+        # The capsule is the hull of its end spheres; in front of the camera, so is its picture.
+        boxes.append(z.box(None if ep is None or eq is None else (
+            min(ep[0], eq[0]), max(ep[1], eq[1]), min(ep[2], eq[2]), max(ep[3], eq[3]))))
+    rows = z.rows(boxes)
+    if rows is None:
+        return
+    length = np.linalg.norm(b - a, axis=1)
+    u = (b - a) / length[:, None]
+    g = np.cross(a, u)  # the axis's moment
+    c = _Capsules(a[rows.prim], b[rows.prim], u[rows.prim], g[rows.prim], length[rows.prim], r[rows.prim],
+                  rows.y)
+    # Per row: the ray (x, y, 1) comes within r of the axis where (d.g)^2 <= r^2 |d x u|^2, a quadratic
+    # in x. Every ray that meets the capsule does.
+    (ux, uy, uz), (gx, gy, gz), y, r2 = c.u.T, c.g.T, c.y, c.r ** 2
+    moment = gy * y + gz
+    alpha = r2 * (uy * uy + uz * uz) - gx * gx
+    pixels = z.pixels(rows, alpha, -2 * r2 * ux * (uz + uy * y) - 2 * gx * moment,
+                      r2 * ((y * uz - uy) ** 2 + ux * ux * (1 + y * y)) - moment * moment,
+                      alpha < -1e-3 * (r2 + gx * gx + gy * gy + gz * gz))
+    if pixels is None:
+        return
+    row, xs, flat = pixels
+    dd = xs * xs + (1 + y * y)[row]
+    du = ux[row] * xs + (uy * y + uz)[row]
+    depth = (_capsule_in_front if in_front else _capsule_anywhere)(c, row, xs, dd, du)
+    lit = None
+    if z.shading != "flat":
+        # n . l with n = (t d - a - w u) / r, from the nearest point of the segment (w along it) to the hit.
+        (ax, ay, az), (lx, ly, lz) = c.a.T, z.light
+        w = np.minimum(np.maximum(depth * du - (ax * ux + ay * uy + az * uz)[row], 0.0), c.length[row])
+        lit = (depth * (lx * xs + (ly * y + lz)[row]) - (lx * ax + ly * ay + lz * az)[row]
+               - w * (lx * ux + ly * uy + lz * uz)[row]) / c.r[row]
+        if not in_front:  # where n . d > 0 the inside is seen: turn n round
+            away = depth * dd - (ax[row] * xs + (ay * y + az)[row]) - w * du > 0
+            lit = np.where(away, -lit, lit)
+    z.keep(flat, depth, lit, ids[rows.prim][row])
+
+
+class _Capsules(NamedTuple):
+    """Capsules' ends, axis, moment ``a x u``, length and radius, one per row of :class:`_Rows`."""
+
+    a: NDArray[np.float64]
+    b: NDArray[np.float64]
+    u: NDArray[np.float64]
+    g: NDArray[np.float64]
+    length: NDArray[np.float64]
+    r: NDArray[np.float64]
+    y: NDArray[np.float64]
+
+    def cylinder(self, row, xs, dd, du):
+        """The depths where the rays enter and leave the infinite cylinder about the axis; NaN: miss.
+
+        With ``d_p`` and ``a_p`` the ray and ``a`` across the axis, ``|t d_p - a_p|^2 = r^2``:
+        ``t = (d.a_p -+ sqrt(|d x u|^2 r^2 - (d.g)^2)) / |d x u|^2``.
+        """
+        (gx, gy, gz), y = self.g.T, self.y
+        a_p = self.a - np.sum(self.a * self.u, axis=1)[:, None] * self.u
+        # |d x u|^2 = |d|^2 - (d.u)^2 loses digits only for rays nearly along the axis, and those
+        # meet the side between the ends only on capsules far longer than r over their angle.
+        across = dd - du * du
+        e = gx[row] * xs + (gy * y + gz)[row]
+        s = np.sqrt(across * (self.r ** 2)[row] - e * e)
+        d_a = a_p[:, 0][row] * xs + (a_p[:, 1] * y + a_p[:, 2])[row]
+        return (d_a - s) / across, (d_a + s) / across
+
+    def cap(self, end, row, xs, dd):
+        """The depths where the rays enter and leave the sphere at ``end`` (per row); NaN: miss."""
+        mx, my, mz = end.T
+        return _sphere_roots(xs, dd, mx[row], (my * self.y + mz)[row],
+                             (mx * mx + my * my + mz * mz - self.r ** 2)[row])
+
+    def along(self, row, depth, du):
+        """How far along the axis from ``a`` the hits at ``depth`` lie."""
+        return depth * du - np.sum(self.a * self.u, axis=1)[row]
+
+
+def _capsule_in_front(c, row, xs, dd, du):
+    """The nearest hits on capsules wholly in front of the camera (so the camera is outside them).
+
+    The ray's entry into the infinite cylinder is the hit where it lies between the ends; before
+    a's end the ray can only meet a's cap first, beyond b's end b's (Quilez's capsule intersection).
+    """
+    depth = c.cylinder(row, xs, dd, du)[0]
+    w = c.along(row, depth, du)
+    caps = np.flatnonzero(~((w >= 0) & (w <= c.length[row])))
+    if caps.size:
+        rows, w, du = row[caps], w[caps], du[caps]
+        # No entry (NaN: a miss, or a ray along the axis): the end the ray reaches first.
+        end = np.where(np.where(np.isfinite(w), w > c.length[rows], du < 0)[:, None], c.b[rows], c.a[rows])
+        mx, my, mz = end.T
+        y = c.y[rows]
+        depth[caps] = _sphere_roots(xs[caps], dd[caps], mx, my * y + mz,
+                                    mx * mx + my * my + mz * mz - c.r[rows] ** 2, far=False)[0]
+    return depth
+
+
+def _capsule_anywhere(c, row, xs, dd, du):
+    """The nearest hits in front of the camera on capsules that reach behind it, or hold it.
+
+    Every root of the cylinder and the two end spheres, each kept where it lies on the capsule's
+    surface (the cylinder between the ends, a sphere beyond its own end); the nearest in front.
+    """
+    length = c.length[row]
+    slack = 1e-9 * (length + c.r[row])  # where the cylinder meets a cap, both may claim a hit
+    found = []
+    for t in c.cylinder(row, xs, dd, du):
+        w = c.along(row, t, du)
+        found.append(np.where((w >= -slack) & (w <= length + slack), t, np.nan))
+    for end, beyond_a in ((c.a, True), (c.b, False)):
+        for t in c.cap(end, row, xs, dd):
+            w = c.along(row, t, du)
+            found.append(np.where(w <= slack if beyond_a else w >= length - slack, t, np.nan))
+    roots = np.stack(found)
+    depth = np.min(np.where(roots > MIN_DEPTH, roots, np.inf), axis=0)
+    return np.where(np.isinf(depth), np.nan, depth)
+
+
+def _to_camera(points, R, centre):
+    """World points ``(n, 3)`` in the camera's frame, each row computed alike whatever ``n``."""
+    d = points - centre
+    return d[:, 0:1] * R[:, 0] + d[:, 1:2] * R[:, 1] + d[:, 2:3] * R[:, 2]
+
+
+def _frame(camera, frame):
+    T = camera.frame_count
+    if isinstance(frame, bool) or not isinstance(frame, int | np.integer) or not 0 <= frame < T:
+        raise SceneError(f"the frame must be a whole number from 0 to {T - 1} (the camera has {T} "
+                         f"frames), got {frame!r}")
+    return int(frame)
+
+
+def _primitives(value, columns, name, layout):
+    if value is None:
+        return np.zeros((0, columns))
+    array = frozen_array(value, dtype=np.float64, name=f"the {name}", error=SceneError, finite=True)
+    if array.size == 0:
+        return np.zeros((0, columns))
+    if array.ndim != 2 or array.shape[1] != columns:
+        raise SceneError(f"the {name} must be an array of shape {layout}; got shape {array.shape}")
+    if np.any(array[:, -1] < 0):
+        i = int(np.flatnonzero(array[:, -1] < 0)[0])
+        raise SceneError(f"the {name} must have radii >= 0; number {i} has radius {array[i, -1]:g}")
+    return array
+
+
+def _colours(value, n):
+    if value is None:
+        return np.tile(np.array(GREY, np.uint8), (n, 1))
+    rgb = frozen_array(value, dtype=np.uint8, name="the colours", error=SceneError)
+    if rgb.shape != (n, 3):
+        raise SceneError(f"the colours must be an (S + C, 3) = ({n}, 3) array of RGB 0-255, one per "
+                         f"primitive; got shape {rgb.shape}")
+    return rgb
+
+
+def _light(value):
+    light = frozen_array(value, dtype=np.float64, name="the light", error=SceneError, finite=True)
+    if light.shape != (3,):
+        raise SceneError(f"the light must be a direction (x, y, z); got shape {light.shape}")
+    norm = float(np.linalg.norm(light))
+    if norm == 0:
+        raise SceneError("the light must be a non-zero direction (x, y, z); got (0, 0, 0)")
+    return light / norm
