@@ -5,6 +5,8 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+# The shared motion-capture clips (../shared beside the checkout), for the 3D scene step of the demo.
+MOCAP ?= ../shared/data/mocap
 
 .PHONY: demo test lint bench fuzz browser validator clean
 
@@ -23,6 +25,11 @@ demo: $(STAMP)
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo.gif
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo.mp4
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo_exaggerated.gif --exaggerate 1.5
+	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/frames --save-frame-motion demo/motion.json
+	$(BIN)/toonmotion lift demo/motion.json --prior $(MOCAP)/cmu_16_07_jump.bvh --frames demo/frames \
+	  --view 0,0 -o demo/proxy.json --glb demo/proxy.glb
+	$(BIN)/toonmotion scene demo/proxy.json --frames demo/frames --balloon right_hand \
+	  --balls left_foot,right_foot -o demo/demo_scene.mp4
 
 test: $(STAMP) browser validator
 	$(BIN)/ruff check src tests benchmarks

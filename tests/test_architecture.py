@@ -1,7 +1,7 @@
 """The layering docs/architecture.md describes holds: modules import only sideways or downwards.
 
 The layers, top to bottom, are listed once here and in the document's diagram; a new package
-(``keyshape/``, ``proxy3d/``, ``web/``) must be given a place in both before it can be imported.
+(``keyshape/``, ``proxy3d/``, ``scene/``, ``web/``) must be given a place in both before it can be imported.
 """
 
 import ast
@@ -16,6 +16,7 @@ LAYERS = (
     {"cli", "web"},
     {"api"},
     {"io", "render", "testing", "samples", "sample_animation", "sample_cartoons"},
+    {"scene"},
     {"capture", "keyshape", "proxy3d"},
     {"animate"},
     {"deform"},

@@ -55,6 +55,7 @@ from toonmotion.api.posing import (
 )
 from toonmotion.api.proxy3d import lift_proxy, preview_proxy
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
+from toonmotion.api.scene3d import composite_scene, render_elements, simulate_scene
 from toonmotion.capture.footage import Capture, suggest_joints
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
@@ -69,9 +70,13 @@ from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.sequence import write_animation
 from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.sketch import SketchMatch
+from toonmotion.scene.elements import Balloon, Balls
+from toonmotion.scene.simulate import SceneMotion
 
 __all__ = [
     "Animation",
+    "Balloon",
+    "Balls",
     "Capture",
     "Character",
     "ContourCapture",
@@ -85,6 +90,7 @@ __all__ = [
     "Proxy",
     "RigSettings",
     "SameDepthOverlap",
+    "SceneMotion",
     "SketchMatch",
     "TrackSettings",
     "VideoCapture",
@@ -93,6 +99,7 @@ __all__ = [
     "capture_contours",
     "capture_parts",
     "capture_video",
+    "composite_scene",
     "correct_regions",
     "delete_key",
     "exaggerate",
@@ -107,6 +114,7 @@ __all__ = [
     "pose_view",
     "preview_proxy",
     "redo_edits",
+    "render_elements",
     "render_pose",
     "retarget",
     "retarget_keyposes",
@@ -122,6 +130,7 @@ __all__ = [
     "save_project",
     "set_depth",
     "set_key",
+    "simulate_scene",
     "sketch_pose",
     "suggest_joints",
     "track_footage",

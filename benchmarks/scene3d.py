@@ -1,0 +1,117 @@
+"""Simulated 3D elements composited into a drawing (Jain et al. 2012, 3.5): time per frame; JSON lines.
+
+    python benchmarks/scene3d.py [--proxy PROXY.json --frames FRAMES] [--balloon MARKER]
+                                 [--balls MARKER,...] [--prior BVH] [--repeat N]
+
+Without --proxy, the demo scene is made first, as ``make demo`` makes it but at 640 x 480: the
+bundled character's key-frames animated to transparent PNGs, lifted with a shared mocap clip as
+the prior (``--prior``, default the CMU jump) from the front, a balloon at its right hand and
+balls at its feet. With --proxy and --frames, any proxy and its drawn frames are measured
+(``--balloon`` and ``--balls`` name its markers).
+
+Line 1 (best of ``--repeat`` runs, one core): ``simulate_ms``, ``render_ms``, ``composite_ms``
+per frame (MuJoCo's sub-steps; the ray-cast colour, depth and occlusion maps; the drawing's depth,
+alpha and the depth test) and their ``total_ms`` (goal <= 50), with the frame size, frame count,
+sub-steps, balls and the deepest contact. Line 2: the frames per second of the whole ``toonmotion
+scene`` command writing an MP4 (start-up, reading, simulating, compositing and encoding).
+"""
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+from toonmotion import api  # noqa: E402
+from toonmotion.io.frames import lay_on, load_frames  # noqa: E402
+from toonmotion.io.proxy_json import load_proxy  # noqa: E402
+from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth  # noqa: E402
+from toonmotion.scene.elements import Balloon, Balls  # noqa: E402
+
+SHARED_MOCAP = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
+TOONMOTION = [sys.executable, "-m", "toonmotion.cli"]
+
+
+def demo_scene(folder, prior):
+    """The demo's proxy and frames at 640 x 480, made with the command line in ``folder``."""
+    def run(*argv):
+        subprocess.run([*TOONMOTION, *map(str, argv)], cwd=folder, check=True, capture_output=True)
+
+    run("sample", "-o", "hero.png", "--skeleton", "hero.json", "--keys", "keys.json")
+    run("rig", "hero.png", "--skeleton", "hero.json", "-o", "hero")
+    run("animate", "hero", "keys.json", "-o", "frames", "--size", "640x480", "--save-frame-motion",
+        "motion.json")
+    run("lift", "motion.json", "--prior", prior, "--frames", "frames", "--view", "0,0", "-o", "proxy.json")
+    return folder / "proxy.json", folder / "frames"
+
+
+def stages(proxy, pictures, elements):
+    """Milliseconds per frame of each stage, one pass."""
+    T = proxy.frame_count
+    start = time.perf_counter()
+    motion = api.simulate_scene(proxy, elements)
+    simulate = time.perf_counter() - start
+    pixels, depths = proxy.camera.project(proxy.points), proxy.camera.depth(proxy.points)
+    render = mix = 0.0
+    for t in range(T):
+        start = time.perf_counter()
+        layer = api.render_elements(proxy, motion, t)
+        render += time.perf_counter() - start
+        start = time.perf_counter()
+        alpha, figure = drawing_alpha(pictures[t])
+        drawn = drawn_depth(figure * layer.coverage, pixels[t], depths[t], proxy.limbs)
+        composite(lay_on(pictures[t]), layer, drawn, alpha=alpha, figure=figure)
+        mix += time.perf_counter() - start
+    per = 1000.0 / T
+    return {"simulate_ms": simulate * per, "render_ms": render * per, "composite_ms": mix * per}, motion
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--proxy", type=Path, help="A proxy file (default: the demo scene's, made here).")
+    parser.add_argument("--frames", type=Path, help="Its drawn frames (with --proxy).")
+    parser.add_argument("--balloon", default="right_hand", help="Marker holding a balloon ('' for none).")
+    parser.add_argument("--balls", default="left_foot,right_foot", help="Markers with balls in their path.")
+    parser.add_argument("--prior", type=Path, default=SHARED_MOCAP / "cmu_16_07_jump.bvh",
+                        help="The demo's prior clip.")
+    parser.add_argument("--repeat", type=int, default=3, help="Runs per stage; the best counts.")
+    args = parser.parse_args()
+    if (args.proxy is None) != (args.frames is None):
+        parser.error("give --proxy and --frames together")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        proxy_path, frames_path = (args.proxy, args.frames) if args.proxy else demo_scene(folder, args.prior)
+        proxy = load_proxy(proxy_path)
+        pictures = load_frames(frames_path, alpha=True)[0]
+        elements = [Balloon(args.balloon)] if args.balloon else []
+        elements += [Balls(m) for m in args.balls.split(",") if m]
+        runs = [stages(proxy, pictures, elements) for _ in range(max(1, args.repeat))]
+        best = {k: min(r[0][k] for r in runs) for k in runs[0][0]}
+        motion = runs[0][1]
+        total = sum(best.values())
+        print(json.dumps({"scene": "demo" if args.proxy is None else str(proxy_path),
+                          "size": [proxy.camera.width, proxy.camera.height], "frames": proxy.frame_count,
+                          "substeps": motion.substeps, "balls": motion.balls.shape[1],
+                          **{k: round(v, 2) for k, v in best.items()}, "total_ms": round(total, 2),
+                          "goal_total_ms": 50, "deepest_contact_mm": round(motion.deepest * 1000, 2)}),
+              flush=True)
+        argv = ["scene", proxy_path, "--frames", frames_path, "-o", folder / "scene.mp4"]
+        argv += ["--balloon", args.balloon] if args.balloon else []
+        argv += ["--balls", args.balls] if args.balls else []
+        start = time.perf_counter()
+        subprocess.run([*TOONMOTION, *map(str, argv)], check=True, capture_output=True)
+        seconds = time.perf_counter() - start
+        print(json.dumps({"command": "toonmotion scene -> mp4", "frames": proxy.frame_count,
+                          "seconds": round(seconds, 2), "fps": round(proxy.frame_count / seconds, 2)}),
+              flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,194 @@
+"""Simulated 3D elements around a 3D proxy, composited with the drawing in depth order (Jain et al.
+2012, section 3.5): the calls behind ``scene`` (docs/scene3d.md)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from toonmotion.errors import SceneError
+from toonmotion.io.frames import lay_on
+from toonmotion.progress import Progress
+from toonmotion.proxy3d.proxy import Proxy
+from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
+from toonmotion.render.zbuffer import Layer, render_primitives
+from toonmotion.scene.build import build_scene
+from toonmotion.scene.elements import Element
+from toonmotion.scene.simulate import SceneMotion, simulate
+
+SHADINGS = ("toon", "smooth", "flat")
+
+
+def simulate_scene(proxy: Proxy, elements: Sequence[Element], *,
+                   progress: Progress | None = None) -> SceneMotion:
+    """Simulate scene elements driven by a proxy, one state per drawn frame (MuJoCo).
+
+    The proxy's collision volumes (tapered cylinders and joint spheres; default ones when it was
+    lifted without drawn frames) move as it moves and push what they touch; strings are held at
+    their markers' points.
+
+    Parameters
+    ----------
+    proxy : Proxy
+        From :func:`toonmotion.api.lift_proxy` or a proxy file.
+    elements : sequence of Balloon or Balls
+        :mod:`toonmotion.scene.elements`.
+    progress : callable, optional
+        ``progress("simulate", done, total)``.
+
+    Returns
+    -------
+    SceneMotion
+        The elements as spheres and capsules per frame.
+
+    Raises
+    ------
+    SceneError
+        An element held at a marker the proxy lacks.
+
+    Examples
+    --------
+    A still figure with a ball at its foot: the ball stays where it lies.
+
+    >>> from toonmotion.proxy3d.camera import PerspectiveCamera
+    >>> from toonmotion.scene.elements import Balls
+    >>> cam = PerspectiveCamera(500.0, 160, 120, [[0, 0, 0, 0, 1, 5]] * 6)
+    >>> pts = np.array([[[0.0, 1, 0], [0.0, 0.1, 0]]] * 6)
+    >>> proxy = Proxy(("hip", "foot"), [-1, 0], 12, cam, pts, None, pts, [[0.0, -0.9, 0]],
+    ...               [[[0.0, 0, 0, 1]]] * 6)
+    >>> motion = simulate_scene(proxy, [Balls("foot", count=1)])
+    >>> float(np.abs(motion.balls[-1] - motion.balls[0]).max()) < 1e-3
+    True
+    """
+    return simulate(build_scene(proxy, list(elements)), proxy, progress=progress)
+
+
+def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: str = "toon") -> Layer:
+    """The elements seen from the proxy's camera on one frame: colour, depth and occlusion maps.
+
+    The proxy itself is not drawn.
+
+    Parameters
+    ----------
+    proxy : Proxy
+    motion : SceneMotion
+        From :func:`simulate_scene`.
+    frame : int
+    shading : str
+        ``"toon"`` (Lambert light in three bands, to sit with a drawing), ``"smooth"`` or
+        ``"flat"``.
+
+    Returns
+    -------
+    Layer
+        :class:`toonmotion.render.zbuffer.Layer`: ``colour``, ``depth`` (metres along the camera's
+        axis, ``inf`` where nothing is seen), ``coverage`` (the occlusion map) and ``ids``.
+
+    Raises
+    ------
+    SceneError
+        An unknown shading, a frame the proxy does not have.
+
+    Examples
+    --------
+    A ball on the ground 5 m in front of a camera half a metre up:
+
+    >>> from toonmotion.proxy3d.camera import PerspectiveCamera
+    >>> from toonmotion.scene.elements import Balls
+    >>> cam = PerspectiveCamera(500.0, 160, 120, [[0, 0, 0, 0, 0.5, 5]] * 2)
+    >>> pts = np.array([[[0.0, 1, 0], [0.0, 0.1, 0]]] * 2)
+    >>> proxy = Proxy(("hip", "foot"), [-1, 0], 12, cam, pts, None, pts, [[0.0, -0.9, 0]],
+    ...               [[[0.0, 0, 0, 1]]] * 2)
+    >>> layer = render_elements(proxy, simulate_scene(proxy, [Balls("foot", count=1)]), 1)
+    >>> bool(layer.coverage.any()), bool(4.8 < layer.depth[layer.coverage].min() < 5.2)
+    (True, True)
+    """
+    if shading not in SHADINGS:
+        raise SceneError(f"shading must be one of {', '.join(SHADINGS)}, got {shading!r}")
+    return render_primitives(proxy.camera, frame, spheres=motion.spheres[frame],
+                             capsules=motion.capsules[frame], colours=motion.colours, shading=shading)
+
+
+def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, shading: str = "toon",
+                    background: tuple[int, int, int] = (255, 255, 255),
+                    progress: Progress | None = None) -> Iterator[NDArray[np.uint8]]:
+    """The drawn frames with the simulated elements, in depth order (eq. 23-26), frame by frame.
+
+    Parameters
+    ----------
+    proxy : Proxy
+    frames : (T, H, W, 3 or 4) uint8
+        The drawn frames, as many as the proxy's and of its camera's size. With an alpha channel
+        (transparent PNGs), the figure is where it is not transparent; otherwise they are taken as
+        line art on white (:func:`toonmotion.render.depth_composite.drawing_alpha`).
+    motion : SceneMotion
+        From :func:`simulate_scene`.
+    shading : str
+        As :func:`render_elements`.
+    background : (r, g, b)
+        What transparent drawn frames are laid on.
+    progress : callable, optional
+        ``progress("composite", done, total)``.
+
+    Returns
+    -------
+    iterator of (H, W, 3) uint8
+        Each composited frame, made as it is asked for. Where no element is seen, the drawing
+        (laid on ``background`` if it is transparent) is kept bit for bit.
+
+    Raises
+    ------
+    SceneError
+        Frames whose count or size differ from the proxy's, an unknown shading (at the call,
+        before any frame is made).
+
+    Examples
+    --------
+    >>> from toonmotion.proxy3d.camera import PerspectiveCamera
+    >>> cam = PerspectiveCamera(500.0, 160, 120, [[0, 0, 0, 0, 1, 5]] * 2)
+    >>> pts = np.array([[[0.0, 1, 0], [0.0, 0.1, 0]]] * 2)
+    >>> proxy = Proxy(("hip", "foot"), [-1, 0], 12, cam, pts, None, pts, [[0.0, -0.9, 0]],
+    ...               [[[0.0, 0, 0, 1]]] * 2)
+    >>> drawing = np.full((2, 120, 160, 3), 255, np.uint8)
+    >>> out = list(composite_scene(proxy, drawing, simulate_scene(proxy, [])))
+    >>> all(np.array_equal(o, d) for o, d in zip(out, drawing))
+    True
+    """
+    pictures = check_frames(proxy, frames)
+    if shading not in SHADINGS:
+        raise SceneError(f"shading must be one of {', '.join(SHADINGS)}, got {shading!r}")
+    return _composited(proxy, pictures, motion, shading, background, progress)
+
+
+def _composited(proxy, pictures, motion, shading, background, progress):
+    T = proxy.frame_count
+    pixels = proxy.camera.project(proxy.points)
+    depths = proxy.camera.depth(proxy.points)
+    for t in range(T):
+        layer = render_elements(proxy, motion, t, shading=shading)
+        alpha, figure = drawing_alpha(pictures[t])
+        # The drawing's depth matters only where an element is seen over the figure.
+        drawn = drawn_depth(np.where(layer.coverage, figure, 0.0), pixels[t], depths[t], proxy.limbs)
+        yield composite(lay_on(pictures[t], background), layer, drawn, alpha=alpha, figure=figure)
+        if progress is not None:
+            progress("composite", t + 1, T)
+
+
+def check_frames(proxy: Proxy, frames: ArrayLike) -> NDArray[np.uint8]:
+    """The drawn frames as an array, checked against the proxy's frame count and image size."""
+    pictures = np.asarray(frames)
+    if pictures.ndim != 4 or pictures.shape[3] not in (3, 4) or pictures.dtype != np.uint8:
+        raise SceneError(f"drawn frames must be (frames, height, width, 3 or 4) bytes, got {pictures.shape} "
+                         f"{pictures.dtype}")
+    if len(pictures) != proxy.frame_count:
+        raise SceneError(f"the drawing has {len(pictures)} frames but the proxy {proxy.frame_count}; "
+                         "give the frames the proxy was lifted from")
+    H, W = pictures.shape[1:3]
+    cam = proxy.camera
+    if (W, H) != (cam.width, cam.height):
+        raise SceneError(f"the frames are {W}x{H} pixels but the proxy's camera sees "
+                         f"{cam.width}x{cam.height}; give the frames the proxy was lifted from")
+    return pictures
+

@@ -1,0 +1,268 @@
+"""A MuJoCo model of a proxy and its scene elements (section 3.5).
+
+The proxy is **kinematic**: each marker is a body holding its joint sphere and each limb a body
+holding its tapered cylinder, drawn as :data:`SEGMENTS` capsules whose radii step from one end's
+radius to the other's (MuJoCo has no cone; the steps differ from the taper by at most a sixth of
+the radii's difference). Their poses, velocities and sizes are written every sub-step from the
+lifted motion (:mod:`toonmotion.scene.simulate`) and they are heavy, so that what they touch
+takes their velocity and they do not give way. Proxy geoms collide with the elements but not with
+each other or the ground.
+
+Elements (:mod:`toonmotion.scene.elements`) are ordinary bodies: a balloon's string is a chain of
+:data:`STRING_LINKS` capsules on ball joints hanging from its marker's body (a child of it, so the
+string's end is exactly the marker's point), the balloon a sphere pulled up by gravity
+compensation; balls are free spheres on the ground plane Y = 0. Air (MuJoCo's fluid model,
+density 1.2 kg/m^3) drags on everything that moves.
+
+World: +Y up, metres, gravity -9.81 m/s^2 along Y (the proxy's frame).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion.errors import SceneError
+from toonmotion.proxy3d.proxy import Proxy
+from toonmotion.scene.elements import (
+    BALL_RADIUS,
+    BALLOON_RADIUS,
+    STRING_LENGTH,
+    Balloon,
+    Balls,
+    Element,
+)
+
+SEGMENTS = 3  # capsules per tapered cylinder
+STRING_LINKS = 8
+# Proxy radii when the proxy has no collision volumes (lifted without drawn frames), as a fraction
+# of the figure's height.
+DEFAULT_LIMB_RADIUS = 0.035
+KINEMATIC_MASS = 1000.0  # kg: the proxy does not give way
+BALL_DENSITY = 300.0  # kg/m^3, a light rubber ball
+BALLOON_MASS = 0.01  # kg
+STRING_RADIUS = 0.003  # m, physical; drawn wider (simulate.STRING_DRAWN_PX)
+# Collision bits: proxies (2) touch elements (3) only; elements touch the ground (1) and each other.
+PROXY_BITS = 'contype="2" conaffinity="0"'
+ELEMENT_BITS = 'contype="1" conaffinity="3"'
+CONTACT = 'solref="0.004 1" condim="6" friction="0.9 0.005 0.002"'
+
+
+@dataclass(frozen=True, eq=False)
+class SceneModel:
+    """A compiled scene: the MuJoCo model and where each part of the proxy and the scene is in it.
+
+    Attributes
+    ----------
+    model : mujoco.MjModel
+    height : float
+        The figure's height (metres) that default sizes follow.
+    limb_radii : (T, K, 2) float
+        The cylinders' radii used (the proxy's, or a default when it has none).
+    marker_bodies, limb_bodies : list of int
+        The kinematic bodies, one per marker and one per limb (``proxy.limbs`` order).
+    limb_geoms : (K, SEGMENTS) int
+        Each limb's capsules, parent end first.
+    element_geoms : list of int
+        The geoms to draw, in drawing order.
+    colours : (E, 3) uint8
+        Their colours.
+    held : list of (int, int)
+        ``(geom, marker)``: a string's first capsule and the marker holding it.
+    balls : list of int
+        The balls' geoms.
+    default_volumes : bool
+        Whether the proxy had no volumes and ``limb_radii`` are defaults.
+    """
+
+    model: Any
+    height: float
+    limb_radii: NDArray[np.float64]
+    marker_bodies: list[int]
+    limb_bodies: list[int]
+    limb_geoms: NDArray[np.int64]
+    element_geoms: list[int]
+    colours: NDArray[np.uint8]
+    held: list[tuple[int, int]] = field(default_factory=list)
+    balls: list[int] = field(default_factory=list)
+    default_volumes: bool = False
+
+
+def figure_height(proxy: Proxy) -> float:
+    """The figure's height, metres: the largest vertical extent of its points over the clip."""
+    Y = proxy.points[..., 1]
+    return float(max((Y.max(axis=1) - Y.min(axis=1)).max(), 1e-3))
+
+
+def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> SceneModel:
+    """Compile the proxy and the elements into a MuJoCo model.
+
+    Raises
+    ------
+    SceneError
+        An element names a marker the proxy lacks, or MuJoCo is not installed.
+    """
+    mujoco = _mujoco()
+    names = list(proxy.names)
+    for element in elements:
+        if element.marker not in names:
+            raise SceneError(f"the {type(element).__name__.lower()} is held at {element.marker!r}, which the "
+                             f"proxy lacks; its markers are {', '.join(names)}")
+    height = figure_height(proxy)
+    radii = _limb_radii(proxy, height)
+    default_volumes = proxy.radii is None
+    P0 = proxy.points[0]
+    held_xml: dict[int, list[str]] = {}
+    element_xml = []
+    for i, element in enumerate(elements):
+        if isinstance(element, Balloon):
+            held_xml.setdefault(names.index(element.marker), []).append(_balloon_xml(i, element, height))
+    placed: list[tuple[NDArray[np.float64], float]] = []
+    ball_names: list[str] = []
+    for i, element in enumerate(elements):
+        if isinstance(element, Balls):
+            r = element.radius or BALL_RADIUS * height
+            for j, centre in enumerate(_place_balls(proxy, radii, names.index(element.marker), element.count,
+                                                    r, placed)):
+                placed.append((centre, r))
+                rgba = _rgba(element.colours[j % len(element.colours)])
+                ball_names.append(f"e{i}_ball{j}")
+                element_xml.append(
+                    f'<body name="e{i}_ball{j}" pos="{_v(centre)}"><freejoint/><geom name="e{i}_ball{j}" '
+                    f'type="sphere" size="{r!r}" density="{BALL_DENSITY}" rgba="{rgba}" {ELEMENT_BITS} '
+                    f'{CONTACT}/></body>')
+    bodies = []
+    for n in range(len(names)):
+        bodies.append(
+            f'<body name="m{n}" pos="{_v(P0[n])}"><freejoint/><geom name="m{n}" type="sphere" size="0.01" '
+            f'mass="{KINEMATIC_MASS}" {PROXY_BITS} {CONTACT}/>{"".join(held_xml.get(n, []))}</body>')
+    for k in range(len(proxy.limbs)):
+        capsules = "".join(
+            f'<geom name="l{k}_{s}" type="capsule" size="0.01 0.01" pos="0 0 {s}" mass="{KINEMATIC_MASS}" '
+            f'{PROXY_BITS} {CONTACT}/>' for s in range(SEGMENTS))
+        bodies.append(f'<body name="l{k}"><freejoint/>{capsules}</body>')
+    xml = (
+        '<mujoco model="toonmotion scene"><compiler angle="radian"/>'
+        '<option gravity="0 -9.81 0" density="1.2" viscosity="0.000018" integrator="implicitfast"/>'
+        '<worldbody><geom name="ground" type="plane" size="0 0 1" zaxis="0 1 0" contype="1" '
+        f'conaffinity="1" {CONTACT}/>' + "".join(bodies) + "".join(element_xml) + "</worldbody></mujoco>"
+    )
+    try:
+        model = mujoco.MjModel.from_xml_string(xml)
+    except ValueError as error:  # pragma: no cover - the XML is ours
+        raise SceneError(f"the scene does not compile: {error}") from None
+    geom = lambda name: int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name))  # noqa: E731
+    body = lambda name: int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name))  # noqa: E731
+    drawn = [g for g in range(model.ngeom) if mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g)
+             and mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g).startswith("e")]
+    colours = np.round(model.geom_rgba[drawn, :3] * 255).astype(np.uint8).reshape(-1, 3)
+    held = [(geom(f"e{i}_string0"), names.index(e.marker)) for i, e in enumerate(elements)
+            if isinstance(e, Balloon)]
+    balls = [geom(name) for name in ball_names]
+    return SceneModel(
+        model=model, height=height, limb_radii=radii,
+        marker_bodies=[body(f"m{n}") for n in range(len(names))],
+        limb_bodies=[body(f"l{k}") for k in range(len(proxy.limbs))],
+        limb_geoms=np.array([[geom(f"l{k}_{s}") for s in range(SEGMENTS)] for k in range(len(proxy.limbs))],
+                            dtype=np.int64).reshape(-1, SEGMENTS),
+        element_geoms=drawn, colours=colours, held=held, balls=balls, default_volumes=default_volumes,
+    )
+
+
+def _mujoco():
+    try:
+        import mujoco
+    except ImportError:  # a required dependency, but a broken install must still say so
+        raise SceneError("scenes need the MuJoCo physics engine: pip install mujoco") from None
+    return mujoco
+
+
+def _limb_radii(proxy, height):
+    if proxy.radii is not None:
+        return np.array(proxy.radii)
+    return np.full((proxy.frame_count, len(proxy.limbs), 2), DEFAULT_LIMB_RADIUS * height)
+
+
+def _balloon_xml(i, balloon, height):
+    """A string of capsules straight up from the holding marker's body, the balloon at its top."""
+    radius = balloon.radius or BALLOON_RADIUS * height
+    link = (balloon.string_length or STRING_LENGTH * height) / STRING_LINKS
+    rgba = _rgba(balloon.colour)
+    inner = (f'<body name="e{i}_balloon" pos="0 {link!r} 0" gravcomp="{balloon.lift!r}">'
+             f'<joint type="ball" damping="0.0002"/><geom name="e{i}_balloon" type="sphere" '
+             f'pos="0 {radius!r} 0" size="{radius!r}" mass="{BALLOON_MASS}" rgba="{rgba}" {ELEMENT_BITS} '
+             f'{CONTACT}/></body>')
+    for s in reversed(range(STRING_LINKS)):
+        pos = "0 0 0" if s == 0 else f"0 {link!r} 0"
+        inner = (f'<body name="e{i}_link{s}" pos="{pos}"><joint type="ball" damping="0.00005"/>'
+                 f'<geom name="e{i}_string{s}" type="capsule" pos="0 {link / 2!r} 0" zaxis="0 1 0" '
+                 f'size="{STRING_RADIUS} {link / 2!r}" mass="0.0005" rgba="0.15 0.15 0.15 1" contype="0" '
+                 f'conaffinity="0"/>'
+                 f'{inner}</body>')
+    return inner
+
+
+def _place_balls(proxy, radii, marker, count, r, placed):
+    """Centres on the marker's ground path at evenly spaced times, moved clear of the first frame's
+    volumes and of balls already placed."""
+    T = proxy.frame_count
+    path = proxy.points[:, marker].copy()
+    volumes = _first_frame_volumes(proxy, radii)
+    out = []
+    for k in range(count):
+        c = path[int(round((k + 1) * (T - 1) / (count + 1)))].copy()
+        c[1] = r
+        for _ in range(50):
+            push = _overlap(c, r, volumes, placed + [(o, r) for o in out])
+            if push is None:
+                break
+            c += push
+        out.append(c)
+    return out
+
+
+def _first_frame_volumes(proxy, radii):
+    """Frame 0's capsules ``(a, b, radius)``, one per limb at its larger radius."""
+    P = proxy.points[0]
+    return [(P[p], P[c], float(radii[0, k].max())) for k, (p, c) in enumerate(proxy.limbs)]
+
+
+def _overlap(c, r, capsules, balls, gap=1e-3):
+    """A horizontal move that takes the ball at ``c`` out of the first thing it overlaps, or None."""
+    for a, b, radius in capsules:
+        q = _closest_on_segment(c, a, b)
+        d = c - q
+        depth = radius + r + gap - np.linalg.norm(d)
+        if depth > 0:
+            return _horizontal(d) * depth
+    for o, ro in balls:
+        d = c - o
+        depth = ro + r + gap - np.linalg.norm(d)
+        if depth > 0:
+            return _horizontal(d) * depth
+    return None
+
+
+def _horizontal(d):
+    h = np.array([d[0], 0.0, d[2]])
+    n = np.linalg.norm(h)
+    return h / n if n > 1e-9 else np.array([1.0, 0.0, 0.0])
+
+
+def _closest_on_segment(p, a, b):
+    ab = b - a
+    denominator = float(ab @ ab)
+    s = 0.0 if denominator == 0 else float(np.clip((p - a) @ ab / denominator, 0, 1))
+    return a + s * ab
+
+
+def _v(x):
+    return " ".join(repr(float(c)) for c in x)
+
+
+def _rgba(colour):
+    return " ".join(f"{c / 255:.6g}" for c in colour) + " 1"
+

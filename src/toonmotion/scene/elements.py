@@ -1,0 +1,104 @@
+"""Scene elements: the 3D things a drawn character moves without anyone drawing them (section 3.5).
+
+- :class:`Balloon`: a balloon on a string, the string's end held at a marker (the paper's fig. 11,
+  attached to the single-point proxy of the wrist).
+- :class:`Balls`: balls lying on the ground in a marker's path, kicked by the collision volumes
+  (fig. 11's balls at the feet).
+
+Sizes not given follow the figure: its height (the skeleton proxy's largest vertical extent over
+the clip) times the fractions below, so a scene looks the same on a child and on a giant, and on a
+proxy whose units were guessed. Colours are ``(r, g, b)`` bytes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from toonmotion.errors import SceneError
+
+# Default sizes as fractions of the figure's height.
+BALLOON_RADIUS = 0.07
+STRING_LENGTH = 0.3
+BALL_RADIUS = 0.05
+
+
+@dataclass(frozen=True)
+class Balloon:
+    """A lighter-than-air balloon on a string held at ``marker``.
+
+    Attributes
+    ----------
+    marker : str
+        The marker holding the string's end (a wrist, a hand).
+    radius, string_length : float, optional
+        Metres; default :data:`BALLOON_RADIUS` and :data:`STRING_LENGTH` of the figure's height.
+    lift : float
+        Upward pull as a multiple of the balloon's weight (1 floats, more rises); the string keeps
+        it down.
+    colour : (r, g, b)
+    """
+
+    marker: str
+    radius: float | None = None
+    string_length: float | None = None
+    lift: float = 3.0
+    colour: tuple[int, int, int] = (220, 40, 50)
+
+    def __post_init__(self) -> None:
+        _positive(self.radius, "a balloon's radius")
+        _positive(self.string_length, "a balloon's string length")
+        _positive(self.lift, "a balloon's lift")
+        _colour(self.colour)
+
+
+@dataclass(frozen=True)
+class Balls:
+    """``count`` balls lying on the ground where ``marker`` passes, to be kicked.
+
+    They are placed on the marker's path over the ground (its point proxy dropped to Y = 0) at
+    evenly spaced times, each moved out until it touches no collision volume in the first frame.
+
+    Attributes
+    ----------
+    marker : str
+        A marker near the ground (an ankle, a foot).
+    count : int
+    radius : float, optional
+        Metres; default :data:`BALL_RADIUS` of the figure's height.
+    colours : tuple of (r, g, b)
+        Used in turn.
+    """
+
+    marker: str
+    count: int = 3
+    radius: float | None = None
+    colours: tuple[tuple[int, int, int], ...] = ((250, 200, 40), (40, 150, 230), (60, 190, 90))
+
+    def __post_init__(self) -> None:
+        if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count < 1:
+            raise SceneError(f"a ball count must be a whole number, at least 1, got {self.count!r}")
+        _positive(self.radius, "a ball's radius")
+        if not self.colours:
+            raise SceneError("balls need at least one colour")
+        for colour in self.colours:
+            _colour(colour)
+
+
+Element = Balloon | Balls
+
+
+def _positive(value, what):
+    if value is None:
+        return
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise SceneError(f"{what} must be a number, got {value!r}") from None
+    if not (number > 0 and number < float("inf")):
+        raise SceneError(f"{what} must be a positive, finite number, got {value!r}")
+
+
+def _colour(colour):
+    if len(colour) != 3 or any(isinstance(c, bool) or not isinstance(c, int) or not 0 <= c <= 255
+                                for c in colour):
+        raise SceneError(f"a colour must be three whole numbers 0-255, got {colour!r}")

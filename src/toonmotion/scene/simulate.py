@@ -1,0 +1,243 @@
+"""Simulating a scene around a moving proxy: the drawing's frame rate outside, MuJoCo's sub-steps
+inside (section 3.5).
+
+Between drawn frames ``t`` and ``t + 1`` the proxy moves in a straight line: every sub-step writes
+each kinematic body's pose and velocity (the frame's displacement times the frame rate) and its
+capsules' sizes before MuJoCo steps, so contacts see the proxy's true velocity. At each drawn
+frame the proxy is put exactly at its frame's pose before the scene is read, so a string held at
+a marker starts exactly at the marker's point.
+
+The result, :class:`SceneMotion`, is the elements as primitives per frame (spheres and capsules,
+the form :func:`toonmotion.render.zbuffer.render_primitives` draws), plus what tests and reports
+measure: the balls' centres and how far any ball ended a step inside a proxy capsule.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion.progress import Progress
+from toonmotion.proxy3d.proxy import Proxy
+from toonmotion.scene.build import SEGMENTS, SceneModel, _mujoco
+
+MAX_STEP = 0.002  # seconds: the longest sub-step (the contacts' time constant is twice this)
+
+
+@dataclass(frozen=True, eq=False)
+class SceneMotion:
+    """The scene's elements per drawn frame.
+
+    Attributes
+    ----------
+    spheres : (T, S, 4) float
+        Centre and radius, metres.
+    capsules : (T, C, 7) float
+        End a, end b and radius, metres (strings; the string's first capsule starts at its marker).
+    colours : (S + C, 3) uint8
+        Spheres' then capsules' colours.
+    held : (T, H, 3) float
+        Each string's held end (its first capsule's end a).
+    held_markers : (H,) int
+        The marker holding each string.
+    balls : (T, B, 4) float
+        The balls' centres and radii.
+    deepest : float
+        The deepest a ball ended a sub-step inside a proxy capsule, metres (0: never).
+    substeps : int
+        MuJoCo steps per drawn frame.
+    """
+
+    spheres: NDArray[np.float64]
+    capsules: NDArray[np.float64]
+    colours: NDArray[np.uint8]
+    held: NDArray[np.float64]
+    held_markers: NDArray[np.int64]
+    balls: NDArray[np.float64]
+    deepest: float
+    substeps: int
+
+
+def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = None) -> SceneMotion:
+    """Run the scene through the proxy's frames.
+
+    Parameters
+    ----------
+    scene : SceneModel
+        From :func:`toonmotion.scene.build.build_scene` for this proxy.
+    proxy : Proxy
+    progress : callable, optional
+        ``progress("simulate", done, total)`` per frame.
+
+    Returns
+    -------
+    SceneMotion
+    """
+    mujoco = _mujoco()
+    model = scene.model
+    data = mujoco.MjData(model)
+    T = proxy.frame_count
+    substeps = max(1, math.ceil(1.0 / (proxy.fps * MAX_STEP)))
+    model.opt.timestep = 1.0 / (proxy.fps * substeps)
+    kinematic = _Kinematic(scene, proxy, model)
+    spheres = [g for g in scene.element_geoms if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE]
+    capsules = [g for g in scene.element_geoms if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CAPSULE]
+    order = [scene.element_geoms.index(g) for g in spheres + capsules]
+    S, C = len(spheres), len(capsules)
+    out_spheres, out_capsules = np.zeros((T, S, 4)), np.zeros((T, C, 7))
+    out_balls = np.zeros((T, len(scene.balls), 4))
+    held_geoms = [g for g, _ in scene.held]
+    out_held = np.zeros((T, len(held_geoms), 3))
+    deepest = 0.0
+    kinematic.place(data, 0, 0.0, moving=False)
+    mujoco.mj_forward(model, data)
+    fractions = np.arange(substeps) / substeps
+    for t in range(T):
+        if t > 0:
+            poses = kinematic.poses(t - 1, fractions, moving=True)
+            for s in range(substeps):
+                kinematic.write(data, poses, s)
+                mujoco.mj_step(model, data)
+                deepest = max(deepest, kinematic.deepest_ball(data))
+            kinematic.place(data, t, 0.0, moving=t < T - 1)
+            mujoco.mj_forward(model, data)
+        for i, g in enumerate(spheres):
+            out_spheres[t, i] = (*data.geom_xpos[g], model.geom_size[g, 0])
+        for i, g in enumerate(capsules):
+            out_capsules[t, i] = _capsule(data, model, g)
+        for i, g in enumerate(scene.balls):
+            out_balls[t, i] = (*data.geom_xpos[g], model.geom_size[g, 0])
+        for i, g in enumerate(held_geoms):
+            out_held[t, i] = _capsule(data, model, g)[:3]
+        if progress is not None:
+            progress("simulate", t + 1, T)
+    colours = np.asarray(scene.colours).reshape(-1, 3)[order] if order else np.zeros((0, 3), np.uint8)
+    return SceneMotion(out_spheres, out_capsules, colours, out_held,
+                       np.array([m for _, m in scene.held], dtype=np.int64), out_balls, deepest, substeps)
+
+
+class _Kinematic:
+    """Writes the proxy's pose at (frame + fraction) into the model and data, all bodies at once.
+
+    :meth:`poses` works out a frame's sub-steps together; :meth:`write` puts one in place.
+    """
+
+    def __init__(self, scene, proxy, model):
+        self.model = model
+        self.P = proxy.points
+        self.fps = proxy.fps
+        self.limbs = proxy.limbs
+        self.radii = scene.limb_radii
+        sphere = np.zeros((proxy.frame_count, len(proxy.names)))
+        for end in (0, 1):  # a marker's sphere is as large as the largest cylinder end at it
+            np.maximum.at(sphere.T, self.limbs[:, end], self.radii[:, :, end].T)
+        self.sphere = np.maximum(sphere, 1e-4)
+        joints = [model.body_jntadr[b] for b in scene.marker_bodies + scene.limb_bodies]
+        self.qpos = np.array([model.jnt_qposadr[j] for j in joints], dtype=np.int64)[:, None] + np.arange(7)
+        self.qvel = np.array([model.jnt_dofadr[j] for j in joints], dtype=np.int64)[:, None] + np.arange(6)
+        marker_geoms = np.array([model.body_geomadr[b] for b in scene.marker_bodies], dtype=np.int64)
+        self.geoms = np.concatenate([marker_geoms, scene.limb_geoms.ravel()])  # markers', then limbs'
+        self.u = (np.arange(SEGMENTS) + 0.5) / SEGMENTS
+        self.identity = np.tile([1.0, 0.0, 0.0, 0.0], (len(proxy.names), 1))
+        # Each limb's angular velocity from each frame to the next, (T, K, 3).
+        D = self.P[:, self.limbs[:, 1]] - self.P[:, self.limbs[:, 0]]
+        spin = np.zeros(D.shape)
+        spin[:-1] = _turn(D[:-1], D[1:]) * self.fps
+        self.limb_spin = spin
+        is_ball = np.zeros(model.ngeom, bool)
+        is_ball[scene.balls] = True
+        is_proxy = np.zeros(model.ngeom, bool)
+        is_proxy[self.geoms] = True
+        self.is_ball, self.is_proxy = is_ball, is_proxy
+
+    def poses(self, t, fractions, moving):
+        """The kinematic state at (t + each fraction): qpos, qvel and geom sizes, positions, bounds."""
+        nxt = min(t + 1, len(self.P) - 1)
+        f = np.asarray(fractions, dtype=np.float64)
+        F = len(f)
+        P = self.P[t] + f[:, None, None] * (self.P[nxt] - self.P[t])  # (F, N, 3)
+        radii = self.radii[t] + f[:, None, None] * (self.radii[nxt] - self.radii[t])  # (F, K, 2)
+        sphere = self.sphere[t] + f[:, None] * (self.sphere[nxt] - self.sphere[t])  # (F, N)
+        L = self.limbs
+        N, K = P.shape[1], len(L)
+        axis = P[:, L[:, 1]] - P[:, L[:, 0]]
+        length = np.linalg.norm(axis, axis=-1)  # (F, K)
+        direction = np.where(length[..., None] > 1e-12, axis / np.maximum(length, 1e-300)[..., None],
+                             [0.0, 0, 1])
+        quats = _quat_z_to(direction.reshape(-1, 3)).reshape(F, K, 4)
+        qpos = np.concatenate([np.concatenate([P, np.broadcast_to(self.identity, (F, N, 4))], axis=2),
+                               np.concatenate([P[:, L[:, 0]], quats], axis=2)], axis=1)
+        V = (self.P[nxt] - self.P[t]) * self.fps if moving else np.zeros((N, 3))
+        spin = self.limb_spin[t] if moving else np.zeros((K, 3))
+        qvel = np.concatenate([np.concatenate([V, np.zeros((N, 3))], axis=1),
+                               np.concatenate([V[L[:, 0]], spin], axis=1)])
+        r = np.maximum(radii[..., :1] + self.u * (radii[..., 1:] - radii[..., :1]), 1e-4)  # (F, K, SEGMENTS)
+        half = np.broadcast_to(np.maximum(length / (2 * SEGMENTS), 1e-6)[..., None], r.shape)
+        size = np.zeros((F, N + K * SEGMENTS, 3))
+        size[:, :N, 0] = sphere
+        size[:, N:, 0] = r.reshape(F, -1)
+        size[:, N:, 1] = half.reshape(F, -1)
+        pos = np.zeros((F, N + K * SEGMENTS, 3))
+        pos[:, N:, 2] = (self.u * length[..., None]).reshape(F, -1)
+        rbound = size[..., 0] + size[..., 1]
+        aabb = np.zeros((F, N + K * SEGMENTS, 6))
+        aabb[..., 3] = aabb[..., 4] = size[..., 0]
+        aabb[..., 5] = rbound
+        return qpos, qvel, size, pos, rbound, aabb
+
+    def write(self, data, poses, s):
+        """Sub-step ``s`` of :meth:`poses` into the data and model."""
+        qpos, qvel, size, pos, rbound, aabb = poses
+        data.qpos[self.qpos] = qpos[s]
+        data.qvel[self.qvel] = qvel
+        m, g = self.model, self.geoms
+        # Sizes change frame to frame: the broad phase's bounds (sphere and local box) with them.
+        m.geom_size[g] = size[s]
+        m.geom_pos[g] = pos[s]
+        m.geom_rbound[g] = rbound[s]
+        m.geom_aabb[g] = aabb[s]
+
+    def place(self, data, t, fraction, moving):
+        self.write(data, self.poses(t, [fraction], moving), 0)
+
+    def deepest_ball(self, data):
+        """How far any ball is inside any proxy volume at the step's start, metres (0 when none is)."""
+        n = data.ncon
+        if n == 0:
+            return 0.0
+        pairs = data.contact.geom[:n]
+        touching = (self.is_ball[pairs[:, 0]] & self.is_proxy[pairs[:, 1]]) | (
+            self.is_ball[pairs[:, 1]] & self.is_proxy[pairs[:, 0]])
+        if not touching.any():
+            return 0.0
+        return max(0.0, float(-data.contact.dist[:n][touching].min()))
+
+
+def _capsule(data, model, g):
+    centre = data.geom_xpos[g]
+    axis = data.geom_xmat[g].reshape(3, 3)[:, 2]
+    half = model.geom_size[g, 1]
+    return np.concatenate([centre - half * axis, centre + half * axis, [model.geom_size[g, 0]]])
+
+
+def _quat_z_to(d):
+    """The shortest rotations taking +Z to unit vectors ``d`` ``(n, 3)``, MuJoCo's (w, x, y, z)."""
+    w = 1.0 + d[:, 2]
+    q = np.stack([w, -d[:, 1], d[:, 0], np.zeros(len(d))], axis=1)  # (1 + z.d, z x d)
+    opposite = w < 1e-9
+    q[opposite] = (0.0, 1.0, 0.0, 0.0)  # half a turn about X
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def _turn(a, b):
+    """Rotation vectors turning directions ``a`` to ``b`` (``(..., 3)``), about their common normal."""
+    na, nb = np.linalg.norm(a, axis=-1, keepdims=True), np.linalg.norm(b, axis=-1, keepdims=True)
+    ok = (na > 1e-12) & (nb > 1e-12)
+    a, b = a / np.where(ok, na, 1.0), b / np.where(ok, nb, 1.0)
+    axis = np.cross(a, b)
+    s = np.linalg.norm(axis, axis=-1, keepdims=True)
+    angle = np.arctan2(s, (a * b).sum(-1, keepdims=True))
+    return np.where(ok & (s > 1e-12), axis / np.maximum(s, 1e-300) * angle, 0.0)

@@ -1,0 +1,76 @@
+"""``toonmotion scene``: a proxy file and its drawn frames in, a composited video or PNGs out; bad
+input is one line and exit 2, with nothing overwritten."""
+
+import numpy as np
+import pytest
+
+from tests.conftest import run_cli
+from tests.scene.test_scene import H, W, figure_drawing, kicking
+from toonmotion.io.frames import load_frames
+from toonmotion.io.image import save_png
+from toonmotion.io.proxy_json import save_proxy
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("scene")
+    proxy = kicking(T=8)
+    save_proxy(folder / "proxy.json", proxy)
+    frames = folder / "frames"
+    frames.mkdir()
+    for t in range(proxy.frame_count):
+        save_png(frames / f"f_{t:03d}.png", figure_drawing(proxy, t))
+    return folder, proxy
+
+
+def test_balls_and_a_balloon_are_composited_into_every_frame(files, capsys):
+    folder, proxy = files
+    out = folder / "out"
+    code = run_cli("scene", folder / "proxy.json", "--frames", folder / "frames", "--balloon", "m0",
+                   "--balls", "m2", "--ball-count", "2", "--shading", "flat", "-o", out)
+    assert code == 0
+    assert "simulated 1 balloon and 2 balls over 8 frames" in capsys.readouterr().out
+    made, _ = load_frames(out)
+    drawn, _ = load_frames(folder / "frames")
+    assert made.shape == drawn.shape == (8, H, W, 3)
+    changed = np.any(made != drawn, axis=-1)
+    assert changed.any(axis=(1, 2)).all()  # something of the scene is seen on every frame
+    # Pixels the scene does not touch are the drawing's.
+    assert np.array_equal(made[~changed], drawn[~changed])
+
+
+def test_no_elements_writes_the_drawing_and_says_so(files, capsys):
+    folder, _ = files
+    out = folder / "same"
+    assert run_cli("scene", folder / "proxy.json", "--frames", folder / "frames", "-o", out) == 0
+    assert "no elements given" in capsys.readouterr().err
+    assert np.array_equal(load_frames(out)[0], load_frames(folder / "frames")[0])
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--balloon", "wrist"], "'wrist', which the proxy lacks"),
+    (["--balls", "m2", "--shading", "glossy"], "shading must be one of"),
+    (["--balls", "m2", "--ball-radius", "-1"], "a ball's radius must be a positive"),
+    (["--balls", "m2", "--background", "transparent"], "--background takes white, black or #rrggbb"),
+])
+def test_bad_input_is_one_line_exit_2_and_overwrites_nothing(files, capsys, argv, message):
+    folder, _ = files
+    out = folder / "kept.gif"
+    out.write_bytes(b"earlier work")
+    code = run_cli("scene", folder / "proxy.json", "--frames", folder / "frames", "-o", out, *argv)
+    err = capsys.readouterr().err
+    assert code == 2
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert out.read_bytes() == b"earlier work"
+
+
+def test_frames_that_are_not_the_proxy_s_are_refused(files, tmp_path, capsys):
+    folder, _ = files
+    few = tmp_path / "few"
+    few.mkdir()
+    for t in range(3):
+        save_png(few / f"f_{t}.png", np.full((H, W, 3), 255, np.uint8))
+    out = tmp_path / "out.mp4"
+    assert run_cli("scene", folder / "proxy.json", "--frames", few, "--balls", "m2", "-o", out) == 2
+    assert "the drawing has 3 frames but the proxy 8" in capsys.readouterr().err
+    assert not out.exists()
