@@ -28,8 +28,8 @@ demo: $(STAMP)
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/frames --save-frame-motion demo/motion.json
 	$(BIN)/toonmotion lift demo/motion.json --prior $(MOCAP)/cmu_16_07_jump.bvh --frames demo/frames \
 	  --view 0,0 -o demo/proxy.json --glb demo/proxy.glb
-	$(BIN)/toonmotion scene demo/proxy.json --frames demo/frames --balloon right_hand \
-	  --balls left_foot,right_foot -o demo/demo_scene.mp4
+	$(BIN)/toonmotion scene demo/proxy.json --project demo/hero --keys demo/keys.json \
+	  --balloon right_hand --balls left_foot,right_foot -o demo/demo_scene.mp4
 
 test: $(STAMP) browser validator
 	$(BIN)/ruff check src tests benchmarks

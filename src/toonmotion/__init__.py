@@ -21,14 +21,14 @@ _API = (
     "Animation", "Balloon", "Balls", "Capture", "Character", "ContourCapture", "DeformSettings",
     "FilterSettings", "KeyShapeSpace", "LiftReport", "Markers", "Motion", "PosedFrame", "Proxy",
     "RigSettings", "SameDepthOverlap", "SceneMotion", "SketchMatch", "TrackSettings", "VideoCapture",
-    "animate_character", "animate_drawing", "capture_contours", "capture_parts", "capture_video",
-    "composite_scene", "correct_regions", "delete_key", "exaggerate", "filter_motion", "keyshape_sheet",
-    "keyshape_space", "lift_proxy", "load_project", "motion_in_frames", "move_key", "pick_layer",
-    "pose_character", "pose_view", "preview_proxy", "redo_edits", "render_elements", "render_pose",
-    "retarget", "retarget_keyposes", "retarget_keyshapes", "retarget_line_of_action", "retarget_parts",
-    "retime", "rig_again", "rig_image", "rotate_joint", "same_depth_overlaps", "save_project",
-    "set_depth", "set_key", "simulate_scene", "sketch_pose", "suggest_joints", "track_footage",
-    "undo_edits", "write_animation",
+    "animate_character", "animate_drawing", "animation_frames", "capture_contours", "capture_parts",
+    "capture_video", "composite_scene", "correct_regions", "delete_key", "exaggerate", "filter_motion",
+    "keyshape_sheet", "keyshape_space", "lift_proxy", "load_project", "motion_in_frames", "move_key",
+    "pick_layer", "pose_character", "pose_view", "preview_proxy", "redo_edits", "render_elements",
+    "render_pose", "retarget", "retarget_keyposes", "retarget_keyshapes", "retarget_line_of_action",
+    "retarget_parts", "retime", "rig_again", "rig_image", "rotate_joint", "same_depth_overlaps",
+    "save_project", "set_depth", "set_key", "simulate_scene", "sketch_pose", "suggest_joints",
+    "track_footage", "undo_edits", "write_animation",
 )
 
 __all__ = ["ToonmotionError", "__version__", *_API]

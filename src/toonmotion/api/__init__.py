@@ -55,7 +55,7 @@ from toonmotion.api.posing import (
 )
 from toonmotion.api.proxy3d import lift_proxy, preview_proxy
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
-from toonmotion.api.scene3d import composite_scene, render_elements, simulate_scene
+from toonmotion.api.scene3d import animation_frames, composite_scene, render_elements, simulate_scene
 from toonmotion.capture.footage import Capture, suggest_joints
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
@@ -96,6 +96,7 @@ __all__ = [
     "VideoCapture",
     "animate_character",
     "animate_drawing",
+    "animation_frames",
     "capture_contours",
     "capture_parts",
     "capture_video",

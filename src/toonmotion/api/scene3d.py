@@ -8,12 +8,16 @@ from collections.abc import Iterator, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.animate.animation import Animation
+from toonmotion.api.animation import motion_in_frames
 from toonmotion.errors import SceneError
 from toonmotion.io.frames import lay_on
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
+from toonmotion.render.sequence import animation_bones, render_animation
 from toonmotion.render.zbuffer import Layer, render_primitives
+from toonmotion.rig.character import Character
 from toonmotion.scene.build import build_scene
 from toonmotion.scene.elements import Element
 from toonmotion.scene.simulate import SceneMotion, simulate
@@ -112,7 +116,7 @@ def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: s
 
 
 def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, shading: str = "toon",
-                    background: tuple[int, int, int] = (255, 255, 255),
+                    background: tuple[int, int, int] = (255, 255, 255), limbs: ArrayLike | None = None,
                     progress: Progress | None = None) -> Iterator[NDArray[np.uint8]]:
     """The drawn frames with the simulated elements, in depth order (eq. 23-26), frame by frame.
 
@@ -129,6 +133,9 @@ def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, sha
         As :func:`render_elements`.
     background : (r, g, b)
         What transparent drawn frames are laid on.
+    limbs : (T, H, W) int, optional
+        Which of the proxy's limbs each pixel of the figure belongs to (-1: the nearest limb in
+        the picture), as :func:`animation_frames` gives for a rigged character.
     progress : callable, optional
         ``progress("composite", done, total)``.
 
@@ -159,10 +166,14 @@ def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, sha
     pictures = check_frames(proxy, frames)
     if shading not in SHADINGS:
         raise SceneError(f"shading must be one of {', '.join(SHADINGS)}, got {shading!r}")
-    return _composited(proxy, pictures, motion, shading, background, progress)
+    labels = None if limbs is None else np.asarray(limbs)
+    if labels is not None and labels.shape != pictures.shape[:3]:
+        raise SceneError(f"the limb labels must be one per pixel of every frame, {pictures.shape[:3]}, got "
+                         f"{labels.shape}")
+    return _composited(proxy, pictures, motion, shading, background, labels, progress)
 
 
-def _composited(proxy, pictures, motion, shading, background, progress):
+def _composited(proxy, pictures, motion, shading, background, labels, progress):
     T = proxy.frame_count
     pixels = proxy.camera.project(proxy.points)
     depths = proxy.camera.depth(proxy.points)
@@ -170,7 +181,8 @@ def _composited(proxy, pictures, motion, shading, background, progress):
         layer = render_elements(proxy, motion, t, shading=shading)
         alpha, figure = drawing_alpha(pictures[t])
         # The drawing's depth matters only where an element is seen over the figure.
-        drawn = drawn_depth(np.where(layer.coverage, figure, 0.0), pixels[t], depths[t], proxy.limbs)
+        drawn = drawn_depth(np.where(layer.coverage, figure, 0.0), pixels[t], depths[t], proxy.limbs,
+                            labels=None if labels is None else labels[t])
         yield composite(lay_on(pictures[t], background), layer, drawn, alpha=alpha, figure=figure)
         if progress is not None:
             progress("composite", t + 1, T)
@@ -192,3 +204,61 @@ def check_frames(proxy: Proxy, frames: ArrayLike) -> NDArray[np.uint8]:
                          f"{cam.width}x{cam.height}; give the frames the proxy was lifted from")
     return pictures
 
+
+def animation_frames(character: Character, animation: Animation,
+                     proxy: Proxy) -> tuple[NDArray[np.uint8], NDArray[np.int32]]:
+    """A rigged character's animation as the frames to composite, and each pixel's proxy limb.
+
+    The frames are rendered as ``animate`` writes them at the proxy camera's size, transparent
+    around the figure. Each figure pixel's limb is the proxy limb that ends at the child joint of
+    the bone the pixel follows (a bone whose joint the proxy lacks gives -1: the nearest limb).
+
+    Parameters
+    ----------
+    character : Character
+    animation : Animation
+        From :func:`toonmotion.api.animate_character`: the one the proxy was lifted from
+        (its joints in the frames, :func:`toonmotion.api.motion_in_frames`).
+    proxy : Proxy
+
+    Returns
+    -------
+    frames : (T, H, W, 4) uint8
+    limbs : (T, H, W) int32
+
+    Raises
+    ------
+    SceneError
+        The animation's frame count, or its joints in the frames, differ from the proxy's (it was
+        lifted from another animation or at another size).
+
+    Examples
+    --------
+    See :func:`composite_scene`; ``tests/scene/test_scene.py`` runs it on the bundled character.
+    """
+    cam = proxy.camera
+    size = (cam.width, cam.height)
+    if len(animation.meshes) != proxy.frame_count:
+        raise SceneError(f"the animation has {len(animation.meshes)} frames but the proxy "
+                         f"{proxy.frame_count}; give the key-frames the proxy was lifted from")
+    _check_lifted_from(proxy, motion_in_frames(character, animation, size=size))
+    skeleton = character.skeleton
+    ends = {name: k for k, name in enumerate(proxy.names[c] for c in proxy.limbs[:, 1])}
+    to_limb = np.array([ends.get(skeleton.names[c], -1) for _, c in skeleton.bones] + [-1], np.int32)
+    frames = np.stack(list(render_animation(character, animation, size=size)))
+    limbs = np.stack([to_limb[bones] for bones in animation_bones(character, animation, size=size)])
+    return frames, limbs
+
+
+def _check_lifted_from(proxy, seen):
+    """Refuse an animation whose joints, in its frames, are not where the proxy's markers are."""
+    shared = [n for n in proxy.names if n in seen.skeleton.names]
+    if not shared:
+        raise SceneError("the animation's joints share no name with the proxy's markers; give the "
+                         "animation the proxy was lifted from")
+    ours = proxy.camera.project(proxy.points)[:, [proxy.names.index(n) for n in shared]]
+    theirs = seen.positions[:, [seen.skeleton.names.index(n) for n in shared]]
+    off = float(np.abs(ours - theirs).max())
+    if off > 1.0:
+        raise SceneError(f"the animation's joints are up to {off:.0f} px from the proxy's markers; lift the "
+                         "proxy from this animation's frames (animate --save-frame-motion) at the same size")

@@ -10,10 +10,14 @@ import numpy as np
 import typer
 
 from toonmotion import api
+from toonmotion.animate.motion import Motion
+from toonmotion.animate.timeline import Timeline
 from toonmotion.cli import options
 from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
 from toonmotion.io.frames import load_frames
+from toonmotion.io.motion_json import is_motion_file, load_motion
+from toonmotion.io.pose_json import load_keyframes
 from toonmotion.io.proxy_json import load_proxy
 from toonmotion.io.video import animation_format, save_animation
 from toonmotion.scene.elements import Balloon, Balls, Element
@@ -22,10 +26,15 @@ from toonmotion.scene.elements import Balloon, Balls, Element
 @app.command("scene")
 def scene_command(
     source: Annotated[Path, typer.Argument(metavar="PROXY.json", help="A proxy file made by 'lift'.")],
-    frames: Annotated[Path, typer.Option(
-        "--frames", help="The drawn frames the proxy was lifted from (video, GIF, folder or pattern; "
-        "transparent PNGs from 'animate' keep their figure).")],
     output: Annotated[Path, typer.Option("-o", "--output", help="OUT.mp4, OUT.gif or a folder of PNGs.")],
+    frames: Annotated[Path | None, typer.Option(
+        "--frames", help="The drawn frames the proxy was lifted from (video, GIF, folder or pattern; "
+        "transparent PNGs from 'animate' keep their figure).")] = None,
+    project: Annotated[Path | None, typer.Option(
+        "--project", help="Instead of --frames: the rigged character whose animation (--keys) the proxy was "
+        "lifted from; each pixel's depth then follows the bone it moves with.")] = None,
+    keys: Annotated[Path | None, typer.Option(
+        "--keys", help="With --project: the key-frames or motion it was animated with.")] = None,
     balloon: Annotated[list[str] | None, typer.Option(
         "--balloon", help="A balloon on a string held at MARKER (repeat for more).")] = None,
     balls: Annotated[list[str] | None, typer.Option(
@@ -51,13 +60,20 @@ def scene_command(
                                for m in balloon or ()]
     for text in balls or ():
         elements += [Balls(m, count=ball_count, radius=ball_radius) for m in options.names(text)]
+    if (frames is None) == (project is None) or (project is None) != (keys is None):
+        raise SettingsError("give the drawn frames (--frames) or a project and its keys (--project, --keys)")
     if not elements:
         options.warn("no elements given (--balloon, --balls): the drawing is written as it is")
     proxy = load_proxy(source)
-    pictures, _ = load_frames(frames, alpha=True)
+    limbs = None
     with options.progress("scene") as report:
+        if frames is not None:
+            pictures, _ = load_frames(frames, alpha=True)
+        elif project is not None and keys is not None:
+            character, animation = _animation(project, keys)
+            pictures, limbs = api.animation_frames(character, animation, proxy)
         motion = api.simulate_scene(proxy, elements, progress=report)
-        made = api.composite_scene(proxy, pictures, motion, shading=shading, background=under,
+        made = api.composite_scene(proxy, pictures, motion, shading=shading, background=under, limbs=limbs,
                                    progress=report)
         written = save_animation(output, _opaque(made), fps=proxy.fps)
     deepest = f", deepest contact {motion.deepest * 1000:.1f} mm" if len(motion.balls[0]) else ""
@@ -73,3 +89,14 @@ def _count(n, what):
 def _opaque(frames):
     for f in frames:
         yield np.concatenate([f, np.full(f.shape[:2] + (1,), 255, np.uint8)], axis=2)
+
+
+def _animation(project: Path, keys: Path) -> tuple[api.Character, api.Animation]:
+    """The project's character and its animation through ``keys`` (key-frames or a motion)."""
+    character = api.load_project(project)
+    source: Motion | Timeline
+    if is_motion_file(keys):
+        source = load_motion(keys)
+    else:
+        source = load_keyframes(keys, character.skeleton)
+    return character, api.animate_character(character, source)

@@ -152,6 +152,53 @@ def render_mesh(texture: NDArray[np.uint8], V: NDArray[np.float64], U: NDArray[n
     return out
 
 
+def render_labels(labels: NDArray[np.integer], V: NDArray[np.float64], U: NDArray[np.float64],
+                  F: NDArray[np.int_], *, size: Sequence[int], view: Sequence[float] | None = None,
+                  order: NDArray[np.int_] | None = None) -> NDArray[np.int32]:
+    """Carry a label image through a deformed mesh as :func:`render_mesh` carries the drawing.
+
+    Each covered output pixel takes the label of the rest pixel it comes from (nearest, never
+    blended, so labels stay whole); uncovered pixels are -1.
+
+    Parameters
+    ----------
+    labels : (h, w) int
+        A label per rest (texture) pixel, -1 for none.
+    V, U, F, size, view, order
+        As :func:`render_mesh`.
+
+    Returns
+    -------
+    (H, W) int32
+
+    Examples
+    --------
+    >>> labels = np.array([[0, 0, 1, 1]] * 4)
+    >>> V = np.array([[-0.5, -0.5], [3.5, -0.5], [3.5, 3.5], [-0.5, 3.5]])
+    >>> F = np.array([[0, 1, 2], [0, 2, 3]])
+    >>> render_labels(labels, V, V + [1.0, 0.0], F, size=(4, 4))[0].tolist()
+    [-1, 0, 0, 1]
+    """
+    L = np.asarray(labels)
+    h, w = L.shape
+    texture = np.zeros((h, w, 4), np.uint8)
+    _, V, U, F = _check_mesh(texture, V, U, F)
+    W, H = check_size(size)
+    if view is None:
+        view = (-0.5, -0.5, w - 0.5, h - 0.5)
+    scale, offset = view_transform(view, (W, H))
+    out = np.full(H * W, -1, np.int32)
+    if len(F) == 0:
+        return out.reshape(H, W)
+    lin, map_x, map_y = _rasterise(U * scale + offset, V, F, _check_order(order, len(F)), W, H)
+    n = len(lin)
+    if n:
+        col = np.clip(np.rint(map_x.reshape(-1)[:n]), 0, w - 1).astype(np.intp)
+        row = np.clip(np.rint(map_y.reshape(-1)[:n]), 0, h - 1).astype(np.intp)
+        out[lin] = L[row, col]
+    return out.reshape(H, W)
+
+
 def _rasterise(Uo, V, F, order, W, H):
     """Cover output pixel centres with deformed triangles, later ones in ``order`` winning.
 

@@ -13,7 +13,7 @@ from toonmotion.deform.depth import draw_order
 from toonmotion.io.video import save_animation
 from toonmotion.progress import Progress
 from toonmotion.render.frame import check_overlays, fit_view, natural_size, render_frame
-from toonmotion.render.raster import view_transform
+from toonmotion.render.raster import render_labels, view_transform
 from toonmotion.rig.character import Character
 
 Colour = tuple[int, int, int]
@@ -33,6 +33,28 @@ def frame_transform(character: Character, animation: Animation, *,
     writes with this ``size``: ``frame point = scale * drawing point + offset``."""
     view = animation_view(character, animation)
     return view_transform(view, natural_size(view, size=size))
+
+
+def animation_bones(character: Character, animation: Animation, *,
+                    size: tuple[int, int] | None = None) -> Iterator[NDArray[np.int32]]:
+    """Yield, per frame of ``animation``, which bone each pixel follows: ``(H, W)`` indices into
+    ``character.skeleton.bones``, -1 off the figure.
+
+    In the frames :func:`render_animation` makes with this ``size`` (same view, same draw
+    order). A drawing pixel follows the bone of its nearest mesh vertex at rest.
+    """
+    from scipy.spatial import cKDTree
+
+    mesh, binding = character.mesh, character.binding
+    h, w = character.mask.shape
+    rows, cols = np.mgrid[0:h, 0:w]
+    _, nearest = cKDTree(mesh.V).query(np.stack([cols.ravel(), rows.ravel()], axis=1))
+    at_rest = np.where(character.mask.ravel(), binding.bone[nearest], -1).reshape(h, w)
+    view = animation_view(character, animation)
+    out_size = natural_size(view, size=size)
+    order = draw_order(mesh, binding, character.depth)
+    for _, U in animation.meshes:
+        yield render_labels(at_rest, mesh.V, U, mesh.F, size=out_size, view=view, order=order)
 
 
 def render_animation(
