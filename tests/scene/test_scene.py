@@ -10,8 +10,8 @@ from toonmotion.errors import SceneError
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
-from toonmotion.scene.build import CONTACT, build_scene
-from toonmotion.scene.elements import Balloon, Balls
+from toonmotion.scene.build import CONTACT, SKIRT_LINKS, build_scene
+from toonmotion.scene.elements import Balloon, Balls, Scarf, Skirt
 from toonmotion.scene.simulate import SceneMotion
 
 FPS = 24.0
@@ -204,3 +204,27 @@ def test_a_missing_physics_engine_says_what_to_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco now raises ImportError
     with pytest.raises(SceneError, match="pip install mujoco"):
         build_scene(standing(T=2), [Balls("m2")])
+
+
+def test_a_scarf_s_knot_stays_on_its_marker_and_the_scarf_trails_behind():
+    proxy = waving()
+    motion = simulate_scene(proxy, [Scarf("m2")])
+    knot = proxy.camera.project(motion.held)
+    marker = proxy.camera.project(proxy.points[:, motion.held_markers])
+    assert np.abs(knot - marker).max() < 1.0
+    # Links stay joined end to end, and the free end moves with the hand, not ahead of it.
+    caps = motion.capsules
+    np.testing.assert_allclose(caps[:, 1:, :3], caps[:, :-1, 3:6], atol=1e-6)
+    tip = caps[:, -1, 3:6]
+    assert np.linalg.norm(np.diff(tip, axis=0), axis=-1).max() > 0.01
+
+
+def test_a_skirt_hangs_still_on_a_still_figure_and_swings_on_a_moving_one():
+    still = simulate_scene(standing(), [Skirt("m0", strands=8)])
+    assert still.capsules.shape[1] == 8 * SKIRT_LINKS
+    assert np.abs(still.capsules[-1] - still.capsules[0]).max() < 1e-3
+    moving = simulate_scene(kicking(), [Skirt("m0", strands=8)])
+    hem = moving.capsules[:, SKIRT_LINKS - 1 :: SKIRT_LINKS, 3:6]  # each strand's free end
+    hips = kicking().points[:, 0]
+    lag = hem[:, :, 0].mean(axis=1) - hips[:, 0]
+    assert lag.min() < -0.02  # the hem trails behind the hips as they move along +X

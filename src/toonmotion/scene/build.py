@@ -30,14 +30,25 @@ from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.scene.elements import (
     BALL_RADIUS,
     BALLOON_RADIUS,
+    SCARF_LENGTH,
+    SCARF_WIDTH,
+    SKIRT_LENGTH,
+    SKIRT_RADIUS,
+    SKIRT_WIDTH,
     STRING_LENGTH,
     Balloon,
     Balls,
     Element,
+    Scarf,
+    Skirt,
 )
 
 SEGMENTS = 3  # capsules per tapered cylinder
 STRING_LINKS = 8
+SCARF_LINKS = 10
+SKIRT_LINKS = 4
+CLOTH_DENSITY = 0.25  # kg per square metre of scarf or strand: light cloth
+MIN_LINK_MASS = 0.002  # kg: lighter links make the contacts stiff beyond what a sub-step resolves
 # Proxy radii when the proxy has no collision volumes (lifted without drawn frames), as a fraction
 # of the figure's height.
 DEFAULT_LIMB_RADIUS = 0.035
@@ -118,8 +129,27 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     held_xml: dict[int, list[str]] = {}
     element_xml = []
     for i, element in enumerate(elements):
+        at = held_xml.setdefault(names.index(element.marker), [])
         if isinstance(element, Balloon):
-            held_xml.setdefault(names.index(element.marker), []).append(_balloon_xml(i, element, height))
+            at.append(_balloon_xml(i, element, height))
+        elif isinstance(element, Scarf):
+            width = element.width or SCARF_WIDTH * height
+            length = element.length or SCARF_LENGTH * height
+            marker = names.index(element.marker)
+            way = _free_way(P0[marker], length, width, _first_frame_volumes(proxy, radii),
+                            _directions(P0, marker))
+            at.append(_chain_xml(f"e{i}_scarf", (0.0, 0.0, 0.0), length, SCARF_LINKS, width / 2, width,
+                                 _rgba(element.colour), way))
+        elif isinstance(element, Skirt):
+            width = element.width or SKIRT_WIDTH * height
+            length = element.length or SKIRT_LENGTH * height
+            marker = names.index(element.marker)
+            ring = _skirt_ring(P0[marker], element.radius or SKIRT_RADIUS * height, element.strands, length,
+                               width, _first_frame_volumes(proxy, radii))
+            for j, start in enumerate(ring):
+                way = _free_way(P0[marker] + start, length, width, [], _directions(P0, marker))
+                at.append(_chain_xml(f"e{i}_strand{j}_", start, length, SKIRT_LINKS, width / 2, width,
+                                     _rgba(element.colour), way))
     placed: list[tuple[NDArray[np.float64], float]] = []
     ball_names: list[str] = []
     for i, element in enumerate(elements):
@@ -161,6 +191,8 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     colours = np.round(model.geom_rgba[drawn, :3] * 255).astype(np.uint8).reshape(-1, 3)
     held = [(geom(f"e{i}_string0"), names.index(e.marker)) for i, e in enumerate(elements)
             if isinstance(e, Balloon)]
+    held += [(geom(f"e{i}_scarf0"), names.index(e.marker)) for i, e in enumerate(elements)
+             if isinstance(e, Scarf)]
     balls = [geom(name) for name in ball_names]
     return SceneModel(
         model=model, height=height, limb_radii=radii,
@@ -203,6 +235,70 @@ def _balloon_xml(i, balloon, height):
                  f'conaffinity="0"/>'
                  f'{inner}</body>')
     return inner
+
+
+def _chain_xml(name, start, length, links, radius, width, rgba, direction):
+    """A chain of ``links`` capsules on ball joints, straight along ``direction`` from ``start`` (in
+    its holder's frame): a ribbon or a strand. The first link, knotted at the holder, collides with
+    nothing (it would fight the knot); the others collide with the proxy, the ground and the rest.
+
+    Each link weighs :data:`CLOTH_DENSITY` per square metre of ``width`` times its length; its
+    joint is damped so the ribbon settles instead of swinging for ever.
+    """
+    link = length / links
+    mass = max(CLOTH_DENSITY * width * link, MIN_LINK_MASS)
+    d = np.asarray(direction, dtype=float)
+    inner = ""
+    for s in reversed(range(links)):
+        pos = _v(start) if s == 0 else _v(d * link)
+        bits = 'contype="0" conaffinity="0"' if s == 0 else f"{ELEMENT_BITS} {CONTACT}"
+        inner = (f'<body name="{name}{s}" pos="{pos}"><joint type="ball" damping="{2e-4 * link!r}"/>'
+                 f'<geom name="{name}{s}" type="capsule" pos="{_v(d * link / 2)}" zaxis="{_v(d)}" '
+                 f'size="{radius!r} {link / 2!r}" mass="{mass!r}" rgba="{rgba}" {bits}/>{inner}</body>')
+    return inner
+
+
+def _directions(P, marker):
+    """Ways a chain may hang from a marker, best first: down, then out sideways away from the
+    figure's middle, then the other horizontal ways and up."""
+    away = P[marker] - P.mean(axis=0)
+    away[1] = 0.0
+    n = np.linalg.norm(away)
+    away = away / n if n > 1e-9 else np.array([1.0, 0.0, 0.0])
+    side = np.array([-away[2], 0.0, away[0]])
+    return [np.array([0.0, -1.0, 0.0]), away, side, -side, -away, np.array([0.0, 1.0, 0.0])]
+
+
+def _free_way(start, length, width, volumes, ways):
+    """The first of ``ways`` along which a chain from ``start`` stays above the ground and clear of
+    ``volumes`` (the first frame's); the first way above the ground if none is clear."""
+    above = [w for w in ways if start[1] + w[1] * length > width] or ways
+    for way in above:
+        if _clear([start + way * f * length for f in np.linspace(0.15, 1, 8)], width / 2, volumes):
+            return way
+    return above[0]
+
+
+def _skirt_ring(centre, radius, strands, length, width, volumes):
+    """Strand knots in a horizontal ring round ``centre`` (offsets from it), widened until every
+    strand hangs clear of the first frame's volumes (at most three times ``radius``)."""
+    turns = 2 * np.pi * np.arange(strands) / strands
+    unit = np.stack([np.cos(turns), np.zeros(strands), np.sin(turns)], axis=1)
+    for r in np.linspace(radius, 3 * radius, 21):
+        ring = r * unit
+        hang = [centre + k + [0.0, -f * length, 0.0] for k in ring for f in np.linspace(0, 1, 6)]
+        if _clear(hang, width / 2, volumes):
+            return ring
+    return 3 * radius * unit
+
+
+def _clear(points, radius, volumes, gap=1e-3):
+    """Whether balls of ``radius`` at ``points`` touch none of ``volumes`` ``(a, b, r)``."""
+    for q in points:
+        for a, b, r in volumes:
+            if np.linalg.norm(q - _closest_on_segment(q, a, b)) < r + radius + gap:
+                return False
+    return True
 
 
 def _place_balls(proxy, radii, marker, count, r, placed):

@@ -4,6 +4,10 @@
   attached to the single-point proxy of the wrist).
 - :class:`Balls`: balls lying on the ground in a marker's path, kicked by the collision volumes
   (fig. 11's balls at the feet).
+- :class:`Scarf`: a ribbon tied to a marker that trails behind it and drapes over the body
+  (fig. 15's scarves at the wrists).
+- :class:`Skirt`: strands hanging in a ring around a marker (the hips) that swing with it and are
+  pushed aside by the legs (a grass skirt; the paper's cloth skirts of figs. 9 and 13 need cloth).
 
 Sizes not given follow the figure: its height (the skeleton proxy's largest vertical extent over
 the clip) times the fractions below, so a scene looks the same on a child and on a giant, and on a
@@ -20,6 +24,11 @@ from toonmotion.errors import SceneError
 BALLOON_RADIUS = 0.07
 STRING_LENGTH = 0.3
 BALL_RADIUS = 0.05
+SCARF_LENGTH = 0.4
+SCARF_WIDTH = 0.05
+SKIRT_LENGTH = 0.22
+SKIRT_RADIUS = 0.1
+SKIRT_WIDTH = 0.03
 
 
 @dataclass(frozen=True)
@@ -84,7 +93,62 @@ class Balls:
             _colour(colour)
 
 
-Element = Balloon | Balls
+@dataclass(frozen=True)
+class Scarf:
+    """A ribbon tied to ``marker``, hanging down at first.
+
+    Attributes
+    ----------
+    marker : str
+    length, width : float, optional
+        Metres; default :data:`SCARF_LENGTH` and :data:`SCARF_WIDTH` of the figure's height.
+    colour : (r, g, b)
+    """
+
+    marker: str
+    length: float | None = None
+    width: float | None = None
+    colour: tuple[int, int, int] = (70, 100, 220)
+
+    def __post_init__(self) -> None:
+        _positive(self.length, "a scarf's length")
+        _positive(self.width, "a scarf's width")
+        _colour(self.colour)
+
+
+@dataclass(frozen=True)
+class Skirt:
+    """``strands`` strands hanging in a ring around ``marker``.
+
+    Attributes
+    ----------
+    marker : str
+        The hips, say.
+    strands : int
+    length, radius, width : float, optional
+        The strands' length, the ring's radius and a strand's width, metres; default
+        :data:`SKIRT_LENGTH`, :data:`SKIRT_RADIUS` and :data:`SKIRT_WIDTH` of the figure's height.
+    colour : (r, g, b)
+    """
+
+    marker: str
+    strands: int = 16
+    length: float | None = None
+    radius: float | None = None
+    width: float | None = None
+    colour: tuple[int, int, int] = (230, 120, 170)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.strands, bool) or not isinstance(self.strands, int) or self.strands < 1:
+            raise SceneError(f"a skirt's strand count must be a whole number, at least 1, got "
+                             f"{self.strands!r}")
+        _positive(self.length, "a skirt's length")
+        _positive(self.radius, "a skirt's radius")
+        _positive(self.width, "a skirt's strand width")
+        _colour(self.colour)
+
+
+Element = Balloon | Balls | Scarf | Skirt
 
 
 def _positive(value, what):

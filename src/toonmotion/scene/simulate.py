@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion.errors import SceneError
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.scene.build import SEGMENTS, SceneModel, _mujoco
@@ -91,29 +92,39 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
     out_balls = np.zeros((T, len(scene.balls), 4))
     held_geoms = [g for g, _ in scene.held]
     out_held = np.zeros((T, len(held_geoms), 3))
-    deepest = 0.0
     kinematic.place(data, 0, 0.0, moving=False)
     mujoco.mj_forward(model, data)
     fractions = np.arange(substeps) / substeps
-    for t in range(T):
-        if t > 0:
-            poses = kinematic.poses(t - 1, fractions, moving=True)
-            for s in range(substeps):
-                kinematic.write(data, poses, s)
-                mujoco.mj_step(model, data)
-                deepest = max(deepest, kinematic.deepest_ball(data))
-            kinematic.place(data, t, 0.0, moving=t < T - 1)
-            mujoco.mj_forward(model, data)
-        for i, g in enumerate(spheres):
-            out_spheres[t, i] = (*data.geom_xpos[g], model.geom_size[g, 0])
-        for i, g in enumerate(capsules):
-            out_capsules[t, i] = _capsule(data, model, g)
-        for i, g in enumerate(scene.balls):
-            out_balls[t, i] = (*data.geom_xpos[g], model.geom_size[g, 0])
-        for i, g in enumerate(held_geoms):
-            out_held[t, i] = _capsule(data, model, g)[:3]
-        if progress is not None:
-            progress("simulate", t + 1, T)
+    heard: list[str] = []  # MuJoCo's warnings, kept from its log file and stdout
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(heard.append)
+    try:
+        deepest = 0.0
+        for t in range(T):
+            if t > 0:
+                poses = kinematic.poses(t - 1, fractions, moving=True)
+                for s in range(substeps):
+                    kinematic.write(data, poses, s)
+                    mujoco.mj_step(model, data)
+                    deepest = max(deepest, kinematic.deepest_ball(data))
+                kinematic.place(data, t, 0.0, moving=t < T - 1)
+                mujoco.mj_forward(model, data)
+            for i, g in enumerate(spheres):
+                out_spheres[t, i] = (*data.geom_xpos[g], model.geom_size[g, 0])
+            for i, g in enumerate(capsules):
+                out_capsules[t, i] = _capsule(data, model, g)
+            for i, g in enumerate(scene.balls):
+                out_balls[t, i] = (*data.geom_xpos[g], model.geom_size[g, 0])
+            for i, g in enumerate(held_geoms):
+                out_held[t, i] = _capsule(data, model, g)[:3]
+            if progress is not None:
+                progress("simulate", t + 1, T)
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0:
+        raise SceneError(f"the simulation became unstable ({heard[0].strip() if heard else 'MuJoCo'}); an "
+                         "element may start inside the body or the ground, or be too light: make it "
+                         "larger, heavier or hold it elsewhere")
     colours = np.asarray(scene.colours).reshape(-1, 3)[order] if order else np.zeros((0, 3), np.uint8)
     return SceneMotion(out_spheres, out_capsules, colours, out_held,
                        np.array([m for _, m in scene.held], dtype=np.int64), out_balls, deepest, substeps)
