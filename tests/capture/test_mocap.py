@@ -207,3 +207,20 @@ def test_depth_puts_the_chest_nearer_than_the_back():
     points, depth = project_orthographic(P, up="y", facing="z", with_depth=True)
     np.testing.assert_array_equal(points, project_orthographic(P, up="y", facing="z"))
     assert depth[0, 0] < depth[0, 1]
+
+
+def test_find_joints_finds_what_it_can_and_pick_joints_wants_all():
+    """A drawn figure without a head joint (a shared drawing's skeleton): its roles are found, the
+    head's is None; pick_joints, which wants all sixteen, says which is missing."""
+    from toonmotion.capture.mocap import find_joints, pick_joints
+    from toonmotion.errors import MotionError
+
+    names = ["root", "hip", "torso", "neck", "right_shoulder", "right_elbow", "right_hand", "left_shoulder",
+             "left_elbow", "left_hand", "right_hip", "right_knee", "right_foot", "left_hip", "left_knee",
+             "left_foot"]
+    parents = [-1, 0, 1, 2, 3, 4, 5, 3, 7, 8, 1, 10, 11, 1, 13, 14]
+    found = find_joints(names, parents)
+    assert found["head"] is None
+    assert (found["hips"], found["spine"], found["left_hand"], found["right_foot"]) == (1, 2, 9, 12)
+    with pytest.raises(MotionError, match="standard joint head among"):
+        pick_joints(names, parents)

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.animate.motion import Motion
 from toonmotion.capture.bvh_kinematics import BvhClip
-from toonmotion.capture.mocap import pick_joints
+from toonmotion.capture.mocap import find_joints
 from toonmotion.errors import MotionError
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.camera_fit import CameraWeights
@@ -37,6 +37,7 @@ def lift_proxy(
     units: float | str | None = None,
     extra: Sequence[BvhClip] = (),
     camera_weights: CameraWeights | None = None,
+    still_camera: bool = False,
     skeleton_weights: SkeletonWeights | None = None,
     progress: Progress | None = None,
 ) -> tuple[Proxy, LiftReport]:
@@ -54,7 +55,7 @@ def lift_proxy(
         Named 2D markers per drawn frame (:func:`toonmotion.io.markers_json.load_markers`), or a
         motion (from tracking, an animation or a motion file), whose joints become the markers:
         a joint whose role in its skeleton is a standard one (hips, spine, left elbow, ...,
-        :func:`toonmotion.capture.mocap.pick_joints`) is matched to the clip's joint of that role
+        :func:`toonmotion.capture.mocap.find_joints`) is matched to the clip's joint of that role
         whatever either is called; a joint with neither a role nor a namesake in the clip (a
         root on the hips, a hat) is left out and listed in ``report.left_out``.
     prior : BvhClip
@@ -65,7 +66,7 @@ def lift_proxy(
         The clip's frames to use, as a slice.
     view : (azimuth, elevation), optional
         Degrees; searched when not given.
-    focal, size, frames, widths, units, camera_weights, skeleton_weights
+    focal, size, frames, widths, units, camera_weights, still_camera, skeleton_weights
         As :func:`toonmotion.proxy3d.lift.lift`.
     extra : sequence of BvhClip
         Further clips for the skeleton's PCA subspace, matched the same way.
@@ -113,6 +114,7 @@ def lift_proxy(
     others = [prior_from_bvh(c, drawn.names, joint_map=joint_map) for c in extra]
     proxy, report = lift(drawn, matched, view=view, focal=focal, size=size, frames=frames, widths=widths,
                          units=units, extra=others, camera_weights=camera_weights,
+                         still_camera=still_camera,
                          skeleton_weights=skeleton_weights, progress=progress)
     return proxy, replace(report, left_out=left_out)
 
@@ -131,8 +133,9 @@ def _motion_markers(motion, clip, joint_map):
 
 
 def _roles(names, parents):
+    """Standard role -> joint index, for the roles found (a figure without a head has no head)."""
     try:
-        return pick_joints(names, parents)
+        return {role: j for role, j in find_joints(names, parents).items() if j is not None}
     except MotionError:
         return {}
 

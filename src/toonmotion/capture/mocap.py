@@ -69,8 +69,8 @@ def standard_skeleton_parents() -> dict[str, str | None]:
     return dict(_PARENTS)
 
 
-def pick_joints(names: Sequence[str], parents: ArrayLike) -> dict[str, int]:
-    """Find the 16 :data:`STANDARD_JOINTS` among a mocap skeleton's joints, by name.
+def find_joints(names: Sequence[str], parents: ArrayLike) -> dict[str, int | None]:
+    """Find the 16 :data:`STANDARD_JOINTS` among a skeleton's joints, by name, as far as they go.
 
     Names are matched case-insensitively, with rig prefixes (``mixamorig:``, ``Bip01 ``) and
     separators ignored, and the side read from ``Left``/``Right``/``L``/``R`` before or after
@@ -94,13 +94,13 @@ def pick_joints(names: Sequence[str], parents: ArrayLike) -> dict[str, int]:
     Returns
     -------
     dict
-        Standard name -> joint index, in :data:`STANDARD_JOINTS` order.
+        Standard name -> joint index, or None where no joint matches, in
+        :data:`STANDARD_JOINTS` order.
 
     Raises
     ------
     MotionError
-        Some standard joints have no match (the message names them and lists the joints), or
-        a limb's picks do not form a chain (an elbow not below its shoulder).
+        A limb's picks do not form a chain (an elbow not below its shoulder).
     """
     names = [str(n) for n in names]
     parents = np.asarray(parents, dtype=np.int64)
@@ -130,21 +130,36 @@ def pick_joints(names: Sequence[str], parents: ArrayLike) -> dict[str, int]:
     )
     picks["spine"] = _spine(picks["hips"], picks["neck"], parents, keys)
 
-    missing = [n for n in STANDARD_JOINTS if picks[n] is None]
-    if missing:
-        raise MotionError(
-            f"cannot find the standard joint{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
-            f"among the mocap joints: {', '.join(names)}"
-        )
     for prefix in ("left_", "right_"):
         for upper, lower in _CHAINS:
             a, b = picks[prefix + upper], picks[prefix + lower]
-            if not _is_below(parents, b, a):
+            if a is not None and b is not None and not _is_below(parents, b, a):
                 raise MotionError(
                     f"{prefix + lower} was matched to {names[b]!r}, which is not below "
                     f"{prefix + upper} ({names[a]!r}); the joint names do not follow a known convention"
                 )
-    return {n: int(picks[n]) for n in STANDARD_JOINTS}
+    return {n: picks[n] for n in STANDARD_JOINTS}
+
+
+def pick_joints(names: Sequence[str], parents: ArrayLike) -> dict[str, int]:
+    """Find the 16 :data:`STANDARD_JOINTS` among a mocap skeleton's joints, by name.
+
+    As :func:`find_joints`, but every standard joint must be found.
+
+    Raises
+    ------
+    MotionError
+        Some standard joints have no match (the message names them and lists the joints), or
+        a limb's picks do not form a chain (an elbow not below its shoulder).
+    """
+    picks = find_joints(names, parents)
+    missing = [n for n in STANDARD_JOINTS if picks[n] is None]
+    if missing:
+        raise MotionError(
+            f"cannot find the standard joint{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
+            f"among the mocap joints: {', '.join(str(n) for n in names)}"
+        )
+    return {n: int(j) for n, j in picks.items() if j is not None}
 
 
 @overload
