@@ -90,6 +90,38 @@ def test_one_pixel_noise_and_the_window(walk_prior):
     assert errors[3][0] > errors[1][0] and errors[3][1] > errors[1][1]
 
 
+def test_a_still_camera_is_one_pose_and_steadier_where_the_prior_fits_badly(walk_prior):
+    """A still camera, a prior whose limbs are 25% off the drawn figure's (cartoon proportions):
+    the still fit is one pose for the shot, near the truth; a camera per frame wanders."""
+    prior = prior_in_metres(walk_prior)[0]
+    T = prior.frame_count
+    truth = PerspectiveCamera(1000.0, 960, 720, np.tile(_moving_camera(2)[0], (T, 1)))
+    rng = np.random.default_rng(3)
+    P = prior.positions.copy()
+    for p, c in prior.limbs:  # parents first: each limb rescaled, its children carried along
+        scale = rng.uniform(0.75, 1.25)
+        below = [c] + [j for j in range(len(prior.names)) if _is_below(prior.parents, j, c) and j != c]
+        P[:, below] += (scale - 1) * (prior.positions[:, c] - prior.positions[:, p])[:, None]
+    drawn = Markers(prior.names, truth.project(P), fps=prior.fps)
+    still = estimate_camera(drawn, prior, azimuth=20, elevation=0, focal=1000.0, width=960, height=720,
+                            still=True)
+    assert np.ptp(still.extrinsics, axis=0).max() == 0
+    moving = estimate_camera(drawn, prior, azimuth=20, elevation=0, focal=1000.0, width=960, height=720)
+    centre_error = {name: np.linalg.norm(cam.centres - truth.centres, axis=1).max()
+                    for name, cam in (("still", still), ("moving", moving))}
+    print(centre_error)
+    assert centre_error["still"] < 0.5 * centre_error["moving"]
+    assert np.ptp(moving.centres, axis=0).max() > 2 * np.ptp(still.centres, axis=0).max() + 0.05
+
+
+def _is_below(parents, j, ancestor):
+    while j >= 0:
+        if j == ancestor:
+            return True
+        j = parents[j]
+    return False
+
+
 def test_the_ground_and_roll_terms_pull_as_stated():
     """Without drawing evidence against it, a camera below the ground rises and a rolled one unrolls."""
     P = np.array([[[0.0, 0.0, 0.0], [0.0, 0.3, 0.0]]])

@@ -46,6 +46,9 @@ def lift_command(
         "facing +Z; 90,0: from its left) \\[default: searched].")] = None,
     focal: Annotated[float | None, typer.Option(
         "--focal", help="Focal length in pixels \\[default: the image's diagonal].")] = None,
+    still_camera: Annotated[bool, typer.Option(
+        "--still-camera", help="One camera for the whole shot (a drawing without camera moves): steadier "
+        "than a camera per frame where the prior fits the drawing badly.")] = False,
     size: Annotated[str | None, typer.Option(
         "--size", help="Image WxH pixels \\[default: the frames', else the markers' extent].")] = None,
     frames: Annotated[Path | None, typer.Option(
@@ -85,7 +88,8 @@ def lift_command(
         proxy, found = api.lift_proxy(
             markers, clip, joint_map=_pairs(joint_map, "--map"), segment=_segment(segment),
             view=None if view is None else options.numbers(view, 2, "--view"),  # type: ignore[arg-type]
-            focal=focal, size=options.size(size), frames=pictures, widths=_widths(widths),
+            focal=focal, still_camera=still_camera, size=options.size(size), frames=pictures,
+            widths=_widths(widths),
             units=_units(units), extra=[load_bvh(p) for p in extra or ()], progress=report,
         )
     save_proxy(output, proxy)

@@ -112,6 +112,7 @@ def estimate_camera(
     width: int,
     height: int,
     weights: CameraWeights | None = None,
+    still: bool = False,
     progress: Progress | None = None,
 ) -> PerspectiveCamera:
     """The artist's camera per frame by eq. 2.
@@ -130,6 +131,11 @@ def estimate_camera(
         Image size, pixels.
     weights : CameraWeights, optional
         The paper's by default.
+    still : bool
+        Beyond the paper: one camera for the whole shot, fitted to every frame at once (its
+        ground and roll terms as above; no window or smoothness). For a drawing made without
+        camera moves it is far better posed than a camera per frame, which, where the prior
+        explains the drawing badly (cartoon proportions), can wander off between frames.
     progress : callable, optional
         ``progress("camera", done, total)`` per frame.
 
@@ -179,7 +185,12 @@ def estimate_camera(
             parts.append(np.sqrt(w.smooth) * (p - anchor))
         return np.concatenate(parts)
 
-    for i in range(T):
+    if still:
+        found = least_squares(residuals, previous, args=(0, np.arange(T), None), method="lm", x_scale="jac")
+        rho[:] = found.x
+        if progress is not None:
+            progress("camera", T, T)
+    for i in range(0 if still else T):
         frames = np.arange(max(0, i - half), min(T, i + half + 1))
         anchor = None if i == 0 else previous
         found = least_squares(residuals, previous, args=(i, frames, anchor), method="lm", x_scale="jac")

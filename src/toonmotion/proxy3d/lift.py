@@ -101,6 +101,7 @@ def lift(
     upper: Sequence[str] | None = None,
     extra: Sequence[Prior] = (),
     camera_weights: CameraWeights | None = None,
+    still_camera: bool = False,
     skeleton_weights: SkeletonWeights | None = None,
     smooth: float = 1.0,
     progress: Progress | None = None,
@@ -138,6 +139,9 @@ def lift(
         Upper-body markers, when the skeleton's structure does not tell them.
     extra : sequence of Prior
         Other clips for the skeleton's PCA subspace (same names; their own units are guessed).
+    still_camera : bool
+        One camera for the whole shot (:func:`~toonmotion.proxy3d.camera_fit.estimate_camera`'s
+        ``still``), for drawings made without camera moves.
     camera_weights, skeleton_weights : optional
         Eq. 2's and eq. 16's weights.
     smooth : float
@@ -187,7 +191,7 @@ def lift(
 
     clock = time.perf_counter()
     camera = estimate_camera(markers, warped, azimuth=azimuth, elevation=elevation, focal=f, width=width,
-                             height=height, weights=camera_weights, progress=progress)
+                             height=height, weights=camera_weights, still=still_camera, progress=progress)
     camera_px = float(np.linalg.norm(camera.project(warped.positions) - markers.positions, axis=-1).mean())
     times["camera"] = _since(clock)
 
