@@ -325,5 +325,8 @@ def lay_on(frames: NDArray[np.uint8],
     """
     if frames.shape[-1] == 3:
         return frames
-    a = frames[..., 3:] / 255.0
-    return np.round(a * frames[..., :3] + (1 - a) * np.asarray(background, dtype=np.float64)).astype(np.uint8)
+    # (a c + (255 - a) b + 127) // 255, rounded to nearest; a convex mix of bytes times 255 fits in
+    # 16 bits.
+    a = frames[..., 3:].astype(np.uint16)
+    laid = a * frames[..., :3] + (255 - a) * np.asarray(background, dtype=np.uint16) + 127
+    return (laid // 255).astype(np.uint8)

@@ -125,8 +125,8 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
         speed = float(np.linalg.norm(np.diff(proxy.points, axis=0), axis=-1).max(initial=0.0) * proxy.fps)
         raise SceneError(f"the simulation became unstable ({heard[0].strip() if heard else 'MuJoCo'}); "
                          f"the proxy's markers reach {speed:.1f} m/s (a lift whose camera or depth jumps "
-                         "between frames moves it metres at once: check it with proxy-preview), or an element "
-                         "is too light or starts inside the body or the ground")
+                         "between frames moves it metres at once: check it with proxy-preview), or an "
+                         "element is too light or starts inside the body or the ground")
     colours = np.asarray(scene.colours).reshape(-1, 3)[order] if order else np.zeros((0, 3), np.uint8)
     return SceneMotion(out_spheres, out_capsules, colours, out_held,
                        np.array([m for _, m in scene.held], dtype=np.int64), out_balls, deepest, substeps)
