@@ -37,7 +37,7 @@ def simulate_scene(proxy: Proxy, elements: Sequence[Element], *,
     ----------
     proxy : Proxy
         From :func:`toonmotion.api.lift_proxy` or a proxy file.
-    elements : sequence of Balloon or Balls
+    elements : sequence of Balloon, Balls, Scarf, Skirt or Rain
         :mod:`toonmotion.scene.elements`.
     progress : callable, optional
         ``progress("simulate", done, total)``.

@@ -20,7 +20,7 @@ from toonmotion.io.motion_json import is_motion_file, load_motion
 from toonmotion.io.pose_json import load_keyframes
 from toonmotion.io.proxy_json import load_proxy
 from toonmotion.io.video import animation_format, save_animation
-from toonmotion.scene.elements import Balloon, Balls, Element, Scarf, Skirt
+from toonmotion.scene.elements import Balloon, Balls, Element, Rain, Scarf, Skirt
 
 
 @app.command("scene")
@@ -44,6 +44,9 @@ def scene_command(
         "--scarf", help="A scarf tied at MARKER (a wrist, say; repeat for more).")] = None,
     skirt: Annotated[list[str] | None, typer.Option(
         "--skirt", help="A skirt of strands hanging in a ring around MARKER (the hips, say).")] = None,
+    rain: Annotated[int, typer.Option(
+        "--rain", min=0, help="Rain: this many drops falling over the figure at a time, bouncing off it."
+    )] = 0,
     ball_count: Annotated[int, typer.Option("--ball-count", min=1, help="Balls per --balls marker.")] = 3,
     ball_radius: Annotated[float | None, typer.Option(
         "--ball-radius", help="Metres \\[default: 5% of the figure's height].")] = None,
@@ -65,11 +68,12 @@ def scene_command(
     for text in balls or ():
         elements += [Balls(m, count=ball_count, radius=ball_radius) for m in options.names(text)]
     elements += [Scarf(m.strip()) for m in scarf or ()] + [Skirt(m.strip()) for m in skirt or ()]
+    elements += [Rain(count=rain)] if rain else []
     if (frames is None) == (project is None) or (project is None) != (keys is None):
         raise SettingsError("give the drawn frames (--frames) or a project and its keys (--project, --keys)")
     if not elements:
-        options.warn("no elements given (--balloon, --balls, --scarf, --skirt): the drawing is written as it "
-                     "is")
+        options.warn("no elements given (--balloon, --balls, --scarf, --skirt, --rain): the drawing is "
+                     "written as it is")
     proxy = load_proxy(source)
     limbs = None
     with options.progress("scene") as report:
@@ -84,7 +88,7 @@ def scene_command(
         written = save_animation(output, _opaque(made), fps=proxy.fps)
     deepest = f", deepest contact {motion.deepest * 1000:.1f} mm" if len(motion.balls[0]) else ""
     counts = [(sum(isinstance(e, kind) for e in elements), kind.__name__.lower())
-              for kind in (Balloon, Scarf, Skirt)] + [(motion.balls.shape[1], "ball")]
+              for kind in (Balloon, Scarf, Skirt)] + [(motion.balls.shape[1], "ball"), (rain, "drop")]
     parts = [f"{n} {what}{'' if n == 1 else 's'}" for n, what in counts if n]
     listed = " and ".join([", ".join(parts[:-1]), parts[-1]] if len(parts) > 1 else parts) or "nothing"
     typer.echo(f"simulated {listed} over {written} frames ({motion.substeps} steps each{deepest}) -> "

@@ -30,6 +30,7 @@ from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.scene.elements import (
     BALL_RADIUS,
     BALLOON_RADIUS,
+    RAIN_RADIUS,
     SCARF_LENGTH,
     SCARF_WIDTH,
     SKIRT_LENGTH,
@@ -39,6 +40,7 @@ from toonmotion.scene.elements import (
     Balloon,
     Balls,
     Element,
+    Rain,
     Scarf,
     Skirt,
 )
@@ -49,6 +51,7 @@ SCARF_LINKS = 10
 SKIRT_LINKS = 4
 CLOTH_DENSITY = 0.25  # kg per square metre of scarf or strand: light cloth
 MIN_LINK_MASS = 0.002  # kg: lighter links make the contacts stiff beyond what a sub-step resolves
+CHAIN_ARMATURE = 1e-4  # kg m^2 of rotor inertia on a chain's joints: keeps light links stable in contact
 # Proxy radii when the proxy has no collision volumes (lifted without drawn frames), as a fraction
 # of the figure's height.
 DEFAULT_LIMB_RADIUS = 0.035
@@ -59,6 +62,9 @@ STRING_RADIUS = 0.003  # m, physical; drawn wider (simulate.STRING_DRAWN_PX)
 # Collision bits: proxies (2) touch elements (3) only; elements touch the ground (1) and each other.
 PROXY_BITS = 'contype="2" conaffinity="0"'
 ELEMENT_BITS = 'contype="1" conaffinity="3"'
+# Rain (4) touches the proxy, the ground and the elements but not other drops.
+DROP_BITS = 'contype="4" conaffinity="3"'
+WATER_DENSITY = 1000.0
 CONTACT = 'solref="0.004 1" condim="6" friction="0.9 0.005 0.002"'
 
 
@@ -85,6 +91,9 @@ class SceneModel:
         ``(geom, marker)``: a string's first capsule and the marker holding it.
     balls : list of int
         The balls' geoms.
+    rain : list of (int, (5,) float)
+        Each drop's geom and the box it falls in, ``(x0, x1, z0, z1, top)`` metres
+        (:func:`rain_box`).
     default_volumes : bool
         Whether the proxy had no volumes and ``limb_radii`` are defaults.
     """
@@ -100,6 +109,7 @@ class SceneModel:
     held: list[tuple[int, int]] = field(default_factory=list)
     balls: list[int] = field(default_factory=list)
     default_volumes: bool = False
+    rain: list[tuple[int, NDArray[np.float64]]] = field(default_factory=list)
 
 
 def figure_height(proxy: Proxy) -> float:
@@ -119,7 +129,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     mujoco = _mujoco()
     names = list(proxy.names)
     for element in elements:
-        if element.marker not in names:
+        if element.marker is not None and element.marker not in names:
             raise SceneError(f"the {type(element).__name__.lower()} is held at {element.marker!r}, which the "
                              f"proxy lacks; its markers are {', '.join(names)}")
     height = figure_height(proxy)
@@ -129,6 +139,8 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     held_xml: dict[int, list[str]] = {}
     element_xml = []
     for i, element in enumerate(elements):
+        if isinstance(element, Rain):
+            continue
         at = held_xml.setdefault(names.index(element.marker), [])
         if isinstance(element, Balloon):
             at.append(_balloon_xml(i, element, height))
@@ -164,6 +176,22 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
                     f'<body name="e{i}_ball{j}" pos="{_v(centre)}"><freejoint/><geom name="e{i}_ball{j}" '
                     f'type="sphere" size="{r!r}" density="{BALL_DENSITY}" rgba="{rgba}" {ELEMENT_BITS} '
                     f'{CONTACT}/></body>')
+    drops: list[tuple[str, NDArray[np.float64]]] = []
+    for i, element in enumerate(elements):
+        if isinstance(element, Rain):
+            r = element.radius or RAIN_RADIUS * height
+            box = rain_box(proxy, height)
+            rng = np.random.default_rng(element.seed)
+            volumes = _first_frame_volumes(proxy, radii)
+            starts = [c for c in drops_in(rng, box, 4 * element.count, full_height=True)
+                      if _clear([c], r, volumes)][:element.count]
+            starts += list(drops_in(rng, box, element.count - len(starts), full_height=False))
+            for j, centre in enumerate(starts):
+                drops.append((f"e{i}_drop{j}", box))
+                element_xml.append(
+                    f'<body name="e{i}_drop{j}" pos="{_v(centre)}"><freejoint/><geom name="e{i}_drop{j}" '
+                    f'type="sphere" size="{r!r}" density="{WATER_DENSITY}" rgba="{_rgba(element.colour)}" '
+                    f'{DROP_BITS} solref="0.004 0.3" friction="0.2 0.005 0.0001"/></body>')
     bodies = []
     for n in range(len(names)):
         bodies.append(
@@ -176,7 +204,8 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
         bodies.append(f'<body name="l{k}"><freejoint/>{capsules}</body>')
     xml = (
         '<mujoco model="toonmotion scene"><compiler angle="radian"/>'
-        '<option gravity="0 -9.81 0" density="1.2" viscosity="0.000018" integrator="implicitfast"/>'
+        '<option gravity="0 -9.81 0" density="1.2" viscosity="0.000018" integrator="implicitfast">'
+        '<flag midphase="disable"/></option>'  # the proxy's geoms change size: no compiled bounds
         '<worldbody><geom name="ground" type="plane" size="0 0 1" zaxis="0 1 0" contype="1" '
         f'conaffinity="1" {CONTACT}/>' + "".join(bodies) + "".join(element_xml) + "</worldbody></mujoco>"
     )
@@ -185,6 +214,10 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     except ValueError as error:  # pragma: no cover - the XML is ours
         raise SceneError(f"the scene does not compile: {error}") from None
     geom = lambda name: int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name))  # noqa: E731
+    # The limbs' capsules are moved within their bodies every sub-step; MuJoCo skips the offset of
+    # a geom it compiled at its body's origin ("same frame"), so none of them may be marked so.
+    limb_geoms = [geom(f"l{k}_{s}") for k in range(len(proxy.limbs)) for s in range(SEGMENTS)]
+    model.geom_sameframe[limb_geoms] = 0
     body = lambda name: int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name))  # noqa: E731
     drawn = [g for g in range(model.ngeom) if mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g)
              and mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g).startswith("e")]
@@ -194,6 +227,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     held += [(geom(f"e{i}_scarf0"), names.index(e.marker)) for i, e in enumerate(elements)
              if isinstance(e, Scarf)]
     balls = [geom(name) for name in ball_names]
+    rain = [(geom(name), box) for name, box in drops]
     return SceneModel(
         model=model, height=height, limb_radii=radii,
         marker_bodies=[body(f"m{n}") for n in range(len(names))],
@@ -201,6 +235,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
         limb_geoms=np.array([[geom(f"l{k}_{s}") for s in range(SEGMENTS)] for k in range(len(proxy.limbs))],
                             dtype=np.int64).reshape(-1, SEGMENTS),
         element_geoms=drawn, colours=colours, held=held, balls=balls, default_volumes=default_volumes,
+        rain=rain,
     )
 
 
@@ -252,7 +287,8 @@ def _chain_xml(name, start, length, links, radius, width, rgba, direction):
     for s in reversed(range(links)):
         pos = _v(start) if s == 0 else _v(d * link)
         bits = 'contype="0" conaffinity="0"' if s == 0 else f"{ELEMENT_BITS} {CONTACT}"
-        inner = (f'<body name="{name}{s}" pos="{pos}"><joint type="ball" damping="{2e-4 * link!r}"/>'
+        inner = (f'<body name="{name}{s}" pos="{pos}">'
+                 f'<joint type="ball" damping="{2e-4 * link!r}" armature="{CHAIN_ARMATURE}"/>'
                  f'<geom name="{name}{s}" type="capsule" pos="{_v(d * link / 2)}" zaxis="{_v(d)}" '
                  f'size="{radius!r} {link / 2!r}" mass="{mass!r}" rgba="{rgba}" {bits}/>{inner}</body>')
     return inner
@@ -299,6 +335,26 @@ def _clear(points, radius, volumes, gap=1e-3):
             if np.linalg.norm(q - _closest_on_segment(q, a, b)) < r + radius + gap:
                 return False
     return True
+
+
+def rain_box(proxy: Proxy, height: float) -> NDArray[np.float64]:
+    """Where rain falls: ``(x0, x1, z0, z1, top)``, the figure's ground path over the clip widened
+    by half its height each way, and from half a height above its highest point."""
+    P = proxy.points
+    lo, hi = P.reshape(-1, 3).min(axis=0), P.reshape(-1, 3).max(axis=0)
+    margin = 0.5 * height
+    return np.array([lo[0] - margin, hi[0] + margin, lo[2] - margin, hi[2] + margin, hi[1] + margin])
+
+
+def drops_in(rng, box, count, full_height):
+    """Drop centres in ``box``: at every height down to the ground, or just above the top."""
+    x = rng.uniform(box[0], box[1], count)
+    z = rng.uniform(box[2], box[3], count)
+    if full_height:
+        y = rng.uniform(0.05 * box[4], box[4], count)
+    else:
+        y = box[4] + rng.uniform(0, 0.1 * box[4], count)
+    return np.stack([x, y, z], axis=1)
 
 
 def _place_balls(proxy, radii, marker, count, r, placed):

@@ -8,6 +8,8 @@
   (fig. 15's scarves at the wrists).
 - :class:`Skirt`: strands hanging in a ring around a marker (the hips) that swing with it and are
   pushed aside by the legs (a grass skirt; the paper's cloth skirts of figs. 9 and 13 need cloth).
+- :class:`Rain`: drops falling over the figure that bounce off it (fig. 12's rain), each sent
+  back up when it reaches the ground.
 
 Sizes not given follow the figure: its height (the skeleton proxy's largest vertical extent over
 the clip) times the fractions below, so a scene looks the same on a child and on a giant, and on a
@@ -29,6 +31,7 @@ SCARF_WIDTH = 0.05
 SKIRT_LENGTH = 0.22
 SKIRT_RADIUS = 0.1
 SKIRT_WIDTH = 0.03
+RAIN_RADIUS = 0.008
 
 
 @dataclass(frozen=True)
@@ -148,7 +151,37 @@ class Skirt:
         _colour(self.colour)
 
 
-Element = Balloon | Balls | Scarf | Skirt
+@dataclass(frozen=True)
+class Rain:
+    """``count`` drops falling over the figure's whole path, from above its head.
+
+    A drop that reaches the ground is sent back up to fall again, at a new place, so the rain
+    keeps falling. Drops bounce off the body and the other elements, not off each other.
+
+    Attributes
+    ----------
+    count : int
+    radius : float, optional
+        Metres; default :data:`RAIN_RADIUS` of the figure's height.
+    seed : int
+        Where the drops fall, reproducibly.
+    colour : (r, g, b)
+    """
+
+    count: int = 80
+    radius: float | None = None
+    seed: int = 0
+    colour: tuple[int, int, int] = (120, 170, 230)
+    marker: None = None  # rain is held by nothing
+
+    def __post_init__(self) -> None:
+        if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count < 1:
+            raise SceneError(f"a rain's drop count must be a whole number, at least 1, got {self.count!r}")
+        _positive(self.radius, "a drop's radius")
+        _colour(self.colour)
+
+
+Element = Balloon | Balls | Scarf | Skirt | Rain
 
 
 def _positive(value, what):

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from toonmotion.errors import SceneError
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.proxy import Proxy
-from toonmotion.scene.build import SEGMENTS, SceneModel, _mujoco
+from toonmotion.scene.build import SEGMENTS, SceneModel, _mujoco, drops_in
 
 MAX_STEP = 0.002  # seconds: the longest sub-step (the contacts' time constant is twice this)
 
@@ -95,6 +95,7 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
     kinematic.place(data, 0, 0.0, moving=False)
     mujoco.mj_forward(model, data)
     fractions = np.arange(substeps) / substeps
+    rain = _Rain(scene, model)
     heard: list[str] = []  # MuJoCo's warnings, kept from its log file and stdout
     previous = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(heard.append)
@@ -108,6 +109,7 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
                     mujoco.mj_step(model, data)
                     deepest = max(deepest, kinematic.deepest_ball(data))
                 kinematic.place(data, t, 0.0, moving=t < T - 1)
+                rain.respawn(data)
                 mujoco.mj_forward(model, data)
             for i, g in enumerate(spheres):
                 out_spheres[t, i] = (*data.geom_xpos[g], model.geom_size[g, 0])
@@ -130,6 +132,32 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
     colours = np.asarray(scene.colours).reshape(-1, 3)[order] if order else np.zeros((0, 3), np.uint8)
     return SceneMotion(out_spheres, out_capsules, colours, out_held,
                        np.array([m for _, m in scene.held], dtype=np.int64), out_balls, deepest, substeps)
+
+
+class _Rain:
+    """Sends drops that reached the ground (or left their box) back up above it, each frame."""
+
+    def __init__(self, scene, model):
+        self.geoms = np.array([g for g, _ in scene.rain], dtype=np.int64)
+        self.boxes = np.array([box for _, box in scene.rain]).reshape(-1, 5)
+        joints = [model.body_jntadr[model.geom_bodyid[g]] for g in self.geoms]
+        self.qpos = np.array([model.jnt_qposadr[j] for j in joints], dtype=np.int64)
+        self.qvel = np.array([model.jnt_dofadr[j] for j in joints], dtype=np.int64)
+        self.radius = model.geom_size[self.geoms, 0] if len(self.geoms) else np.zeros(0)
+        self.rng = np.random.default_rng(len(self.geoms))
+
+    def respawn(self, data):
+        if not len(self.geoms):
+            return
+        at = data.geom_xpos[self.geoms]
+        box = self.boxes
+        out = ((at[:, 1] < 1.5 * self.radius) | (at[:, 0] < box[:, 0]) | (at[:, 0] > box[:, 1])
+               | (at[:, 2] < box[:, 2]) | (at[:, 2] > box[:, 3]))
+        for k in np.flatnonzero(out):
+            q, v = self.qpos[k], self.qvel[k]
+            data.qpos[q:q + 3] = drops_in(self.rng, box[k], 1, full_height=False)[0]
+            data.qpos[q + 3:q + 7] = (1.0, 0.0, 0.0, 0.0)
+            data.qvel[v:v + 6] = 0.0
 
 
 class _Kinematic:
