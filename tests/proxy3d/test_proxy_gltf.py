@@ -261,19 +261,46 @@ def test_khronos_validator_finds_no_errors(tmp_path, radii):
 
 
 @pytest.mark.skipif(shutil.which("blender") is None, reason="Blender is not installed")
-def test_blender_imports_the_glb_and_the_bvh(tmp_path):
+def test_blender_imports_the_glb_and_the_bvh_and_poses_them_as_the_skeleton(tmp_path):
+    """Debian's Blender imports both files; at every frame each limb's bone starts at its parent
+    joint of the skeleton proxy (Blender's axes: x, -z, y of ours), in the glTF (frame t) and in
+    the BVH (frame t + 1)."""
     proxy = synthetic_proxy(FOREST, frames=4)
     save_proxy_glb(tmp_path / "proxy.glb", proxy)
     save_bvh(tmp_path / "proxy.bvh", skeleton_clip(proxy))
     script = (
-        "import bpy\n"
+        "import bpy, builtins, numpy\n"
+        # Debian's Blender 3.4 add-ons predate NumPy 1.24 and Python 3.11: numpy.bool and open(.., 'rU').
+        "numpy.bool = getattr(numpy, 'bool', bool)\n"
+        "import io_anim_bvh.import_bvh as ib\n"
+        "ib.open = lambda f, mode='r', *a, **k: builtins.open(f, mode.replace('U', ''), *a, **k)\n"
         "bpy.ops.wm.read_homefile(use_empty=True)\n"
         f"bpy.ops.import_scene.gltf(filepath={str(tmp_path / 'proxy.glb')!r})\n"
+        "gltf = [o for o in bpy.data.objects if o.type == 'ARMATURE']\n"
         f"bpy.ops.import_anim.bvh(filepath={str(tmp_path / 'proxy.bvh')!r})\n"
-        "armatures = [o for o in bpy.data.objects if o.type == 'ARMATURE']\n"
-        "print('ARMATURES', len(armatures), 'CAMERAS', len(bpy.data.cameras))\n"
+        "bvh = [o for o in bpy.data.objects if o.type == 'ARMATURE' and o not in gltf]\n"
+        "print('ARMATURES', len(gltf) + len(bvh), 'CAMERAS', len(bpy.data.cameras))\n"
+        "for kind, arm, shift in (('glb', gltf[0], 0), ('bvh', bvh[0], 1)):\n"
+        f"    for t in range({proxy.frame_count}):\n"
+        "        bpy.context.scene.frame_set(t + shift)\n"
+        "        for bone in arm.pose.bones:\n"
+        "            h = arm.matrix_world @ bone.head\n"
+        "            print('HEAD', kind, t, bone.name, h.x, h.y, h.z)\n"
     )
     done = subprocess.run(["blender", "-b", "--factory-startup", "--python-expr", script],
                           capture_output=True, text=True, timeout=300, check=False)
     assert done.returncode == 0, done.stderr[-2000:]
-    assert "ARMATURES 2 CAMERAS 1" in done.stdout
+    assert "ARMATURES 2 CAMERAS 1" in done.stdout, done.stdout[-2000:]
+    heads = {}
+    for line in done.stdout.splitlines():
+        if line.startswith("HEAD "):
+            _, kind, t, name, x, y, z = line.split()
+            heads[kind, int(t), name] = np.array([float(x), float(y), float(z)])
+    checked = 0
+    for kind in ("glb", "bvh"):
+        for t in range(proxy.frame_count):
+            for p, c in proxy.limbs:
+                x, y, z = proxy.skeleton[t, p]
+                np.testing.assert_allclose(heads[kind, t, proxy.names[c]], [x, -z, y], atol=1e-4)
+                checked += 1
+    assert checked == 2 * proxy.frame_count * len(proxy.limbs)
