@@ -76,6 +76,7 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/track.py
 	$(BIN)/python benchmarks/editor.py
 	$(BIN)/python benchmarks/proxy3d.py
+	$(BIN)/python benchmarks/scene3d.py
 
 clean:
 	rm -rf $(VENV) demo node_modules

@@ -75,6 +75,9 @@ def scene_command(
         options.warn("no elements given (--balloon, --balls, --scarf, --skirt, --rain): the drawing is "
                      "written as it is")
     proxy = load_proxy(source)
+    if proxy.radii is None and elements:
+        options.warn("the proxy has no collision volumes (it was lifted without --frames): its limbs are "
+                     "taken as 3.5% of the figure's height thick")
     limbs = None
     with options.progress("scene") as report:
         if frames is not None:
