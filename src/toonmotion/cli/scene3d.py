@@ -20,6 +20,7 @@ from toonmotion.io.motion_json import is_motion_file, load_motion
 from toonmotion.io.pose_json import load_keyframes
 from toonmotion.io.proxy_json import load_proxy
 from toonmotion.io.video import animation_format, save_animation
+from toonmotion.scene.build import DEFAULT_LIMB_RADIUS
 from toonmotion.scene.elements import Balloon, Balls, Element, Rain, Scarf, Skirt
 
 
@@ -76,8 +77,8 @@ def scene_command(
                      "written as it is")
     proxy = load_proxy(source)
     if proxy.radii is None and elements:
-        options.warn("the proxy has no collision volumes (it was lifted without --frames): its limbs are "
-                     "taken as 3.5% of the figure's height thick")
+        options.warn("the proxy has no collision volumes (it was lifted without --frames): its limbs' radii "
+                     f"are taken as {DEFAULT_LIMB_RADIUS:.1%} of the figure's height")
     limbs = None
     with options.progress("scene") as report:
         if frames is not None:
