@@ -27,8 +27,8 @@ _API = (
     "pick_layer", "pose_character", "pose_view", "preview_proxy", "redo_edits", "render_elements",
     "render_pose", "retarget", "retarget_keyposes", "retarget_keyshapes", "retarget_line_of_action",
     "retarget_parts", "retime", "rig_again", "rig_image", "rotate_joint", "same_depth_overlaps",
-    "save_project", "set_depth", "set_key", "simulate_scene", "sketch_pose", "suggest_joints",
-    "track_footage", "undo_edits", "write_animation",
+    "save_project", "scene_passes", "set_depth", "set_key", "simulate_scene", "sketch_pose",
+    "suggest_joints", "track_footage", "undo_edits", "write_animation",
 )
 
 __all__ = ["ToonmotionError", "__version__", *_API]

@@ -74,3 +74,24 @@ def test_frames_that_are_not_the_proxy_s_are_refused(files, tmp_path, capsys):
     assert run_cli("scene", folder / "proxy.json", "--frames", few, "--balls", "m2", "-o", out) == 2
     assert "the drawing has 3 frames but the proxy 8" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_passes_are_written_for_compositing_elsewhere(files, tmp_path):
+    from PIL import Image
+
+    from toonmotion.api import scene_passes, simulate_scene
+    from toonmotion.scene.elements import Balls
+
+    folder, proxy = files
+    passes = tmp_path / "passes"
+    assert run_cli("scene", folder / "proxy.json", "--frames", folder / "frames", "--balls", "m2",
+                   "--ball-count", "1", "-o", tmp_path / "out.gif", "--passes", passes) == 0
+    assert len(list(passes.glob("*.png"))) == 3 * proxy.frame_count
+    expected = list(scene_passes(proxy, simulate_scene(proxy, [Balls("m2", count=1)])))
+    for t, (beauty, depth, occlusion) in enumerate(expected):
+        read = np.asarray(Image.open(passes / f"depth_{t:04d}.png"))
+        assert np.array_equal(read, depth)  # 16 bits, millimetres
+        assert np.array_equal(np.asarray(Image.open(passes / f"beauty_{t:04d}.png")), beauty)
+        assert np.array_equal(np.asarray(Image.open(passes / f"occlusion_{t:04d}.png")), occlusion)
+        assert np.array_equal(occlusion > 0, beauty[..., 3] > 0) and np.array_equal(occlusion > 0, depth > 0)
+    assert any((o > 0).any() for _, _, o in expected)

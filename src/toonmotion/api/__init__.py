@@ -55,7 +55,13 @@ from toonmotion.api.posing import (
 )
 from toonmotion.api.proxy3d import lift_proxy, preview_proxy
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
-from toonmotion.api.scene3d import animation_frames, composite_scene, render_elements, simulate_scene
+from toonmotion.api.scene3d import (
+    animation_frames,
+    composite_scene,
+    render_elements,
+    scene_passes,
+    simulate_scene,
+)
 from toonmotion.capture.footage import Capture, suggest_joints
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
@@ -129,6 +135,7 @@ __all__ = [
     "rotate_joint",
     "same_depth_overlaps",
     "save_project",
+    "scene_passes",
     "set_depth",
     "set_key",
     "simulate_scene",

@@ -16,7 +16,7 @@ from toonmotion.progress import Progress
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
 from toonmotion.render.sequence import animation_bones, render_animation
-from toonmotion.render.zbuffer import Layer, render_primitives
+from toonmotion.render.zbuffer import Layer, layer_passes, render_primitives
 from toonmotion.rig.character import Character
 from toonmotion.scene.build import build_scene
 from toonmotion.scene.elements import Element
@@ -262,3 +262,39 @@ def _check_lifted_from(proxy, seen):
     if off > 1.0:
         raise SceneError(f"the animation's joints are up to {off:.0f} px from the proxy's markers; lift the "
                          "proxy from this animation's frames (animate --save-frame-motion) at the same size")
+
+
+def scene_passes(proxy: Proxy, motion: SceneMotion, *, shading: str = "toon"
+                 ) -> Iterator[tuple[NDArray[np.uint8], NDArray[np.uint16], NDArray[np.uint8]]]:
+    """The elements' beauty, depth and occlusion passes per frame, for compositing elsewhere.
+
+    Parameters
+    ----------
+    proxy : Proxy
+    motion : SceneMotion
+        From :func:`simulate_scene`.
+    shading : str
+        As :func:`render_elements`.
+
+    Returns
+    -------
+    iterator of (beauty, depth, occlusion)
+        Per frame :func:`toonmotion.render.zbuffer.layer_passes`: RGBA, depth in millimetres
+        (16 bits; 0 where nothing is seen) and a 0/255 mask.
+
+    Examples
+    --------
+    >>> from toonmotion.proxy3d.camera import PerspectiveCamera
+    >>> from toonmotion.scene.elements import Balls
+    >>> cam = PerspectiveCamera(500.0, 160, 120, [[0, 0, 0, 0, 0.5, 5]] * 2)
+    >>> pts = np.array([[[0.0, 1, 0], [0.0, 0.1, 0]]] * 2)
+    >>> proxy = Proxy(("hip", "foot"), [-1, 0], 12, cam, pts, None, pts, [[0.0, -0.9, 0]],
+    ...               [[[0.0, 0, 0, 1]]] * 2)
+    >>> beauty, depth, seen = next(scene_passes(proxy, simulate_scene(proxy, [Balls("foot", count=1)])))
+    >>> bool((seen > 0).any()), bool(4800 < depth[seen > 0].min() < 5200)
+    (True, True)
+    """
+    if shading not in SHADINGS:
+        raise SceneError(f"shading must be one of {', '.join(SHADINGS)}, got {shading!r}")
+    frames = range(proxy.frame_count)
+    return (layer_passes(render_elements(proxy, motion, t, shading=shading)) for t in frames)

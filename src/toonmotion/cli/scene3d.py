@@ -8,6 +8,7 @@ from typing import Annotated
 
 import numpy as np
 import typer
+from PIL import Image
 
 from toonmotion import api
 from toonmotion.animate.motion import Motion
@@ -16,6 +17,7 @@ from toonmotion.cli import options
 from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
 from toonmotion.io.frames import load_frames
+from toonmotion.io.image import save_png
 from toonmotion.io.motion_json import is_motion_file, load_motion
 from toonmotion.io.pose_json import load_keyframes
 from toonmotion.io.proxy_json import load_proxy
@@ -56,6 +58,10 @@ def scene_command(
     string_length: Annotated[float | None, typer.Option(
         "--string-length", help="Metres \\[default: 30% of the figure's height].")] = None,
     shading: Annotated[str, typer.Option("--shading", help="toon, smooth or flat.")] = "toon",
+    passes: Annotated[Path | None, typer.Option(
+        "--passes", help="Also write the elements' passes per frame into this folder, for compositing "
+        "elsewhere: beauty_NNNN.png (RGBA), depth_NNNN.png (16-bit millimetres, 0: nothing) and "
+        "occlusion_NNNN.png.")] = None,
     background: Annotated[str, typer.Option(
         "--background", help="white, black or #rrggbb under transparent frames.")] = "white",
 ) -> None:
@@ -90,6 +96,8 @@ def scene_command(
         made = api.composite_scene(proxy, pictures, motion, shading=shading, background=under, limbs=limbs,
                                    progress=report)
         written = save_animation(output, _opaque(made), fps=proxy.fps)
+        if passes is not None:
+            _write_passes(passes, api.scene_passes(proxy, motion, shading=shading))
     deepest = f", deepest contact {motion.deepest * 1000:.1f} mm" if len(motion.balls[0]) else ""
     counts = [(sum(isinstance(e, kind) for e in elements), kind.__name__.lower())
               for kind in (Balloon, Scarf, Skirt)] + [(motion.balls.shape[1], "ball"), (rain, "drop")]
@@ -113,3 +121,11 @@ def _animation(project: Path, keys: Path) -> tuple[api.Character, api.Animation]
     else:
         source = load_keyframes(keys, character.skeleton)
     return character, api.animate_character(character, source)
+
+
+def _write_passes(folder: Path, passes) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    for t, (beauty, depth, occlusion) in enumerate(passes):
+        save_png(folder / f"beauty_{t:04d}.png", beauty)
+        save_png(folder / f"depth_{t:04d}.png", Image.fromarray(depth))
+        save_png(folder / f"occlusion_{t:04d}.png", occlusion)

@@ -488,3 +488,34 @@ def _light(value):
     if norm == 0:
         raise SceneError("the light must be a non-zero direction (x, y, z); got (0, 0, 0)")
     return light / norm
+
+
+def layer_passes(layer: Layer, *, depth_unit: float = 0.001
+                 ) -> tuple[NDArray[np.uint8], NDArray[np.uint16], NDArray[np.uint8]]:
+    """A layer as the three passes a compositing program reads: beauty, depth and occlusion.
+
+    Returns
+    -------
+    beauty : (H, W, 4) uint8
+        The colour, opaque where an element is seen, transparent elsewhere.
+    depth : (H, W) uint16
+        Depth in ``depth_unit`` metres (millimetres by default), rounded and capped at 65,535;
+        0 where nothing is seen.
+    occlusion : (H, W) uint8
+        255 where an element is seen, 0 elsewhere.
+
+    Examples
+    --------
+    >>> from toonmotion.proxy3d.camera import PerspectiveCamera
+    >>> cam = PerspectiveCamera(100.0, 40, 30, [[0, 0, 0, 0, 0, 5]])
+    >>> beauty, depth, seen = layer_passes(render_primitives(cam, 0, spheres=[[0, 0, 0, 1]]))
+    >>> int(depth[15, 20]), int(beauty[15, 20, 3]), int(seen[0, 0])
+    (4000, 255, 0)
+    """
+    if not (np.isfinite(depth_unit) and depth_unit > 0):
+        raise SceneError(f"the depth unit must be a positive number of metres, got {depth_unit!r}")
+    covered = layer.coverage
+    beauty = np.concatenate([layer.colour, np.where(covered, 255, 0).astype(np.uint8)[..., None]], axis=2)
+    depth = np.zeros(covered.shape, np.uint16)
+    depth[covered] = np.clip(np.rint(layer.depth[covered] / depth_unit), 1, 65535).astype(np.uint16)
+    return beauty, depth, np.where(covered, 255, 0).astype(np.uint8)
