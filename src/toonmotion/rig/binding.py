@@ -40,6 +40,8 @@ _VERTEX_SLACK = 1.5
 # Pixels of segment outside the figure count this many times their length in a fallback choice.
 OUTSIDE_PENALTY = 4.0
 
+RULES = ("straight", "geodesic")
+
 
 class CorrectionError(ToonmotionError):
     """A decomposition correction is malformed."""
@@ -127,7 +129,8 @@ class Binding:
 
 
 def decompose(
-    mesh: Mesh, skeleton: Skeleton, mask: NDArray[np.bool_], *, corrections: Iterable[Correction] = ()
+    mesh: Mesh, skeleton: Skeleton, mask: NDArray[np.bool_], *, corrections: Iterable[Correction] = (),
+    rule: str = "straight",
 ) -> Binding:
     """Attach every vertex of ``mesh`` to a bone of ``skeleton`` (eq. 3.1).
 
@@ -139,11 +142,34 @@ def decompose(
         The silhouette's mask, used to test that a connecting segment stays inside.
     corrections : sequence of Correction
         Applied in order after the automatic decomposition.
+    rule : {"straight", "geodesic"}
+        ``"straight"``: the thesis's rule (module docstring). ``"geodesic"``: the nearest bone
+        *through the drawing* (:func:`geodesic_bones`); no vertex needs the fallback, and a
+        bone's region is connected. Not yet the default: see docs/rigging.md.
 
     Returns
     -------
     Binding
+
+    Raises
+    ------
+    SkeletonError
+        No bone of non-zero length; with ``"geodesic"``, a part of the mesh no bone reaches.
     """
+    if rule not in RULES:
+        raise SkeletonError(f"the decomposition rule must be one of {', '.join(RULES)}, got {rule!r}")
+    if rule == "geodesic":
+        bone, fallback = geodesic_bones(mesh, skeleton, mask), np.zeros(len(mesh.V), dtype=bool)
+    else:
+        bone, fallback = _straight_bones(mesh, skeleton, mask)
+    binding = binding_from_bones(mesh, bone, fallback, ())
+    for correction in corrections:
+        binding = attach_inside(binding, mesh, skeleton, correction.curve, correction.bone)
+    return binding
+
+
+def _straight_bones(mesh, skeleton, mask):
+    """The thesis's rule: ``(bone per vertex, fallback per vertex)``."""
     A, B, usable = _bone_segments(skeleton)
     closest, distance = closest_points_on_segments(mesh.V, A[usable], B[usable])
     order = np.argsort(distance, axis=1, kind="stable")
@@ -163,11 +189,7 @@ def decompose(
             np.repeat(mesh.V[fallback], k, axis=0), closest[fallback].reshape(-1, 2), mask
         ).reshape(-1, k)
         chosen[fallback] = np.argmin(distance[fallback] + OUTSIDE_PENALTY * outside, axis=1)
-    bone = np.flatnonzero(usable)[chosen]
-    binding = binding_from_bones(mesh, bone, np.isin(np.arange(n), fallback), ())
-    for correction in corrections:
-        binding = attach_inside(binding, mesh, skeleton, correction.curve, correction.bone)
-    return binding
+    return np.flatnonzero(usable)[chosen], np.isin(np.arange(n), fallback)
 
 
 def attach_inside(binding: Binding, mesh: Mesh, skeleton: Skeleton, curve: ArrayLike, bone: str) -> Binding:
@@ -230,6 +252,60 @@ def binding_from_bones(
         vertex_kind=kind,
         joint_area=joint_area,
     )
+
+
+def geodesic_bones(mesh: Mesh, skeleton: Skeleton, mask: NDArray[np.bool_]) -> NDArray[np.int64]:
+    """Each vertex's bone by the shortest path through the mesh (eq. 3.1 with distance inside
+    the shape), ``(n,)`` indices into ``skeleton.bones``.
+
+    Every bone is sampled every half mesh spacing; each sample is linked to the mesh vertices
+    within 1.5 spacings (its three nearest if none), a link costing its length plus
+    :data:`OUTSIDE_PENALTY` times the pixels of it outside the mask, so a bone drawn just outside
+    its limb still reaches it. One multi-source Dijkstra (``scipy.sparse.csgraph``) over the
+    mesh's edges then gives every vertex its nearest sample, and that sample's bone. A curled or
+    thin curved limb is claimed along its own length, never across a gap.
+
+    Raises
+    ------
+    SkeletonError
+        Some vertices are reached by no bone (a part of the drawing apart from every bone).
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+    from scipy.spatial import cKDTree
+
+    A, B, usable = _bone_segments(skeleton)
+    V, F = mesh.V, np.asarray(mesh.F)
+    n, h = len(V), mesh.spacing
+    edges = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1), axis=0)
+    samples, sample_bone = [], []
+    for b in np.flatnonzero(usable):
+        k = max(2, int(np.ceil(np.linalg.norm(B[b] - A[b]) / (0.5 * h))) + 1)
+        samples.append(A[b] + np.linspace(0, 1, k)[:, None] * (B[b] - A[b]))
+        sample_bone.append(np.full(k, b))
+    S, owner = np.concatenate(samples), np.concatenate(sample_bone)
+    tree = cKDTree(V)
+    near = tree.query_ball_point(S, 1.5 * h)
+    for i, found in enumerate(near):
+        if not found:
+            near[i] = list(np.atleast_1d(tree.query(S[i], k=min(3, n))[1]))
+    seed = np.repeat(np.arange(len(S)), [len(f) for f in near])
+    vertex = np.concatenate([np.asarray(f, dtype=np.int64) for f in near])
+    outside = _outside_length(S[seed], V[vertex], mask)
+    cost = np.linalg.norm(V[vertex] - S[seed], axis=1) + OUTSIDE_PENALTY * outside
+    rows = np.concatenate([edges[:, 0], edges[:, 1], n + seed, vertex])
+    cols = np.concatenate([edges[:, 1], edges[:, 0], vertex, n + seed])
+    length = np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1)
+    weight = np.concatenate([length, length, cost, cost]) + 1e-12  # csgraph drops zero weights
+    graph = coo_matrix((weight, (rows, cols)), shape=(n + len(S), n + len(S))).tocsr()
+    distance, _, source = dijkstra(graph, indices=n + np.arange(len(S)), min_only=True,
+                                   return_predecessors=True)
+    lost = np.flatnonzero(~np.isfinite(distance[:n]))
+    if len(lost):
+        raise SkeletonError(f"{len(lost)} mesh vertices (a part of the drawing around "
+                            f"{tuple(np.round(V[lost[0]]).astype(int))}) are reached by no bone; give that "
+                            "part a bone or leave it out of the mask")
+    return owner[source[:n] - n].astype(np.int64)
 
 
 def _bone_segments(skeleton):
