@@ -72,3 +72,31 @@ def test_a_part_no_bone_reaches_and_an_unknown_rule_are_refused():
         decompose(mesh, skeleton, mask, rule="geodesic")
     with pytest.raises(SkeletonError, match="rule must be one of straight, geodesic"):
         decompose(mesh, skeleton, mask, rule="nearest")
+
+
+def test_the_rule_is_a_rig_setting_kept_in_the_project(tmp_path):
+    import json
+
+    from toonmotion.api import load_project, rig_image, save_project
+    from toonmotion.errors import SettingsError
+    from toonmotion.rig.character import RigSettings
+    from toonmotion.rig.edits import without_edits
+
+    with pytest.raises(SettingsError, match="decomposition must be one of straight, geodesic, got 'near'"):
+        RigSettings(decomposition="near")
+    folder = _require(DRAWINGS_DIR / "char4")
+    skeleton, _ = load_char_cfg(folder / "char_cfg.yaml")
+    character = rig_image(folder / "texture.png", mask=folder / "mask.png", skeleton=skeleton,
+                          settings=RigSettings(decomposition="geodesic"))
+    assert not character.binding.fallback.any()
+    save_project(tmp_path / "p", character)
+    again = load_project(tmp_path / "p")
+    assert again.settings.decomposition == "geodesic"
+    assert np.array_equal(again.binding.bone, character.binding.bone)
+    assert np.array_equal(without_edits(again).binding.bone, character.binding.bone)
+    # A project saved before the setting existed reads as the thesis's rule.
+    project = tmp_path / "p" / "project.json"
+    data = json.loads(project.read_text())
+    del data["settings"]["decomposition"]
+    project.write_text(json.dumps(data))
+    assert load_project(tmp_path / "p").settings.decomposition == "straight"

@@ -44,6 +44,9 @@ def rig(
         "--largest-only", help="Keep only the largest part of the figure.")] = False,
     background: Annotated[str, typer.Option(
         "--background", help="Background model without alpha or mask: auto, flat, paper.")] = "auto",
+    decomposition: Annotated[str, typer.Option(
+        "--decomposition", help="Which bone each part follows: straight (the thesis's rule) or geodesic "
+        "(nearest through the drawing: curls and thin curved limbs stay whole).")] = "straight",
     max_pixels: Annotated[int | None, typer.Option(
         "--max-pixels", help="Refuse larger images \\[default: the image_pixels limit].", min=1)] = None,
 ) -> None:
@@ -52,7 +55,7 @@ def rig(
         raise SettingsError("give either --spacing or --vertices, not both")
     settings = RigSettings(spacing=spacing, vertices=vertices, tolerance=tolerance,
                            refine_joints=refine_joints, largest_only=largest_only,
-                           segmentation=background)
+                           segmentation=background, decomposition=decomposition)
     with options.progress("rigging") as report:
         character = api.rig_image(
             image, mask=mask, skeleton=skeleton, settings=settings, max_pixels=max_pixels, progress=report

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.arrays import frozen_array
+from toonmotion.rig.binding import RULES as DECOMPOSITIONS
 from toonmotion.rig.binding import Binding, Correction
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.curve_skeleton import CurveSkeleton
@@ -47,6 +48,9 @@ class RigSettings:
         Longest bone of an automatic skeleton, pixels; None: a fifth of the figure's size.
     segmentation : str
         Background model for drawings without alpha or mask: "auto", "flat" or "paper".
+    decomposition : str
+        Which bone each vertex follows: "straight" (the thesis's rule, eq. 3.1) or "geodesic"
+        (nearest through the drawing; :func:`toonmotion.rig.binding.decompose`).
 
     Construction checks every value and raises :class:`~toonmotion.errors.SettingsError` (one
     line) for one out of range; numbers are stored as ``float`` (``vertices`` as ``int``), so
@@ -71,8 +75,12 @@ class RigSettings:
     prune: float = 0.5
     max_bone: float | None = None
     segmentation: str = "auto"
+    decomposition: str = "straight"
 
     def __post_init__(self) -> None:
+        if self.decomposition not in DECOMPOSITIONS:
+            raise SettingsError(f"decomposition must be one of {', '.join(DECOMPOSITIONS)}, got "
+                                f"{self.decomposition!r}")
         if self.segmentation not in METHODS:
             raise SettingsError(
                 f"segmentation must be one of {', '.join(METHODS)}, got {self.segmentation!r}"

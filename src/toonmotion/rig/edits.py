@@ -123,7 +123,8 @@ def redo(character: Character, steps: int = 1) -> tuple[Character, tuple[Edit, .
 
 def without_edits(character: Character) -> Character:
     """The character as rigging left it: the automatic decomposition, every region at depth 0."""
-    binding = decompose(character.mesh, character.skeleton, character.mask)
+    binding = decompose(character.mesh, character.skeleton, character.mask,
+                        rule=character.settings.decomposition)
     depth = np.zeros(len(character.skeleton.bones), dtype=np.int64)
     return dataclasses.replace(character, binding=binding, depth=depth, edits=(), undone=())
 

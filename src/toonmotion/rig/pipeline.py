@@ -94,7 +94,7 @@ def rig_drawing(
     mesh = triangulate(silhouette, spacing=spacing, refine_points=refine)
 
     report("binding", 5, len(STAGES))
-    binding = decompose(mesh, skeleton, figure)
+    binding = decompose(mesh, skeleton, figure, rule=settings.decomposition)
     return Character(texture=rgba, mask=figure, silhouette=silhouette, curve_skeleton=cskel,
                      skeleton=skeleton, mesh=mesh, binding=binding, settings=settings)
 
