@@ -10,7 +10,7 @@ from toonmotion.errors import SceneError
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
-from toonmotion.scene.build import CONTACT, SKIRT_LINKS, build_scene
+from toonmotion.scene.build import CONTACT_TIME, SKIRT_LINKS, build_scene
 from toonmotion.scene.elements import Balloon, Balls, Rain, Scarf, Skirt
 from toonmotion.scene.simulate import SceneMotion
 
@@ -71,10 +71,6 @@ def test_a_string_s_held_end_projects_onto_its_marker_on_every_frame():
     assert (balloon[:, 1] > proxy.points[:, 2, 1]).all()
 
 
-def contact_time_constant():
-    return float(CONTACT.split('solref="')[1].split()[0])
-
-
 def test_a_kicked_ball_is_pushed_and_never_sinks_into_the_limb_beyond_the_contact_softness():
     speed = 2.0
     proxy = kicking(speed=speed)
@@ -83,7 +79,7 @@ def test_a_kicked_ball_is_pushed_and_never_sinks_into_the_limb_beyond_the_contac
     assert end[0] - start[0] > 0.3  # kicked along +X
     # MuJoCo's contacts are soft: a body driven at v into a ball sinks in until the ball takes up
     # its speed, about v times the contact's time constant.
-    assert 0 < motion.deepest <= speed * contact_time_constant()
+    assert 0 < motion.deepest <= speed * CONTACT_TIME
 
 
 def test_elements_at_rest_with_a_still_character_stay_at_rest():
@@ -244,7 +240,7 @@ def test_rain_falls_bounces_off_a_limb_and_never_passes_through_it():
     s = np.clip((drops[..., 0] + 0.6) / 1.2, 0, 1)
     axis = np.stack([-0.6 + 1.2 * s, np.full(s.shape, 1.2), np.zeros(s.shape)], axis=-1)
     gap = np.linalg.norm(drops - axis, axis=-1) - 0.2 - r  # from the roof's surface
-    softness = 3.0 * contact_time_constant()  # falling at 3 m/s at most
+    softness = 3.0 * CONTACT_TIME  # falling at 3 m/s at most
     assert gap.min() > -softness
     assert (gap < 0.01).any()  # some drops do land on it
     assert (drops[-1, :, 1] > 0).all()

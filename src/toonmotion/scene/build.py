@@ -65,7 +65,8 @@ ELEMENT_BITS = 'contype="1" conaffinity="3"'
 # Rain (4) touches the proxy, the ground and the elements but not other drops.
 DROP_BITS = 'contype="4" conaffinity="3"'
 WATER_DENSITY = 1000.0
-CONTACT = 'solref="0.004 1" condim="6" friction="0.9 0.005 0.002"'
+CONTACT_TIME = 0.004  # seconds: the contacts' time constant (MuJoCo's solref), twice the longest step
+CONTACT = f'solref="{CONTACT_TIME} 1" condim="6" friction="0.9 0.005 0.002"'
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,6 +137,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     radii = _limb_radii(proxy, height)
     default_volumes = proxy.radii is None
     P0 = proxy.points[0]
+    volumes = _first_frame_volumes(proxy, radii)  # where elements must not start
     held_xml: dict[int, list[str]] = {}
     element_xml = []
     for i, element in enumerate(elements):
@@ -148,7 +150,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             width = element.width or SCARF_WIDTH * height
             length = element.length or SCARF_LENGTH * height
             marker = names.index(element.marker)
-            way = _free_way(P0[marker], length, width, _first_frame_volumes(proxy, radii),
+            way = _free_way(P0[marker], length, width, volumes,
                             _directions(P0, marker))
             at.append(_chain_xml(f"e{i}_scarf", (0.0, 0.0, 0.0), length, SCARF_LINKS, width / 2, width,
                                  _rgba(element.colour), way))
@@ -157,7 +159,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             length = element.length or SKIRT_LENGTH * height
             marker = names.index(element.marker)
             ring = _skirt_ring(P0[marker], element.radius or SKIRT_RADIUS * height, element.strands, length,
-                               width, _first_frame_volumes(proxy, radii))
+                               width, volumes)
             for j, start in enumerate(ring):
                 way = _free_way(P0[marker] + start, length, width, [], _directions(P0, marker))
                 at.append(_chain_xml(f"e{i}_strand{j}_", start, length, SKIRT_LINKS, width / 2, width,
@@ -167,8 +169,8 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     for i, element in enumerate(elements):
         if isinstance(element, Balls):
             r = element.radius or BALL_RADIUS * height
-            for j, centre in enumerate(_place_balls(proxy, radii, names.index(element.marker), element.count,
-                                                    r, placed)):
+            marker = names.index(element.marker)
+            for j, centre in enumerate(_place_balls(proxy, volumes, marker, element.count, r, placed)):
                 placed.append((centre, r))
                 rgba = _rgba(element.colours[j % len(element.colours)])
                 ball_names.append(f"e{i}_ball{j}")
@@ -182,7 +184,6 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             r = element.radius or RAIN_RADIUS * height
             box = rain_box(proxy, height)
             rng = np.random.default_rng(element.seed)
-            volumes = _first_frame_volumes(proxy, radii)
             starts = [c for c in drops_in(rng, box, 4 * element.count, full_height=True)
                       if _clear([c], r, volumes)][:element.count]
             starts += list(drops_in(rng, box, element.count - len(starts), full_height=False))
@@ -191,7 +192,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
                 element_xml.append(
                     f'<body name="e{i}_drop{j}" pos="{_v(centre)}"><freejoint/><geom name="e{i}_drop{j}" '
                     f'type="sphere" size="{r!r}" density="{WATER_DENSITY}" rgba="{_rgba(element.colour)}" '
-                    f'{DROP_BITS} solref="0.004 0.3" friction="0.2 0.005 0.0001"/></body>')
+                    f'{DROP_BITS} solref="{CONTACT_TIME} 0.3" friction="0.2 0.005 0.0001"/></body>')
     bodies = []
     for n in range(len(names)):
         bodies.append(
@@ -357,12 +358,11 @@ def drops_in(rng, box, count, full_height):
     return np.stack([x, y, z], axis=1)
 
 
-def _place_balls(proxy, radii, marker, count, r, placed):
+def _place_balls(proxy, volumes, marker, count, r, placed):
     """Centres on the marker's ground path at evenly spaced times, moved clear of the first frame's
     volumes and of balls already placed."""
     T = proxy.frame_count
     path = proxy.points[:, marker].copy()
-    volumes = _first_frame_volumes(proxy, radii)
     out = []
     for k in range(count):
         c = path[int(round((k + 1) * (T - 1) / (count + 1)))].copy()
