@@ -46,8 +46,9 @@ def _skeleton():
 
 @pytest.fixture(scope="module")
 def character():
-    # Whole-number settings as a user would type them: saved and reloaded as floats.
-    settings = RigSettings(spacing=3, tolerance=1, max_bone=20, min_part=0, prune=1)
+    # Whole-number settings as a user would type them: saved and reloaded as floats. The thesis's
+    # straight-line rule, so that fallback vertices are saved and read back too.
+    settings = RigSettings(spacing=3, tolerance=1, max_bone=20, min_part=0, prune=1, decomposition="straight")
     ch = rig_drawing(_u_drawing(), skeleton=_skeleton(), settings=settings)
     curve = np.array([[2.3, 10.7], [25.1, 10.7], [25.1, 20.3], [2.3, 20.3]])
     ch = apply_edit(ch, Correction(curve=curve, bone="bar"))

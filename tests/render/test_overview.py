@@ -82,9 +82,11 @@ def test_right_panel_colours_interior_triangles_by_bone(character):
 
 
 def test_overview_draws_fallback_vertices_without_error(character):
-    # A skeleton partly off the figure still renders; its fallback vertices are marked.
+    # A skeleton partly off the figure still renders; its fallback vertices (the thesis's rule) are
+    # marked.
     skeleton = Skeleton.from_joints([("a", None, (36.0, 44.0)), ("b", "a", (36.0, 6.0))])
-    ch = rig_drawing(character.texture, skeleton=skeleton, settings=RigSettings(spacing=5.0))
+    ch = rig_drawing(character.texture, skeleton=skeleton,
+                     settings=RigSettings(spacing=5.0, decomposition="straight"))
     assert ch.binding.fallback.any()
     image = np.asarray(render_overview(ch, height=200))
     assert image.shape[2] == 3

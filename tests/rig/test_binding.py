@@ -51,7 +51,7 @@ def u_shape():
     mesh = triangulate(trace_silhouette(mask), spacing=3.0)
     assert check_mesh(mesh) == []
     skeleton = _u_skeleton()
-    return mesh, skeleton, mask, decompose(mesh, skeleton, mask)
+    return mesh, skeleton, mask, decompose(mesh, skeleton, mask, rule="straight")
 
 
 def _distance_to_segment(points, a, b):
@@ -166,7 +166,7 @@ def test_decompose_replays_corrections(u_shape):
     once = attach_inside(binding, mesh, skeleton, CURVE, "br")
     twice = attach_inside(once, mesh, skeleton, CURVE[:, ::-1] + [4, -4], "rt")
     assert len(twice.corrections) == 2
-    replayed = decompose(mesh, skeleton, mask, corrections=twice.corrections)
+    replayed = decompose(mesh, skeleton, mask, corrections=twice.corrections, rule="straight")
     for field in ("bone", "fallback", "joint_triangle", "vertex_kind", "joint_area"):
         np.testing.assert_array_equal(getattr(replayed, field), getattr(twice, field))
     assert [c.bone for c in replayed.corrections] == ["br", "rt"]
@@ -218,11 +218,31 @@ def test_zero_length_bones_are_skipped_not_fatal(u_shape):
     mesh, skeleton, mask, binding = u_shape
     joints = [*skeleton.joints(), ("stub", "lt", (6.0, 6.0))]
     with_stub = Skeleton.from_joints(joints)
-    result = decompose(mesh, with_stub, mask)
+    result = decompose(mesh, with_stub, mask, rule="straight")
     assert "stub" in with_stub.bone_names
+    geodesic = decompose(mesh, with_stub, mask, rule="geodesic")
+    assert not np.any(geodesic.bone == with_stub.bone_names.index("stub"))
+    assert [with_stub.bone_names[b] for b in geodesic.bone] == \
+        [skeleton.bone_names[b] for b in decompose(mesh, skeleton, mask, rule="geodesic").bone]
     assert not np.any(result.bone == with_stub.bone_names.index("stub"))
     names = [with_stub.bone_names[b] for b in result.bone]
     assert names == [skeleton.bone_names[b] for b in binding.bone]
+
+
+def test_a_bone_wholly_outside_the_figure_is_refused_by_the_geodesic_rule(u_shape):
+    mesh, _, mask, _ = u_shape
+    skeleton = Skeleton.from_joints([("a", None, (6.0, 46.0)), ("in_left", "a", (6.0, 6.0)),
+                                     ("b", None, (56.0, 50.0)), ("outside", "b", (56.0, 6.0))])
+    with pytest.raises(SkeletonError, match="bone 'outside' lies wholly outside the drawing"):
+        decompose(mesh, skeleton, mask, rule="geodesic")
+    # Within two mesh spacings of the figure it is taken as drawn a little off its limb: the
+    # arm's half nearer it is its own (the inner half is as near the other bone round the bar).
+    near = Skeleton.from_joints([("a", None, (6.0, 46.0)), ("in_left", "a", (6.0, 6.0)),
+                                 ("b", None, (52.0, 50.0)), ("outside", "b", (52.0, 6.0))])
+    binding = decompose(mesh, near, mask, rule="geodesic")
+    upper_right = (mesh.V[:, 0] > (GAP[1] + 48) / 2) & (mesh.V[:, 1] < BAR_TOP - 12)
+    assert upper_right.sum() > 30
+    assert np.all(binding.bone[upper_right] == near.bone_names.index("outside"))
 
 
 def test_bone_outside_the_figure_falls_back_but_attaches_everything(u_shape):
@@ -235,7 +255,7 @@ def test_bone_outside_the_figure_falls_back_but_attaches_everything(u_shape):
             ("outside", "b", (56.0, 6.0)),  # right of the right arm, off the figure
         ]
     )
-    binding = decompose(mesh, skeleton, mask)
+    binding = decompose(mesh, skeleton, mask, rule="straight")
     assert binding.bone.shape == (len(mesh.V),)
     assert binding.bone.min() >= 0 and binding.bone.max() < len(skeleton.bones)
     assert binding.fallback.any()

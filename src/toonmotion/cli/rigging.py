@@ -45,8 +45,8 @@ def rig(
     background: Annotated[str, typer.Option(
         "--background", help="Background model without alpha or mask: auto, flat, paper.")] = "auto",
     decomposition: Annotated[str, typer.Option(
-        "--decomposition", help="Which bone each part follows: straight (the thesis's rule) or geodesic "
-        "(nearest through the drawing: curls and thin curved limbs stay whole).")] = "straight",
+        "--decomposition", help="Which bone each part follows: geodesic (nearest through the drawing: curls "
+        "and thin curved limbs stay whole; the default) or straight (the thesis's rule).")] = "geodesic",
     max_pixels: Annotated[int | None, typer.Option(
         "--max-pixels", help="Refuse larger images \\[default: the image_pixels limit].", min=1)] = None,
 ) -> None:

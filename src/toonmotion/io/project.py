@@ -127,12 +127,15 @@ class _Strict(Model):
     model_config = ConfigDict(strict=True)
 
 
-# RigSettings' own fields, types and defaults (the dataclass checks ranges when it is built).
+# RigSettings' own fields, types and defaults (the dataclass checks ranges when it is built),
+# but projects saved before the decomposition rule was a setting were rigged by the thesis's.
 _HINTS = typing.get_type_hints(RigSettings)
+_SAVED_BEFORE = {"decomposition": "straight"}
 _Settings = create_model(  # type: ignore[call-overload]
     "_Settings",
     __base__=_Strict,
-    **{f.name: (_HINTS[f.name], f.default) for f in dataclasses.fields(RigSettings)},
+    **{f.name: (_HINTS[f.name], _SAVED_BEFORE.get(f.name, f.default))
+       for f in dataclasses.fields(RigSettings)},
 )
 
 

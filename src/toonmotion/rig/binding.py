@@ -1,11 +1,12 @@
 """Decomposition: which bone each mesh vertex follows (thesis 3.3, eq. 3.1, fig. 3.6; 6.3a).
 
-Each vertex attaches to the nearest bone whose connecting segment (from the vertex to its
-closest point on the bone) stays inside the silhouette, so an arm never grabs the body across
-the gap between them. When no bone can be reached that way (annotated bones often run just
-outside a thin limb) the vertex takes the bone that minimises its distance plus
-``OUTSIDE_PENALTY`` times the length of the segment outside the figure, and
-:attr:`Binding.fallback` records it.
+Two rules (``decompose(rule=...)``). The default, ``"geodesic"``, attaches each vertex to the
+bone nearest *through the drawing* (:func:`geodesic_bones`). The thesis' rule, ``"straight"``,
+attaches it to the nearest bone whose connecting segment (from the vertex to its closest point
+on the bone) stays inside the silhouette, so an arm never grabs the body across the gap between
+them; when no bone can be reached that way (annotated bones often run just outside a thin limb)
+the vertex takes the bone that minimises its distance plus ``OUTSIDE_PENALTY`` times the length
+of the segment outside the figure, and :attr:`Binding.fallback` records it.
 
 Triangles whose three vertices share a bone are *interior* triangles, the rest *joint*
 triangles. Vertices are *silhouette* (on the outline), *interior* (every triangle around them
@@ -39,6 +40,15 @@ _VERTEX_SLACK = 1.5
 
 # Pixels of segment outside the figure count this many times their length in a fallback choice.
 OUTSIDE_PENALTY = 4.0
+# The geodesic rule links each vertex straight to this many nearest bones (the rest it reaches
+# through the mesh), and drops links more than LINK_OUTSIDE mesh spacings outside the figure.
+NEAREST_BONES = 6
+LINK_OUTSIDE = 2.0
+# Each pixel a vertex lies past a bone's end adds this much to the geodesic rule's link cost.
+BEYOND_END = 0.5
+# The geodesic rule measures from this fraction of each limb's half-thickness out from its bone.
+SURFACE = 0.5
+_SCAN = 3
 
 RULES = ("straight", "geodesic")
 
@@ -130,7 +140,7 @@ class Binding:
 
 def decompose(
     mesh: Mesh, skeleton: Skeleton, mask: NDArray[np.bool_], *, corrections: Iterable[Correction] = (),
-    rule: str = "straight",
+    rule: str = "geodesic",
 ) -> Binding:
     """Attach every vertex of ``mesh`` to a bone of ``skeleton`` (eq. 3.1).
 
@@ -144,8 +154,8 @@ def decompose(
         Applied in order after the automatic decomposition.
     rule : {"straight", "geodesic"}
         ``"straight"``: the thesis's rule (module docstring). ``"geodesic"``: the nearest bone
-        *through the drawing* (:func:`geodesic_bones`); no vertex needs the fallback, and a
-        bone's region is connected. Not yet the default: see docs/rigging.md.
+        *through the drawing* (:func:`geodesic_bones`, the default); no vertex needs the
+        fallback.
 
     Returns
     -------
@@ -255,57 +265,90 @@ def binding_from_bones(
 
 
 def geodesic_bones(mesh: Mesh, skeleton: Skeleton, mask: NDArray[np.bool_]) -> NDArray[np.int64]:
-    """Each vertex's bone by the shortest path through the mesh (eq. 3.1 with distance inside
-    the shape), ``(n,)`` indices into ``skeleton.bones``.
+    """Each vertex's bone by the shortest way to it through the drawing (eq. 3.1 with distance
+    inside the shape), ``(n,)`` indices into ``skeleton.bones``.
 
-    Every bone is sampled every half mesh spacing; each sample is linked to the mesh vertices
-    within 1.5 spacings (its three nearest if none), a link costing its length plus
-    :data:`OUTSIDE_PENALTY` times the pixels of it outside the mask, so a bone drawn just outside
-    its limb still reaches it. One multi-source Dijkstra (``scipy.sparse.csgraph``) over the
-    mesh's edges then gives every vertex its nearest sample, and that sample's bone. A curled or
-    thin curved limb is claimed along its own length, never across a gap.
+    Each vertex is linked straight to its :data:`NEAREST_BONES` nearest bones (at the nearest
+    point of each), a link costing its length plus :data:`OUTSIDE_PENALTY` times its pixels
+    outside the mask; links more than :data:`LINK_OUTSIDE` mesh spacings outside are dropped. One
+    multi-source Dijkstra (``scipy.sparse.csgraph``) over those links and the mesh's edges then
+    gives every vertex the bone its cheapest way starts from. Where a bone can be seen from a
+    vertex the way is the straight segment (the thesis's rule, exactly); where it cannot (a curled
+    pigtail, a thin curved arm whose annotated bone runs just outside it) the way goes round
+    through the mesh, so a limb is claimed along its own length, never across a gap. Every way
+    is a shortest path, so each bone's region is connected to the vertices that see the bone.
 
     Raises
     ------
     SkeletonError
-        Some vertices are reached by no bone (a part of the drawing apart from every bone).
+        A bone lies wholly outside the drawing, or some vertices are reached by no bone (a part
+        of the drawing apart from every bone).
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
-    from scipy.spatial import cKDTree
 
     A, B, usable = _bone_segments(skeleton)
+    _check_bones_touch_the_drawing(skeleton, A, B, usable, mask, mesh.spacing)
     V, F = mesh.V, np.asarray(mesh.F)
-    n, h = len(V), mesh.spacing
+    n, bones = len(V), np.flatnonzero(usable)
+    closest, distance = closest_points_on_segments(V, A[bones], B[bones])
+    k = min(NEAREST_BONES, len(bones))
+    nearest = np.argpartition(distance, k - 1, axis=1)[:, :k] if k < len(bones) else \
+        np.broadcast_to(np.arange(k), (n, k))
+    vertex = np.repeat(np.arange(n), k)
+    bone = nearest.ravel()
+    foot = closest[vertex, bone]
+    outside = _outside_length(V[vertex], foot, mask)
+    # A link may leave the figure only where its bone does (a bone drawn just off its limb),
+    # never to cross a gap between limbs.
+    h, w = mask.shape
+    fx = np.clip(np.rint(foot[:, 0]), 0, w - 1).astype(np.int64)
+    fy = np.clip(np.rint(foot[:, 1]), 0, h - 1).astype(np.int64)
+    keep = (outside == 0) | (~mask[fy, fx] & (outside <= LINK_OUTSIDE * mesh.spacing))
+    vertex, bone = vertex[keep], bone[keep]
+    # How far past the bone's ends the vertex lies, along the bone: near a joint a vertex beside
+    # one bone is nearly as near the next one's end, and the bone it lies beside should win.
+    d = B[bones] - A[bones]
+    along = np.einsum("ij,ij->i", V[vertex] - A[bones][bone], d[bone]) / np.einsum("ij,ij->i", d, d)[bone]
+    beyond = np.maximum(np.maximum(-along, along - 1), 0) * np.linalg.norm(d, axis=1)[bone]
+    # Measured from the limb's surface rather than its bone (less the half-thickness; every cost
+    # is shifted by the thickest so all stay >= 0): a vertex of a wide head or belly stays with
+    # its own bone though a thin limb's joint is a little nearer.
+    radius = _limb_half_thickness(skeleton, mask, mesh.spacing)[bones]
+    cost = distance[vertex, bone] + OUTSIDE_PENALTY * outside[keep] + BEYOND_END * beyond \
+        + SURFACE * (radius.max() - radius[bone])
     edges = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1), axis=0)
-    samples, sample_bone = [], []
-    for b in np.flatnonzero(usable):
-        k = max(2, int(np.ceil(np.linalg.norm(B[b] - A[b]) / (0.5 * h))) + 1)
-        samples.append(A[b] + np.linspace(0, 1, k)[:, None] * (B[b] - A[b]))
-        sample_bone.append(np.full(k, b))
-    S, owner = np.concatenate(samples), np.concatenate(sample_bone)
-    tree = cKDTree(V)
-    near = tree.query_ball_point(S, 1.5 * h)
-    for i, found in enumerate(near):
-        if not found:
-            near[i] = list(np.atleast_1d(tree.query(S[i], k=min(3, n))[1]))
-    seed = np.repeat(np.arange(len(S)), [len(f) for f in near])
-    vertex = np.concatenate([np.asarray(f, dtype=np.int64) for f in near])
-    outside = _outside_length(S[seed], V[vertex], mask)
-    cost = np.linalg.norm(V[vertex] - S[seed], axis=1) + OUTSIDE_PENALTY * outside
-    rows = np.concatenate([edges[:, 0], edges[:, 1], n + seed, vertex])
-    cols = np.concatenate([edges[:, 1], edges[:, 0], vertex, n + seed])
     length = np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1)
-    weight = np.concatenate([length, length, cost, cost]) + 1e-12  # csgraph drops zero weights
-    graph = coo_matrix((weight, (rows, cols)), shape=(n + len(S), n + len(S))).tocsr()
-    distance, _, source = dijkstra(graph, indices=n + np.arange(len(S)), min_only=True,
-                                   return_predecessors=True)
-    lost = np.flatnonzero(~np.isfinite(distance[:n]))
+    rows = np.concatenate([edges[:, 0], edges[:, 1], n + bone])
+    cols = np.concatenate([edges[:, 1], edges[:, 0], vertex])
+    weight = np.concatenate([length, length, cost]) + 1e-12  # csgraph drops zero weights
+    size = n + len(bones)
+    graph = coo_matrix((weight, (rows, cols)), shape=(size, size)).tocsr()
+    reached, _, source = dijkstra(graph, indices=n + np.arange(len(bones)), min_only=True,
+                                  return_predecessors=True)
+    lost = np.flatnonzero(~np.isfinite(reached[:n]))
     if len(lost):
         raise SkeletonError(f"{len(lost)} mesh vertices (a part of the drawing around "
                             f"{tuple(np.round(V[lost[0]]).astype(int))}) are reached by no bone; give that "
                             "part a bone or leave it out of the mask")
-    return owner[source[:n] - n].astype(np.int64)
+    return bones[source[:n] - n].astype(np.int64)
+
+
+def _check_bones_touch_the_drawing(skeleton, A, B, usable, mask, spacing):
+    """SkeletonError naming a usable bone none of whose points is within ``LINK_OUTSIDE``
+    spacings of the mask: it would claim vertices it is nowhere near."""
+    from scipy.ndimage import distance_transform_edt
+
+    h, w = mask.shape
+    far = distance_transform_edt(~np.pad(mask, 1))[1:-1, 1:-1]
+    for b in np.flatnonzero(usable):
+        k = int(np.ceil(np.linalg.norm(B[b] - A[b]))) + 1
+        P = A[b] + np.linspace(0, 1, k)[:, None] * (B[b] - A[b])
+        x, y = np.rint(P[:, 0]).astype(np.int64), np.rint(P[:, 1]).astype(np.int64)
+        on = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+        if not on.any() or far[y[on], x[on]].min() > LINK_OUTSIDE * spacing:
+            raise SkeletonError(f"bone {skeleton.bone_names[b]!r} lies wholly outside the drawing; move its "
+                                "joints onto the figure")
 
 
 def _bone_segments(skeleton):
@@ -337,3 +380,41 @@ def _outside_length(start, end, mask):
     inside = np.zeros(len(p), dtype=bool)
     inside[on_image] = mask[y[on_image], x[on_image]]
     return np.bincount(seg[tested & ~inside], minlength=len(start))
+
+
+def bone_half_thickness(skeleton: Skeleton, mask: NDArray[np.bool_], *, floor: float) -> NDArray[np.float64]:
+    """Each bone's limb half-thickness: the median distance to the outline along the middle half
+    of the bone, at least ``floor`` (a bone outside its limb), ``(b,)`` pixels."""
+    from scipy.ndimage import distance_transform_edt
+
+    distance = distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
+    h, w = mask.shape
+    bones = skeleton.bones
+    A, B = skeleton.positions[bones[:, 0]], skeleton.positions[bones[:, 1]]
+    t = np.linspace(0.25, 0.75, 9)
+    P = A[:, None] + t[None, :, None] * (B - A)[:, None]
+    x = np.clip(np.rint(P[..., 0]), 0, w - 1).astype(np.int64)
+    y = np.clip(np.rint(P[..., 1]), 0, h - 1).astype(np.int64)
+    return np.maximum(np.median(distance[y, x], axis=1), floor)
+
+
+def _limb_half_thickness(skeleton, mask, spacing):
+    """Each bone's limb half-thickness wherever the bone runs in it: the largest distance to the
+    outline found across the bone (within ``SCAN`` spacings each side) along its middle half, the
+    median over the bone, at least ``spacing``. A bone drawn along one side of its limb still
+    measures the whole limb."""
+    from scipy.ndimage import distance_transform_edt
+
+    distance = distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
+    h, w = mask.shape
+    bones = skeleton.bones
+    A, B = skeleton.positions[bones[:, 0]], skeleton.positions[bones[:, 1]]
+    d = B - A
+    normal = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.maximum(np.linalg.norm(d, axis=1), 1e-12)[:, None]
+    t = np.linspace(0.25, 0.75, 9)
+    across = np.linspace(-_SCAN * spacing, _SCAN * spacing, 4 * _SCAN + 1)
+    P = (A[:, None, None] + t[None, :, None, None] * d[:, None, None]
+         + across[None, None, :, None] * normal[:, None, None])
+    x = np.clip(np.rint(P[..., 0]), 0, w - 1).astype(np.int64)
+    y = np.clip(np.rint(P[..., 1]), 0, h - 1).astype(np.int64)
+    return np.maximum(np.median(distance[y, x].max(axis=2), axis=1), spacing)

@@ -49,8 +49,8 @@ class RigSettings:
     segmentation : str
         Background model for drawings without alpha or mask: "auto", "flat" or "paper".
     decomposition : str
-        Which bone each vertex follows: "straight" (the thesis's rule, eq. 3.1) or "geodesic"
-        (nearest through the drawing; :func:`toonmotion.rig.binding.decompose`).
+        Which bone each vertex follows: "geodesic" (nearest through the drawing, the default) or
+        "straight" (the thesis's rule, eq. 3.1); see :func:`toonmotion.rig.binding.decompose`.
 
     Construction checks every value and raises :class:`~toonmotion.errors.SettingsError` (one
     line) for one out of range; numbers are stored as ``float`` (``vertices`` as ``int``), so
@@ -75,7 +75,7 @@ class RigSettings:
     prune: float = 0.5
     max_bone: float | None = None
     segmentation: str = "auto"
-    decomposition: str = "straight"
+    decomposition: str = "geodesic"
 
     def __post_init__(self) -> None:
         if self.decomposition not in DECOMPOSITIONS:

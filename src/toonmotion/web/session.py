@@ -374,9 +374,15 @@ def open_drawing(editing: Editing, message: dict[str, Any],
     if skeleton is not None and (x.min() < 0 or y.min() < 0 or x.max() > width or y.max() > height):
         raise SkeletonError(f"this skeleton does not fit the new {width}x{height} drawing: "
                             "find a new skeleton for it, or load one made for it")
-    character = api.rig_image(image, mask=load_mask(uploads / "mask", size=(width, height))
-                              if with_mask else None, skeleton=skeleton, settings=before.settings,
-                              progress=lambda stage, index, total: progress(index, total))
+    try:
+        character = api.rig_image(image, mask=load_mask(uploads / "mask", size=(width, height))
+                                  if with_mask else None, skeleton=skeleton, settings=before.settings,
+                                  progress=lambda stage, index, total: progress(index, total))
+    except SkeletonError as error:
+        if skeleton is None:
+            raise
+        raise SkeletonError(f"the kept skeleton does not fit the new figure ({error}): find a new "
+                            "skeleton, or load one made for it") from None
     if skeleton is not None:
         _check_on_figure(character)
     with editing.lock:
