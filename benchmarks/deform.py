@@ -1,24 +1,38 @@
-"""Deformation speed against libigl's ARAP, and rendering speed; JSON lines.
+"""Deformation speed against libigl's ARAP, folds and area over extreme poses, and rendering
+speed; JSON lines.
 
-    python benchmarks/deform.py [DRAWING_DIR ...]
+    python benchmarks/deform.py [DRAWING_DIR ...] [--decomposition straight|geodesic]
 
-Each drawing (default: every drawing in ../shared/data/drawings, with its char_cfg.yaml
-skeleton) is rigged to about 1,500 vertices and animated through a sequence of poses: rest,
-elbows bent, knees bent, arms raised, back to rest, 8 in-betweens apart (40 frames). Runs on one
-core (thread pools pinned before NumPy loads). Needs the benchmark extra: pip install -e '.[bench]'.
+Each drawing folder (texture.png, mask.png, char_cfg.yaml; default: every drawing in
+../shared/data/drawings) is rigged to about 1,500 vertices. Every pose is built from the
+skeleton's structure, never from joint names: a *bend joint* is one with a parent and exactly one
+child; a *chain* starts at a joint whose parent has two or more children (or is the root) and
+runs to a leaf; *above the root* is above it in the image (drawings stand upright).
+Runs on one core (thread pools pinned before NumPy loads). Needs the benchmark extra:
+pip install -e '.[bench]'.
 
 Keys, one line per drawing:
   drawing, vertices, free        mesh size; vertices stage two moves (the joint areas)
+  decomposition, fallback        the rule; vertices without an inside path to their bone
   precompute_ms                  building the Deformer (needle model, joint area, factorisation)
   frame_ms                       median time per frame, stage one + stage two, each frame's solve
-                                 warm-started from the previous frame (goal: at most 2)
-  cold_frame_ms                  median per key pose solved from stage one alone (no warm start)
+                                 warm-started from the previous frame; the sequence is rest,
+                                 every bend joint at 60 degrees, chains raised 60 degrees, rest,
+                                 8 in-betweens apart (goal: at most 1)
+  cold_frame_ms                  median per key pose solved from stage one alone (goal: at most 3)
   iterations                     median stage-two iterations per frame
   libigl_frame_ms                median time per frame of libigl's ARAP (ARAP_ENERGY_TYPE_ELEMENTS,
                                  10 iterations) on the same mesh, with the vertices nearest the
                                  joints and to 3 samples per bone as handles placed where our
                                  stage one puts them, warm-started from its previous frame
-  speedup                        libigl_frame_ms / frame_ms (goal: at least 3)
+  speedup                        libigl_frame_ms / frame_ms (goal: at least 5)
+  extreme_poses, inverted        the extreme pose set (each bend joint bent 150 degrees above the
+                                 root and 120 below, both ways, one at a time; every chain raised
+                                 overhead, or sideways below the root; the upper body turned 40
+                                 degrees both ways against the lower) and the inverted triangles
+                                 after stage two summed over it (goal: 0)
+  area_change_max                largest whole-figure area change over every bone stretched 1.5x,
+                                 one at a time, and the single-frame filter's jump (goal: 0.02)
 One more line: render_1024_ms, the median time to render one 1024x1024 frame of the bundled
 character (goal: at most 15).
 """
@@ -40,31 +54,16 @@ import numpy as np  # noqa: E402
 from toonmotion.animate.timeline import interpolate_pose  # noqa: E402
 from toonmotion.deform.deformer import Deformer  # noqa: E402
 from toonmotion.deform.depth import draw_order  # noqa: E402
+from toonmotion.geometry.polygon import triangle_areas  # noqa: E402
 from toonmotion.io.drawing_folder import rig_drawing_folder  # noqa: E402
 from toonmotion.render.raster import render_mesh  # noqa: E402
+from toonmotion.rig.character import RigSettings  # noqa: E402
 from toonmotion.rig.pipeline import rig_drawing  # noqa: E402
-from toonmotion.rig.pose import Pose, rotate_about  # noqa: E402
 from toonmotion.samples import sample_character  # noqa: E402
+from toonmotion.testing.poses import extreme_poses, filter_jump, key_poses, stretch_poses  # noqa: E402
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "drawings"
 INBETWEENS = 8
-
-
-def key_poses(skeleton):
-    """Rest, elbows bent 60 degrees, knees bent 45, arms raised, rest (AD joint names)."""
-    rest = skeleton.positions
-    elbows = rotate_about(skeleton, rest, "right_elbow", np.pi / 3)
-    elbows = rotate_about(skeleton, elbows, "left_elbow", -np.pi / 3)
-    knees = rotate_about(skeleton, rest, "right_knee", np.pi / 4)
-    knees = rotate_about(skeleton, knees, "left_knee", -np.pi / 4)
-    raised = rest
-    for side, outwards in (("right", -1.0), ("left", 1.0)):
-        shoulder, elbow = skeleton.index(f"{side}_shoulder"), skeleton.index(f"{side}_elbow")
-        d = raised[elbow] - raised[shoulder]
-        target = np.arctan2(-np.sin(np.pi / 3), outwards * np.cos(np.pi / 3))
-        turn = (target - np.arctan2(d[1], d[0]) + np.pi) % (2 * np.pi) - np.pi
-        raised = rotate_about(skeleton, raised, f"{side}_shoulder", turn)
-    return [Pose(np.array(p)) for p in (rest, elbows, knees, raised, rest)]
 
 
 def pose_sequence(skeleton, keys):
@@ -84,10 +83,10 @@ def handles(mesh, skeleton):
     return np.unique(nearest)
 
 
-def bench_drawing(folder):
+def bench_drawing(folder, decomposition):
     import igl  # the benchmark extra
 
-    character = rig_drawing_folder(folder)
+    character = rig_drawing_folder(folder, settings=RigSettings(decomposition=decomposition))
     skeleton, mesh = character.skeleton, character.mesh
 
     start = time.perf_counter()
@@ -128,10 +127,19 @@ def bench_drawing(folder):
 
     frame_ms = statistics.median(times)
     libigl_ms = statistics.median(igl_times)
+    F = mesh.F
+    extremes = extreme_poses(skeleton)
+    inverted = sum(int((triangle_areas(deformer.deform(pose).U, F) <= 0).sum()) for _, pose in extremes)
+    rest_area = float(triangle_areas(mesh.V, F).sum())
+    area_cases = [*stretch_poses(skeleton), ("filter jump", filter_jump(character))]
+    area_change = max(abs(float(triangle_areas(deformer.deform(pose).U, F).sum()) / rest_area - 1)
+                      for _, pose in area_cases)
     return {
         "drawing": folder.name,
+        "decomposition": decomposition,
         "vertices": len(mesh.V),
         "free": int(deformer.free.sum()),
+        "fallback": int(character.binding.fallback.sum()),
         "handles": len(b),
         "precompute_ms": round(precompute_ms, 2),
         "frame_ms": round(frame_ms, 3),
@@ -139,6 +147,9 @@ def bench_drawing(folder):
         "iterations": statistics.median(iterations),
         "libigl_frame_ms": round(libigl_ms, 3),
         "speedup": round(libigl_ms / frame_ms, 2),
+        "extreme_poses": len(extremes),
+        "inverted": inverted,
+        "area_change_max": round(area_change, 4),
     }
 
 
@@ -146,7 +157,7 @@ def bench_render():
     rgba, skeleton = sample_character()
     character = rig_drawing(rgba, skeleton=skeleton)
     deformer = Deformer(character)
-    U = deformer.deform(key_poses(skeleton)[3]).U
+    U = deformer.deform(key_poses(skeleton)[2]).U
     order = draw_order(character.mesh, character.binding, character.depth)
     # The figure fills the frame's height, as in a 1024x1024 export.
     lo, hi = U.min(axis=0) - 10, U.max(axis=0) + 10
@@ -164,6 +175,8 @@ def bench_render():
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("drawings", nargs="*", type=Path, help="drawing folders (default: the shared ones)")
+    parser.add_argument("--decomposition", choices=("geodesic", "straight"), default="geodesic",
+                        help="the decomposition rule to rig with (default: geodesic, toonmotion's default)")
     args = parser.parse_args(argv)
     try:
         import cv2
@@ -175,7 +188,7 @@ def main(argv=None):
     if not folders:
         sys.exit(f"no drawings found (looked in {DEFAULT_DIR})")
     for folder in folders:
-        print(json.dumps(bench_drawing(folder)), flush=True)
+        print(json.dumps(bench_drawing(folder, args.decomposition)), flush=True)
     print(json.dumps(bench_render()), flush=True)
 
 

@@ -109,6 +109,7 @@ def _needle_fields():
         "t": np.array([0.5, 0.2, 0.9]),
         "s": np.array([1.0, -2.0, 0.0]),
         "rest_length": np.array([5.0, 5.1]),
+        "rest_direction": np.array([[1.0, 0.0], [0.0, 1.0]]),
         "rigid": np.array([False, False]),
         "offset": np.zeros((3, 2)),
     }

@@ -125,6 +125,16 @@ def _worst_step(frames, timeline):
 # The design gap behind the known failures of the two tests below; one test covers them all.
 SOLVE_DRIFT = "'solve' warm-starts each frame from the last and stage two stops early: frames drift from keys"
 
+# Stage two's unfolding (docs/posing.md) widens the joint area on the frames where a triangle is
+# crushed; the widened solve lands apart from the previous frame's, where the crushed triangles
+# made a spike at the armpit (visible in the picture, invisible to this test), so 'solve' pops once.
+UNFOLD_POP = "'solve' pops on the frame where stage two first widens its joint area round a crushed triangle"
+UNFOLD_FAILS = {
+    ("char1", "linear", "solve"): "frame 14 -> 15 moves 34.8 px where its neighbours move 10.5 px (3.3x): "
+                                  "the widened solve removes a spike at the right armpit",
+    ("char1", "in-out", "solve"): "the same frame, 5.2x with in-out easing",
+}
+
 SMOOTHNESS_FAILS = {
     ("sample", "linear", "solve"): "frame 6 (a key) pops 31.7 px from frame 5 where its neighbours move "
                                    "~14.5 px: 2.18x the key difference per frame. The key is solved from "
@@ -134,10 +144,10 @@ SMOOTHNESS_FAILS = {
 
 
 def _smooth_cases():
-    """Every case but the known failures (:func:`test_solved_frames_stay_with_their_keys` has those)."""
+    """Every case but the known failures (the strict xfail tests below have those)."""
     return [pytest.param(who, ease, method, id=f"{who}-{ease}-{method}")
             for who in ("sample", "char1") for ease in ("linear", "in-out") for method in METHODS
-            if (who, ease, method) not in SMOOTHNESS_FAILS]
+            if (who, ease, method) not in SMOOTHNESS_FAILS and (who, ease, method) not in UNFOLD_FAILS]
 
 
 @pytest.mark.parametrize(("who", "ease", "method"), _smooth_cases())
@@ -186,6 +196,14 @@ def _check_hold(deformer, who, method):
     drift = np.abs(frames - keys[0].U).max()
     print(f"\n{who} {method}: keys {keys_apart:.3g} px apart, frames drift {drift:.3g} px")
     assert drift <= keys_apart + 1e-9
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=UNFOLD_POP)
+def test_solved_frames_do_not_pop_where_stage_two_unfolds(request):
+    """Every case of ``UNFOLD_FAILS``, each as strict as the smoothness test."""
+    expect_every_case_to_fail({
+        f"smooth {who}-{ease}-{method}": lambda who=who, ease=ease, method=method: _check_smooth(
+            request.getfixturevalue(who), who, ease, method) for who, ease, method in UNFOLD_FAILS})
 
 
 @pytest.mark.xfail(strict=True, raises=AssertionError, reason=SOLVE_DRIFT)

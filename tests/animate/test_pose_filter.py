@@ -2,15 +2,13 @@
 
 Every property runs on the bundled sample character and on each shared drawing, with the two
 pushes of the thesis' figures: up before a jump with both feet on the ground (fig. 5.4) and
-sideways before a run with one foot down (fig. 5.3). Cases that fail today are left out of the
-plain tests and checked together, one ``xfail(strict=True)`` test per design gap, with what was
-measured.
+sideways before a run with one foot down (fig. 5.3).
 """
 
 import numpy as np
 import pytest
 
-from tests.conftest import drawing_names, expect_every_case_to_fail
+from tests.conftest import drawing_names
 from toonmotion.animate.pose_filter import MIN_CHAIN_FRACTION, exaggerate_pose
 from toonmotion.errors import FilterError
 from toonmotion.geometry.polygon import triangle_areas
@@ -26,20 +24,6 @@ CASES = {
 
 # The filtered figure's total area may differ from the rest mesh's by at most this fraction.
 AREA_TOLERANCE = 0.02
-
-# Measured with the default deformer. In every failing case the bone regions keep their areas
-# (stage one is exact there) and the loss or gain sits in the joint bands: the chain transform
-# turns each hip bone (root -> hip, part of every leg chain as the thesis' OC) by about 30 degrees
-# while the torso above only translates with the root, so the hip/torso bands fold over.
-AREA_FAILS = {
-    ("sample", "jump"): "measured -7.97% (stage one -1.65%, 1 triangle inverted): the sample's joint "
-                        "areas cover 1130 of its 1517 vertices, so stage two spreads the squashed legs' "
-                        "shrink over the whole body (its untouched torso loses ~0.6% of the figure)",
-    ("char2", "jump"): "measured +3.39% (stage one +3.94%, 13 triangles inverted): the knee and hip "
-                       "joint bands open as the squashed legs bend (right knee band alone +1.9% of "
-                       "the figure), and stage two does not close them",
-}
-
 
 def _height(character):
     rows = np.flatnonzero(character.mask.any(axis=1))
@@ -128,27 +112,18 @@ def _check_area(deformer, name, case):
     assert abs(change) <= AREA_TOLERANCE
 
 
-@pytest.mark.parametrize("case", [c for c in CASES if ("sample", c) not in AREA_FAILS])
+@pytest.mark.parametrize("case", list(CASES))
 def test_sample_keeps_its_area(rigs, case):
     _check_area(rigs.deformer("sample"), "sample", case)
 
 
 @pytest.mark.parametrize(("name", "case"), [
-    pytest.param(name, case, id=f"{name}-{case}")
-    for name in drawing_names() for case in CASES if (name, case) not in AREA_FAILS
+    pytest.param(name, case, id=f"{name}-{case}") for name in drawing_names() for case in CASES
 ])
 def test_drawing_keeps_its_area(rigs, name, case):
+    """The jump once changed the sample's area by -8% and char2's by +3.4%: stage two now holds
+    the figure's area (docs/posing.md)."""
     _check_area(rigs.deformer(name), name, case)
-
-
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="joint bands do not keep their area when the filter squashes the legs")
-def test_squashed_legs_keep_the_figures_area(rigs):
-    """Every case of ``AREA_FAILS``, each as strict as :func:`test_drawing_keeps_its_area`."""
-    expect_every_case_to_fail({
-        f"{name}-{case}": lambda name=name, case=case: _check_area(rigs.deformer(name), name, case)
-        for name, case in AREA_FAILS
-    })
 
 
 # --- squash bends the legs (fig. 5.4) --------------------------------------------------------------

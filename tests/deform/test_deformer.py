@@ -60,10 +60,7 @@ def _gap_cases(rigs, gap, checks):
     }
 
 
-# The design gaps behind the known failures, one test each at the end of this module.
-TORSO_BANDS = "a stretched torso stretches its joint bands, whose area stage two does not keep"
-CHAR4_ARMS = "char4's arm bones run outside its thin curved arms, which the decomposition splits lengthwise"
-BENT_JOINTS = "stage two leaves inverted triangles in bent joints"
+# The design gap behind the known failures, one test at the end of this module.
 SMALL_LIMBS = "a limb of under ~3.5% of the figure cannot add the 2% bar when stretched 1.5x"
 
 
@@ -171,20 +168,9 @@ def test_stage_one_scales_a_stretched_bones_region_exactly(rigged, bone, preserv
     np.testing.assert_allclose(posed[others], rest[others], rtol=1e-9, atol=1e-9)
 
 
-AREA_KEPT_FAILS = {
-    ("sample", "torso"): (TORSO_BANDS, "measured +8.59% (stage one +8.31%): the joint bands torso/hips "
-                                       "and torso/shoulders stretch"),
-    ("char1", "torso"): (TORSO_BANDS, "measured +11.38% (stage one +13.91%): torso/hip and arm/hip joint "
-                                      "bands stretch"),
-    ("char2", "torso"): (TORSO_BANDS, "measured +7.21% (stage one +6.02%)"),
-    ("char3", "torso"): (TORSO_BANDS, "measured +14.04% (stage one +11.80%)"),
-    ("char4", "torso"): (TORSO_BANDS, "measured +6.86% (stage one +6.03%)"),
-    ("char4", "forearm"): (CHAR4_ARMS, "measured +3.64% (stage one +3.71%)"),
-}
-
-
-@pytest.mark.parametrize(("name", "part"), _cases(CHARACTERS, STRETCHED_BONES, AREA_KEPT_FAILS))
+@pytest.mark.parametrize(("name", "part"), _cases(CHARACTERS, STRETCHED_BONES, {}))
 def test_stretching_one_bone_keeps_the_figures_area(rigged, name, part, record_property):
+    """The torso included: its joint bands once grew figures by 7-14% (stage two's area constraint)."""
     _check_area_kept(rigged, name, part, record_property)
 
 
@@ -199,9 +185,6 @@ def _check_area_kept(rigged, name, part, record_property):
 
 
 AREA_GROWS_FAILS = {
-    ("sample", "torso"): (TORSO_BANDS, "measured +8.60% off vs +8.61% on: the sample's torso bone holds "
-                                       "few vertices, and the gain comes from the stretched torso/hip and "
-                                       "torso/shoulder joint bands"),
     ("char2", "forearm"): (SMALL_LIMBS, "measured +1.68% (on: +0.14%): the forearm is ~3.4% of char2's "
                                         "area, so 1.5x adds ~1.7%"),
     ("char2", "shin"): (SMALL_LIMBS, "measured +1.58% (on: +0.16%): char2's shin is ~3% of its area"),
@@ -230,20 +213,7 @@ def _check_area_grows(rigged, name, part, record_property):
 
 POSES = ("elbows+", "elbows-", "knees+", "knees-", "arms up")
 
-# Inverted joint triangles after stage two, measured (after stage one in brackets).
-INVERSION_FAILS = {
-    ("sample", "elbows-"): (BENT_JOINTS, "1 joint triangle inverted (stage one: 9), area -7% of rest"),
-    ("char1", "arms up"): (BENT_JOINTS, "2 joint triangles inverted (stage one: 27), areas -10% and -3% "
-                                        "of rest"),
-    ("char2", "elbows+"): (BENT_JOINTS, "1 joint triangle inverted (stage one: 1), area -5% of rest"),
-    ("char3", "elbows-"): (BENT_JOINTS, "3 joint triangles inverted (stage one: 5), down to -43% of rest"),
-    ("char4", "elbows+"): (CHAR4_ARMS, "3 joint triangles inverted (stage one: 17)"),
-    ("char4", "elbows-"): (CHAR4_ARMS, "4 joint triangles inverted (stage one: 42), down to -98% of rest"),
-    ("char4", "arms up"): (CHAR4_ARMS, "3 joint triangles inverted (stage one: 11), down to -94% of rest"),
-}
-
-
-@pytest.mark.parametrize(("name", "kind"), _cases(CHARACTERS, POSES, INVERSION_FAILS))
+@pytest.mark.parametrize(("name", "kind"), _cases(CHARACTERS, POSES, {}))
 def test_stage_two_lowers_its_energy_and_leaves_no_joint_triangle_inverted(rigged, name, kind):
     _check_stage_two(rigged, name, kind)
 
@@ -264,17 +234,15 @@ def _check_stage_two(rigged, name, kind):
     assert after == 0
 
 
-CONVERGENCE_FAILS = {}
-
-
-@pytest.mark.parametrize(("name", "kind"), _cases(CHARACTERS, POSES, CONVERGENCE_FAILS))
+@pytest.mark.parametrize(("name", "kind"), _cases(CHARACTERS, POSES, {}))
 def test_stage_two_stops_near_its_minimum(rigged, name, kind):
     """The default stopping rule (an iteration gains less than 0.01%) ends within 1% of the energy
-    that iterating to convergence reaches."""
+    that iterating to convergence reaches, in one solve (no unfolding, which may widen the joint
+    area differently after a shorter or longer solve)."""
     skeleton = rigged().character.skeleton
     pose = Pose(_test_pose(skeleton, kind))
-    default = rigged().deform(pose)
-    converged = rigged(tolerance=1e-10, max_iterations=3000).deform(pose)
+    default = rigged(unfold=0).deform(pose)
+    converged = rigged(unfold=0, tolerance=1e-10, max_iterations=3000).deform(pose)
     assert converged.converged and converged.energy <= default.energy
     print(f"\n{name} {kind}: energy {default.energy:.5g} in {default.iterations} iterations, "
           f"{converged.energy:.5g} in {converged.iterations}")
@@ -286,7 +254,9 @@ def test_stage_two_moves_only_the_joint_area(rigged):
     deformer = rigged()
     skeleton = deformer.character.skeleton
     result = deformer.deform(Pose(_test_pose(skeleton, "elbows+")))
-    fixed = ~deformer.free
+    # The joint area, widened only where unfolding needed it.
+    assert np.all(result.free[deformer.free])
+    fixed = ~result.free
     assert fixed.any() and deformer.free.any()
     np.testing.assert_array_equal(result.U[fixed], result.stage_one[fixed])
     assert np.abs(result.U[deformer.free] - result.stage_one[deformer.free]).max() > 1e-3
@@ -345,6 +315,8 @@ def test_a_warm_start_worse_than_stage_one_is_ignored(rigged):
         ({"max_iterations": 0}, r"max_iterations must be a whole number >= 1, got 0"),
         ({"max_iterations": 2.5}, r"max_iterations must be a whole number >= 1"),
         ({"edge_term": "springy"}, r"edge term must be one of rigid, length, got 'springy'"),
+        ({"unfold": -1}, r"unfold must be a whole number >= 0, got -1"),
+        ({"unfold": 1.5}, r"unfold must be a whole number >= 0"),
     ],
 )
 def test_bad_settings_are_refused(settings, message, rigs):
@@ -471,8 +443,7 @@ def test_find_overlaps_reports_an_arm_across_the_body_and_its_depth(rigged):
 
 # --- known design gaps: one strict xfail each, over every case it breaks ------------------------
 
-GAPS = {"torso-bands": TORSO_BANDS, "char4-arms": CHAR4_ARMS, "bent-joints": BENT_JOINTS,
-        "small-limbs": SMALL_LIMBS}
+GAPS = {"small-limbs": SMALL_LIMBS}
 
 
 @pytest.mark.parametrize("gap", [
@@ -481,7 +452,5 @@ GAPS = {"torso-bands": TORSO_BANDS, "char4-arms": CHAR4_ARMS, "bent-joints": BEN
 ])
 def test_known_design_gap(rigs, record_property, gap):
     """Every known failure of ``gap``, each as strict as its plain test above."""
-    checks = [("area kept", AREA_KEPT_FAILS, partial(_check_area_kept, record_property=record_property)),
-              ("area grows", AREA_GROWS_FAILS, partial(_check_area_grows, record_property=record_property)),
-              ("stage two", INVERSION_FAILS, _check_stage_two)]
+    checks = [("area grows", AREA_GROWS_FAILS, partial(_check_area_grows, record_property=record_property))]
     expect_every_case_to_fail(_gap_cases(rigs, gap, checks))

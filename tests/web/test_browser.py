@@ -422,7 +422,8 @@ def test_exaggerate_fix_the_feet_and_draw_the_acceleration(page, editor):
     page.click("#exaggerate-play")
     page.wait_for_timeout(600)
     page.click("#exaggerate-play")
-    assert page.errors == [] and page.locator("#error").is_hidden()
+    assert page.errors == []
+    assert page.locator("#error").is_hidden(), page.locator("#error").text_content()
 
 
 def test_rig_move_a_joint_and_rig_again(page, editor):

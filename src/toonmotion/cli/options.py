@@ -22,7 +22,9 @@ err = Console(stderr=True)
 Project = Annotated[Path, typer.Argument(help="Project folder made by 'toonmotion rig'.")]
 Size = Annotated[str | None, typer.Option("--size", help="Output WxH pixels \\[default: the view at 1:1].")]
 Overlay = Annotated[str, typer.Option("--overlay", help="Comma list of mesh, skeleton, rest.")]
-NoArea = Annotated[bool, typer.Option("--no-area", help="Do not preserve area when bones stretch.")]
+NoArea = Annotated[bool, typer.Option(
+    "--no-area", help="Do not preserve area: needles keep their length when bones stretch and the figure's "
+    "area is not held.")]
 StageOne = Annotated[bool, typer.Option("--stage-one", help="Needle model only, no joint-area solve.")]
 Weights = Annotated[str, typer.Option("--weights", help="Stage-two weights w1,w2,w3.")]
 JointWidth = Annotated[

@@ -11,12 +11,20 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver, SolveResult, joint_area
-from toonmotion.deform.needles import needle_model, stage_one
+from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver, SolveResult, joint_area, joint_radii
+from toonmotion.deform.needles import needle_model, stage_one, stretch_maps, triangle_shapes
+from toonmotion.deform.unfold import rings_round, untangle
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.arrays import frozen_array
+from toonmotion.geometry.polygon import triangle_areas
 from toonmotion.rig.character import Character
 from toonmotion.rig.pose import Pose, check_pose
+
+# Stage two widens its joint area round triangles left with less than this fraction of their
+# rest area (folded, or crushed into a spike on the way to folding).
+_CRUSHED = 0.2
+# Widened joint-area solvers a Deformer keeps (each a factorisation of a few hundred vertices).
+_UNFOLD_SOLVERS = 8
 
 
 @dataclass(frozen=True)
@@ -38,6 +46,11 @@ class DeformSettings:
         Stop iterating when an iteration lowers the energy by less than this fraction.
     stage_two : bool
         Run stage two at all (off shows the needle model alone, as in fig. 3.9e).
+    unfold : int
+        Times stage two may widen its joint area where a triangle is left inverted or crushed
+        below a fifth of its rest area (two rings of triangles round each, then solved again from
+        the result); what is still inverted after that is untangled locally
+        (:mod:`toonmotion.deform.unfold`). 0 keeps to one solve and untangles nothing.
     edge_term : str
         ``"rigid"``: each joint triangle's edges keep their lengths *and* their orientation
         (the edges of a triangle turn together), so triangles do not flip; ``"length"``: the
@@ -53,6 +66,7 @@ class DeformSettings:
     tolerance: float = 1e-4
     stage_two: bool = True
     edge_term: str = "rigid"
+    unfold: int = 3
 
     def __post_init__(self) -> None:
         for name in ("preserve_area", "stage_two"):
@@ -78,6 +92,8 @@ class DeformSettings:
             isinstance(self.max_iterations, int) and self.max_iterations >= 1
         ):
             raise SettingsError(f"max_iterations must be a whole number >= 1, got {self.max_iterations!r}")
+        if isinstance(self.unfold, bool) or not (isinstance(self.unfold, int) and self.unfold >= 0):
+            raise SettingsError(f"unfold must be a whole number >= 0, got {self.unfold!r}")
         if not (isinstance(self.tolerance, (int, float)) and np.isfinite(self.tolerance)
                 and self.tolerance > 0):
             raise SettingsError(f"the stage-two tolerance must be a number > 0, got {self.tolerance!r}")
@@ -93,12 +109,16 @@ class Deformation(SolveResult):
         As for :class:`SolveResult`; ``iterations`` is 0 when stage two is off.
     stage_one : (n, 2) float
         The needle model's result, before stage two.
+    free : (n,) bool or None
+        The vertices stage two moved: the deformer's joint area, widened where it unfolded
+        triangles (None when not given).
 
     Construction copies ``U`` and ``stage_one`` (read-only) and raises ``ValueError`` unless
     they are ``(n, 2)`` alike and the figures are numbers (an iteration count >= 0).
     """
 
     stage_one: NDArray[np.float64]
+    free: NDArray[np.bool_] | None = None
     _what = "a deformation"
 
     def __post_init__(self) -> None:
@@ -106,6 +126,9 @@ class Deformation(SolveResult):
         stage = frozen_array(self.stage_one, dtype=np.float64, shape=self.U.shape,
                              name=f"{self._what}'s stage_one")
         object.__setattr__(self, "stage_one", stage)
+        if self.free is not None:
+            object.__setattr__(self, "free", frozen_array(self.free, dtype=np.bool_, shape=(len(self.U),),
+                                                          name=f"{self._what}'s free"))
 
 
 class Deformer:
@@ -118,6 +141,10 @@ class Deformer:
     needles : NeedleModel
     free : (n,) bool
         The joint-area vertices stage two moves.
+    joint_width_px : (b,) float
+        Each bone's joint width: how far round the joints at its ends stage two frees vertices
+        (:func:`~toonmotion.deform.joint_solve.joint_radii`, the larger end), at least the mesh
+        spacing.
     solver : JointSolver
     """
 
@@ -128,13 +155,27 @@ class Deformer:
         self.needles = needle_model(mesh.V, character.skeleton, character.binding.bone)
         self.free = joint_area(mesh, character.skeleton, character.binding, character.mask,
                                width=settings.joint_width)
+        radius = joint_radii(character.skeleton, character.mask, width=settings.joint_width,
+                             floor=mesh.spacing)
+        ends = radius[character.skeleton.bones]
+        self.joint_width_px = np.maximum(ends.max(axis=1), mesh.spacing)
         self.solver = JointSolver(mesh, self.free, weights=settings.weights,
                                   edge_term=settings.edge_term)
+        self._rest_triangle_areas = triangle_areas(mesh.V, mesh.F)
+        self._rest_area = float(self._rest_triangle_areas.sum())
+        self._F = np.asarray(mesh.F)
+        self._unfold_solvers: dict[bytes, JointSolver] = {}
 
     def stage_one(self, pose: Pose) -> NDArray[np.float64]:
         """The needle model alone for ``pose``: ``(n, 2)``."""
         check_pose(self.character.skeleton, pose)
         return stage_one(self.needles, pose.positions, preserve_area=self.settings.preserve_area)
+
+    def shape(self, pose: Pose) -> NDArray[np.complex128]:
+        """The shape stage two asks of each joint triangle in ``pose``: its bones' stretch
+        (:func:`~toonmotion.deform.needles.triangle_shapes`), for :meth:`JointSolver.solve`."""
+        check_pose(self.character.skeleton, pose)
+        return self._shape_for(self.solver, pose)
 
     def deform(self, pose: Pose, *, previous: Deformation | None = None) -> Deformation:
         """Deform the character into ``pose``.
@@ -148,13 +189,43 @@ class Deformer:
         """
         U1 = self.stage_one(pose)
         s = self.settings
+        shape = self.shape(pose)
         if not s.stage_two:
-            energy = self.solver.energy(U1)
+            energy = self.solver.energy(U1, shape=shape)
             return Deformation(U=U1, stage_one=U1, iterations=0, energy_start=energy,
                                energy=energy, converged=True)
         initial = None if previous is None else U1 + (previous.U - previous.stage_one)
+        area = self._rest_area if s.preserve_area else None
         result = self.solver.solve(U1, initial=initial, max_iterations=s.max_iterations,
-                                   tolerance=s.tolerance)
-        return Deformation(U=result.U, stage_one=U1, iterations=result.iterations,
-                           energy_start=result.energy_start, energy=result.energy,
-                           converged=result.converged)
+                                   tolerance=s.tolerance, shape=shape, area=area)
+        U, free, iterations, converged = result.U, self.free, result.iterations, result.converged
+        for _ in range(s.unfold):
+            folded = triangle_areas(U, self._F) <= _CRUSHED * self._rest_triangle_areas
+            if not folded.any():
+                break
+            free = free | rings_round(self._F, folded, len(free))
+            solver = self._solver_for(free)
+            again = solver.solve(U1, initial=U, max_iterations=s.max_iterations, tolerance=s.tolerance,
+                                 shape=self._shape_for(solver, pose), area=area)
+            U, iterations, converged = again.U, iterations + again.iterations, again.converged
+        if s.unfold and (triangle_areas(U, self._F) <= 0).any():
+            U = untangle(U, self._F, free)
+        energy = result.energy if U is result.U else self.solver.energy(U, shape=shape)
+        return Deformation(U=U, stage_one=U1, iterations=iterations, energy_start=result.energy_start,
+                           energy=energy, converged=converged, free=free)
+
+    def _solver_for(self, free):
+        """A JointSolver for a widened joint area; the last few are kept, since an animation
+        folds in the same places frame after frame."""
+        key = np.packbits(free).tobytes()
+        if key not in self._unfold_solvers:
+            if len(self._unfold_solvers) >= _UNFOLD_SOLVERS:
+                self._unfold_solvers.pop(next(iter(self._unfold_solvers)))
+            self._unfold_solvers[key] = JointSolver(self.character.mesh, free, weights=self.settings.weights,
+                                                    edge_term=self.settings.edge_term)
+        return self._unfold_solvers[key]
+
+    def _shape_for(self, solver, pose):
+        maps = stretch_maps(self.needles, pose.positions, preserve_area=self.settings.preserve_area)
+        return triangle_shapes(maps, self.needles.bone, solver.triangles,
+                               keep_area=self.settings.preserve_area)

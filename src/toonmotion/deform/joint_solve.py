@@ -8,7 +8,26 @@ keeps its stage-one position. The energy (eq. 3.8) is the weighted sum of
 * ``E3``, squared changes of the lengths of edges that touch a free vertex (3.7).
 
 E1 and E2 are linear in the positions. E3 is linearised the Gauss-Newton way of eq. 3.9: the
-edge vector ``u_i - u_j`` should equal its rest length times its current direction. The matrix
+edge vector ``u_i - u_j`` should equal its rest length times its current direction.
+
+The thesis's E3 asks joint triangles for their *rest* shape. Where a bone is stretched, the
+needle model stretches its region along the bone and thins it across (fig. 3.8, area kept), but
+a joint band held to its rest shape between a stretched and an unstretched region can only open
+up: stretching a torso 1.5x grew whole figures by 7-14%. So a solve may be given each triangle's
+*shape*: a linear map of the plane (``a e + b conj(e)`` on a complex edge ``e``) that its rest
+edges take before the fit of E3. :class:`~toonmotion.deform.deformer.Deformer` passes the mean of
+its corners' bones' stretch maps, scaled to keep area when the needles do (:func:`stretch_maps`).
+Unstretched bones give the identity, the thesis's E3.
+
+Even so, a region stretched along its bone and thinned across leaves its unstretched neighbours
+where they were, and the band between them must widen: the needle model alone grows a figure
+whose torso is stretched 1.5x by 6-16%. A solve may therefore be given the whole mesh's *area*
+to keep, a hard constraint: after each iteration's solve the free vertices move by the
+smallest correction, in the metric of the normal matrix, that brings the linearised total signed
+area to the target (one more triangular solve per frame, for ``N^-1 g`` with ``g`` the area's
+gradient, which lives on the free outline vertices only; the gradient is updated every
+iteration). The area lost or gained is spread over the joint areas' outline as smoothly as the
+energy allows. The matrix
 of that linear system depends on the rest mesh only, so its normal matrix is factorised once
 (:class:`JointSolver`), and each iteration is a sparse product and two triangular solves.
 Each iteration fixes the edge directions at their best values for the current positions and
@@ -26,7 +45,6 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
-from scipy.ndimage import distance_transform_edt
 from scipy.sparse.linalg import splu
 
 from toonmotion.errors import MeshError, SettingsError
@@ -37,7 +55,8 @@ from toonmotion.geometry.coordinates import (
     mean_value_weights,
     rsi_laplacian_coefficients,
 )
-from toonmotion.rig.binding import Binding
+from toonmotion.geometry.polygon import triangle_areas
+from toonmotion.rig.binding import Binding, bone_half_thickness
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
 from toonmotion.shape.mesh import Mesh, unique_edges
 
@@ -110,31 +129,33 @@ def joint_area(
     if width == 0 or len(mesh.V) == 0:
         return free
     bones = skeleton.bones
+    radius = joint_radii(skeleton, mask, width=width, floor=mesh.spacing)
     usable = skeleton.bone_lengths > MIN_BONE_LENGTH
-    thickness = _bone_half_thickness(skeleton, mask, floor=mesh.spacing)
-    for joint in skeleton.positions:
-        # Joints at the same place (AD's root and hip) count as one joint.
+    for j, joint in enumerate(skeleton.positions):
+        if radius[j] == 0:
+            continue
         here = np.flatnonzero(np.hypot(*(skeleton.positions - joint).T) <= MIN_BONE_LENGTH)
         meeting = np.flatnonzero(usable & (np.isin(bones[:, 0], here) | np.isin(bones[:, 1], here)))
-        if len(meeting) < 2:
-            continue
-        radius = width * thickness[meeting].min()
-        near = np.hypot(mesh.V[:, 0] - joint[0], mesh.V[:, 1] - joint[1]) < radius
+        near = np.hypot(mesh.V[:, 0] - joint[0], mesh.V[:, 1] - joint[1]) < radius[j]
         free |= near & np.isin(binding.bone, meeting)
     return free
 
 
-def _bone_half_thickness(skeleton, mask, *, floor):
-    """Median distance to the outline along the middle half of each bone, at least ``floor``."""
-    distance = distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
-    h, w = mask.shape
+def joint_radii(skeleton: Skeleton, mask: NDArray[np.bool_], *, width: float, floor: float
+                ) -> NDArray[np.float64]:
+    """How far round each joint :func:`joint_area` frees vertices, ``(j,)`` pixels: ``width``
+    times the thinnest half-thickness of the bones meeting there (each at least ``floor``), 0
+    where fewer than two bones meet. Joints at one place (AD's root and hip) count as one."""
     bones = skeleton.bones
-    A, B = skeleton.positions[bones[:, 0]], skeleton.positions[bones[:, 1]]
-    t = np.linspace(0.25, 0.75, 9)
-    P = A[:, None] + t[None, :, None] * (B - A)[:, None]
-    x = np.clip(np.rint(P[..., 0]), 0, w - 1).astype(np.int64)
-    y = np.clip(np.rint(P[..., 1]), 0, h - 1).astype(np.int64)
-    return np.maximum(np.median(distance[y, x], axis=1), floor)
+    usable = skeleton.bone_lengths > MIN_BONE_LENGTH
+    thickness = bone_half_thickness(skeleton, mask, floor=floor)
+    radius = np.zeros(len(skeleton))
+    for j, joint in enumerate(skeleton.positions):
+        here = np.flatnonzero(np.hypot(*(skeleton.positions - joint).T) <= MIN_BONE_LENGTH)
+        meeting = np.flatnonzero(usable & (np.isin(bones[:, 0], here) | np.isin(bones[:, 1], here)))
+        if len(meeting) >= 2:
+            radius[j] = width * thickness[meeting].min()
+    return radius
 
 
 class JointSolver:
@@ -176,6 +197,11 @@ class JointSolver:
         free = np.asarray(free, dtype=bool)
         self.free = np.flatnonzero(free)
         self.fixed = np.flatnonzero(~free)
+        # Triangles that touch a free vertex: the only ones whose area a solve changes.
+        self._all_F = mesh.F
+        self._moving = np.asarray(mesh.F)[free[mesh.F].any(axis=1)]
+        self._position = np.full(len(free), -1)
+        self._position[self.free] = np.arange(len(self.free))
         rest = as_complex(mesh.V)
         A1 = _laplacian_rows(mesh, rest, free)
         A2 = _mean_value_rows(mesh, free)
@@ -186,9 +212,7 @@ class JointSolver:
             self.edges, A3, self._corners = _triangle_edge_rows(mesh, free)
         self.rest_edge = rest[self.edges[:, 0]] - rest[self.edges[:, 1]]
         self.rest_length = np.abs(self.rest_edge)
-        if self._corners is not None:
-            self._rest = self.rest_edge.reshape(-1, 3)
-            self._rest_conj = np.conj(self._rest)
+        self._set_shape(None)
         w1, w2, w3 = self.weights
         self._linear = sp.vstack([np.sqrt(w1) * A1, np.sqrt(w2) * A2]).tocsr()
         self._A3 = A3
@@ -209,12 +233,38 @@ class JointSolver:
         self._from_fixed = (-(Ff.conj().T @ Fx)).tocsr()
         self._from_edges = (w3 * A3[:, self.free].conj().T).tocsr()
 
-    def energy(self, U: NDArray[np.float64]) -> float:
-        """Eq. 3.8 at vertices ``U`` (``(n, 2)``)."""
+    @property
+    def triangles(self) -> NDArray[np.int64]:
+        """``(t, 3)`` corners of the triangles E3 holds (``"rigid"``), or ``(e, 2)`` ends of its
+        edges (``"length"``): what a ``shape`` given to :meth:`solve` has one entry for."""
+        return self._corners if self._corners is not None else self.edges
+
+    def energy(self, U: NDArray[np.float64], *, shape: NDArray[np.complex128] | None = None) -> float:
+        """Eq. 3.8 at vertices ``U`` (``(n, 2)``), with ``shape`` as for :meth:`solve`."""
+        self._set_shape(shape)
         return self._energy(as_complex(U))
 
+    def _set_shape(self, shape):
+        """Rest edges (and lengths) mapped by ``shape``: ``(k, 2)`` complex ``(a, b)`` per entry of
+        :attr:`triangles`, edges ``e -> a e + b conj(e)``; None: the rest edges themselves."""
+        if shape is None:
+            self._target_rest, self._target_length = self.rest_edge, self.rest_length
+        else:
+            shape = np.asarray(shape, dtype=complex)
+            if shape.shape != (len(self.triangles), 2):
+                raise ValueError(f"a stage-two shape must be ({len(self.triangles)}, 2) complex, "
+                                 f"got {shape.shape}")
+            per_edge = np.repeat(shape, 3, axis=0) if self._corners is not None else shape
+            edge = self.rest_edge
+            self._target_rest = per_edge[:, 0] * edge + per_edge[:, 1] * np.conj(edge)
+            self._target_length = np.abs(self._target_rest)
+        if self._corners is not None:
+            self._rest = self._target_rest.reshape(-1, 3)
+            self._rest_conj = np.conj(self._rest)
+
     def solve(self, U: NDArray[np.float64], *, initial: NDArray[np.float64] | None = None,
-              max_iterations: int = 50, tolerance: float = 1e-3) -> SolveResult:
+              max_iterations: int = 50, tolerance: float = 1e-3,
+              shape: NDArray[np.complex128] | None = None, area: float | None = None) -> SolveResult:
         """Solve for the free vertices, the others fixed at ``U`` (the stage-one result).
 
         Parameters
@@ -232,7 +282,15 @@ class JointSolver:
             Stop when an iteration lowers the energy by less than this fraction of it; 1e-3 when
             not given. ``Deformer.deform`` passes ``DeformSettings.tolerance`` (1e-4 by default)
             and fine tuning passes 1e-6.
+        shape : (k, 2) complex, optional
+            The linear map ``e -> a e + b conj(e)`` each triangle's rest edges take before E3
+            fits them (module docstring), one ``(a, b)`` per row of :attr:`triangles`; None: the
+            rest shape (``(1, 0)`` everywhere).
+        area : float, optional
+            The whole mesh's signed area (px^2, :func:`~toonmotion.geometry.polygon.triangle_areas`
+            summed) to keep, a constraint (module docstring); None: no constraint.
         """
+        self._set_shape(shape)
         z = as_complex(U).copy()
         start = self._energy(z)
         if initial is not None and len(self.free):
@@ -246,10 +304,25 @@ class JointSolver:
                                energy=start, converged=True)
         base = self._from_fixed @ z[self.fixed] + self._epsilon * z[self.free]
         targets, energy = self._local(z)
+        if area is not None:
+            # The moving triangles' share of the target: the others keep their area in ``U``.
+            area = float(area) - float(triangle_areas(as_points(z), np.asarray(self._all_F)).sum()) \
+                + self._moving_area(z)[0]
         iterations, converged = 0, False
         while iterations < max_iterations and not converged:
             iterations += 1
-            z[self.free] = self._factor.solve(base + self._from_edges @ targets)
+            rhs = base + self._from_edges @ targets
+            if area is None:
+                z[self.free] = self._factor.solve(rhs)
+            else:
+                # One solve for the step and for the correction's direction, N^-1 g, with the area's
+                # gradient at the last iterate (it moves little in one iteration).
+                both = self._factor.solve(np.stack([rhs, self._moving_area(z)[1]], axis=1))
+                z[self.free], direction = both[:, 0], both[:, 1]
+                now, gradient = self._moving_area(z)
+                slope = float(np.vdot(gradient, direction).real)
+                if slope > 1e-12 * max(abs(now), 1.0):
+                    z[self.free] += ((area - now) / slope) * direction
             targets, new_energy = self._local(z)
             converged = energy - new_energy <= tolerance * energy
             energy = new_energy
@@ -258,6 +331,21 @@ class JointSolver:
 
     def _energy(self, z):
         return self._local(z)[1]
+
+    def _moving_area(self, z):
+        """The moving triangles' total signed area at ``z`` and its gradient over the free
+        vertices, ``(m,)`` complex: ``d area = Re(conj(g) . dz)``."""
+        c = z[self._moving]
+        nxt, prv = np.roll(c, -1, axis=1), np.roll(c, 1, axis=1)
+        # triangle_areas' sign: -1/2 cross(b - a, c - a), positive counter-clockwise on screen.
+        total = -0.5 * float(np.sum((np.conj(c[:, 1] - c[:, 0]) * (c[:, 2] - c[:, 0])).imag))
+        corner = 0.5j * (nxt - prv)
+        where = self._position[self._moving].ravel()
+        keep = where >= 0
+        m = len(self.free)
+        gradient = (np.bincount(where[keep], corner.ravel().real[keep], minlength=m)
+                    + 1j * np.bincount(where[keep], corner.ravel().imag[keep], minlength=m))
+        return total, gradient
 
     def _local(self, z):
         """The local step at positions ``z``: every E3 row's best target edge vector, and the
@@ -271,9 +359,9 @@ class JointSolver:
         if self._corners is None:
             e = z[self.edges[:, 0]] - z[self.edges[:, 1]]
             length = np.abs(e)
-            targets = np.where(length > 1e-12, self.rest_length * e / np.maximum(length, 1e-300),
-                               self.rest_edge)
-            stretch = length - self.rest_length
+            targets = np.where(length > 1e-12, self._target_length * e / np.maximum(length, 1e-300),
+                               self._target_rest)
+            stretch = length - self._target_length
             return targets, float(energy + self.weights[2] * np.dot(stretch, stretch))
         c = z[self._corners]  # (t, 3); the edges of a triangle run to corner 0, 1, 2 from the next
         e = np.empty_like(c)

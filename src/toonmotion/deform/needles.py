@@ -41,6 +41,8 @@ class NeedleModel:
     s : (n,) float
         Signed needle length across the bone, pixels.
     rest_length : (b,) float
+    rest_direction : (b, 2) float
+        Unit vector along each bone at rest, ``(1, 0)`` for rigid bones.
     rigid : (b,) bool
         Bones of zero rest length: their vertices translate only.
     offset : (n, 2) float
@@ -55,6 +57,7 @@ class NeedleModel:
     t: NDArray[np.float64]
     s: NDArray[np.float64]
     rest_length: NDArray[np.float64]
+    rest_direction: NDArray[np.float64]
     rigid: NDArray[np.bool_]
     offset: NDArray[np.float64]
 
@@ -67,7 +70,8 @@ class NeedleModel:
         object.__setattr__(self, "bones", bones)
         object.__setattr__(self, "bone", bone)
         for name, dtype, shape in (("t", np.float64, (n,)), ("s", np.float64, (n,)),
-                                   ("rest_length", np.float64, (b,)), ("rigid", np.bool_, (b,)),
+                                   ("rest_length", np.float64, (b,)), ("rest_direction", np.float64, (b, 2)),
+                                   ("rigid", np.bool_, (b,)),
                                    ("offset", np.float64, (n, 2))):
             object.__setattr__(self, name, frozen_array(getattr(self, name), dtype=dtype, shape=shape,
                                                         name=f"a needle model's {name}"))
@@ -94,6 +98,7 @@ def needle_model(V: NDArray[np.float64], skeleton: Skeleton, bone: NDArray[np.in
         t=t,
         s=s,
         rest_length=length,
+        rest_direction=u,
         rigid=rigid,
         offset=np.where(rigid[bone][:, None], rel, 0.0),
     )
@@ -121,3 +126,34 @@ def stage_one(model: NeedleModel, positions: NDArray[np.float64], *, preserve_ar
         r = model.rigid[b]
         U[r] = A[b[r]] + model.offset[r]
     return U
+
+
+def stretch_maps(model: NeedleModel, positions: NDArray[np.float64], *, preserve_area: bool = True
+                 ) -> NDArray[np.complex128]:
+    """How stage one stretches each bone's region, before it turns: ``(b, 2)`` complex ``(a, c)``,
+    the linear map ``e -> a e + c conj(e)`` of rest-frame vectors ``e = x + iy``.
+
+    A bone posed ``s`` times its rest length stretches its region ``s``-fold along its rest
+    direction ``u`` and, with area preservation, ``1/s``-fold across (otherwise not at all):
+    ``a = (s + r) / 2``, ``c = (s - r) / 2 u^2`` with ``r`` the factor across. Rigid bones and
+    bones at their rest length give the identity ``(1, 0)``.
+    """
+    d = positions[model.bones[:, 1]] - positions[model.bones[:, 0]]
+    length = np.hypot(d[:, 0], d[:, 1])
+    stretch = np.where(model.rigid, 1.0, length / np.where(model.rigid, 1.0, model.rest_length))
+    across = 1.0 / np.maximum(stretch, 1e-300) if preserve_area else np.ones_like(stretch)
+    u = model.rest_direction[:, 0] + 1j * model.rest_direction[:, 1]
+    return np.stack([(stretch + across) / 2, (stretch - across) / 2 * u**2], axis=1).astype(complex)
+
+
+def triangle_shapes(maps: NDArray[np.complex128], bone: NDArray[np.integer], corners: NDArray[np.integer],
+                    *, keep_area: bool = True) -> NDArray[np.complex128]:
+    """The shape stage two asks of each triangle (or edge): the mean of its corners' bones'
+    :func:`stretch_maps`, ``(k, 2)`` for ``corners`` ``(k, c)``; with ``keep_area`` scaled to
+    determinant 1, since a mean of area-keeping maps of different directions grows area a little.
+    """
+    mean = maps[bone[corners]].mean(axis=1)
+    if keep_area:
+        det = np.abs(mean[:, 0]) ** 2 - np.abs(mean[:, 1]) ** 2
+        mean = mean / np.sqrt(np.maximum(det, 1e-300))[:, None]
+    return mean

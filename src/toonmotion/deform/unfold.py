@@ -1,0 +1,162 @@
+"""Mend triangles stage two leaves inverted: widen the joint area round them, then untangle.
+
+Stage two's rigid edge term keeps a joint triangle from flipping on its own, but fixed vertices
+on both sides of a sharply bent joint can leave it no room: the thesis's joint band is too
+narrow there (its future work, 7.2 item 4, asks for more freedom at joints). Two remedies, used
+in turn by :meth:`~toonmotion.deform.deformer.Deformer.deform`:
+
+* :func:`rings_round`: the vertices within a few rings of triangles round the folded ones, to
+  add to the joint area and solve again;
+* :func:`untangle`: where a triangle is still inverted after that (an outline sliver pinched in
+  the crease of a bend, which the outline's curvature term holds folded), each of its movable
+  corners is tried at a few places (the mean of its neighbours, its mirror image in the opposite
+  edge, half-way from that edge to the mirror image) and moved to the one that leaves the
+  smallest of its triangles largest, when that is larger than now; passes repeat while they
+  mend something. A triangle still inverted (inside a crowded bend, where every single move
+  folds a neighbour) has a patch of a few rings round it laid out again by Tutte's method.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion.geometry.polygon import triangle_areas
+
+# At most this many passes of untangle, and rings round a triangle in its last resort.
+_PASSES = 10
+_PATCH_RINGS = 4
+
+
+def rings_round(F: NDArray[np.int_], folded: NDArray[np.bool_], n: int, rings: int = 2
+                ) -> NDArray[np.bool_]:
+    """Vertices of the ``folded`` triangles and of ``rings`` rings of triangles round them, ``(n,)``."""
+    near = np.zeros(n, dtype=bool)
+    near[F[folded].ravel()] = True
+    for _ in range(rings):
+        near[F[near[F].any(axis=1)].ravel()] = True
+    return near
+
+
+def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bool_]
+             ) -> NDArray[np.float64]:
+    """``U`` with movable corners of inverted triangles moved so fewer (usually none) are inverted.
+
+    Parameters
+    ----------
+    U : (n, 2) float
+        Vertices.
+    F : (m, 3) int
+        Triangles, counter-clockwise on screen at rest (positive :func:`triangle_areas`).
+    movable : (n,) bool
+        Vertices that may move (stage two's free vertices).
+
+    Returns
+    -------
+    (n, 2) float
+        A new array; vertices that are not corners of inverted triangles are unchanged.
+
+    Examples
+    --------
+    A square of two triangles with one corner pushed across the diagonal:
+
+    >>> U = np.array([[0.0, 0.0], [0.0, 2.0], [2.0, 2.0], [0.5, 1.5]])
+    >>> F = np.array([[0, 1, 2], [0, 2, 3]])
+    >>> mended = untangle(U, F, np.array([False, False, False, True]))
+    >>> bool((triangle_areas(U, F) <= 0).any()), bool((triangle_areas(mended, F) > 0).all())
+    (True, True)
+    """
+    U = np.array(U, dtype=float)
+    F = np.asarray(F)
+    incident = _incident(F, len(U))
+    neighbours = _neighbours(F, len(U))
+    for _ in range(_PASSES):
+        folded = np.flatnonzero(triangle_areas(U, F) <= 0)
+        if len(folded) == 0:
+            break
+        mended = False
+        for t in folded:
+            if triangle_areas(U, F[t:t + 1])[0] > 0:
+                continue  # mended by a move earlier in this pass
+            for k in range(3):
+                v = F[t, k]
+                if not movable[v]:
+                    continue
+                a, b = U[F[t, (k + 1) % 3]], U[F[t, (k + 2) % 3]]
+                mirror = _mirror(U[v], a, b)
+                middle = 0.5 * (a + b)
+                candidates = [U[neighbours[v]].mean(axis=0), mirror, middle + 0.5 * (mirror - middle)]
+                around = F[incident[v]]
+                best, best_score = None, triangle_areas(U, around).min()
+                for c in candidates:
+                    trial = U.copy()
+                    trial[v] = c
+                    score = triangle_areas(trial, around).min()
+                    if score > best_score:
+                        best, best_score = c, score
+                if best is not None:
+                    U[v] = best
+                    mended = True
+                    if best_score > 0:
+                        break
+        if not mended:
+            break
+    for t in np.flatnonzero(triangle_areas(U, F) <= 0):
+        if triangle_areas(U, F[t:t + 1])[0] <= 0:
+            U = _tutte_patch(U, F, t, movable, incident, neighbours)
+    return U
+
+
+def _tutte_patch(U, F, t, movable, incident, neighbours):
+    """``U`` with a patch round triangle ``t`` laid out again by Tutte's method (each inner vertex
+    at the mean of its neighbours, the patch's edge held), for the smallest patch of up to
+    :data:`_PATCH_RINGS` rings that leaves no triangle of it inverted; ``U`` itself if none does.
+    With a convex edge Tutte's layout is never folded, and a small patch's edge nearly is."""
+    folded = np.zeros(len(F), dtype=bool)
+    folded[t] = True
+    for rings in range(1, _PATCH_RINGS + 1):
+        patch = rings_round(F, folded, len(U), rings)
+        inside = patch[F].all(axis=1)  # the patch's triangles
+        # Inner vertices: every triangle round them is the patch's; the rest of it is its edge.
+        inner = np.flatnonzero(patch & movable & np.array([inside[incident[v]].all() for v in range(len(U))]))
+        if len(inner) == 0:
+            continue
+        where = np.full(len(U), -1)
+        where[inner] = np.arange(len(inner))
+        L = np.zeros((len(inner), len(inner)))
+        b = np.zeros((len(inner), 2))
+        for i, v in enumerate(inner):
+            L[i, i] = len(neighbours[v])
+            for w in neighbours[v]:
+                if where[w] >= 0:
+                    L[i, where[w]] -= 1
+                else:
+                    b[i] += U[w]
+        trial = U.copy()
+        trial[inner] = np.linalg.solve(L, b)
+        around = F[np.unique(np.concatenate([incident[v] for v in inner]))]
+        if (triangle_areas(trial, around) > 0).all():
+            return trial
+    return U
+
+
+def _mirror(p, a, b):
+    """``p`` reflected in the line through ``a`` and ``b``."""
+    d = b - a
+    foot = a + d * (np.dot(p - a, d) / max(np.dot(d, d), 1e-300))
+    return 2 * foot - p
+
+
+def _incident(F, n):
+    """Triangles round each vertex, as a list of index arrays."""
+    order = np.argsort(F.ravel(), kind="stable")
+    counts = np.bincount(F.ravel(), minlength=n)
+    return np.split(order // 3, np.cumsum(counts)[:-1])
+
+
+def _neighbours(F, n):
+    """Each vertex's neighbours along mesh edges, as a list of index arrays."""
+    edges = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    edges = np.unique(np.concatenate([edges, edges[:, ::-1]]), axis=0)
+    counts = np.bincount(edges[:, 0], minlength=n)
+    return np.split(edges[:, 1], np.cumsum(counts)[:-1])
