@@ -20,7 +20,13 @@ choices open:
   round a small touch-up, and a region twice as wide as a large move, to spread its bend over.
 * **Point dragging** picks the vertex nearest each start point, inside or on the outline (a
   facial feature is inside), within ``max(2 h, 3)`` px. A dragged vertex in a joint area frees
-  that whole connected joint area as well, so the joint bends with it as in stage two.
+  its connected joint area as well, so the joint bends with it as in stage two, but only within
+  :data:`JOINT_REACH` times the smaller of a joint width (the joint area's reach round the
+  joints of the vertex's bone, :attr:`Deformer.joint_width_px
+  <toonmotion.deform.deformer.Deformer>`) and the default follow radius along mesh edges. So a
+  figure whose joint areas join up into most of its body (the bundled character's cover 1,118
+  of its 1,517 vertices, its neck joint's reach is 141 px) does not move as a whole under a
+  small drag, a larger drag takes more of the joint along, and nothing farther moves at all.
 * **Sketch curves** (fig. 3.11): ``S0`` and ``Sn`` are the outline vertices nearest the curve's
   first and last points; they must lie on one outline loop and differ. Of the loop's two arcs
   between them, the one lying closer to the curve on average is re-shaped. Each arc vertex keeps
@@ -48,6 +54,8 @@ from toonmotion.geometry.segments import arc_lengths, closest_points_on_segments
 from toonmotion.rig.pose import check_pose
 from toonmotion.shape.mesh import Mesh, unique_edges
 
+# A drag frees the joint area it is in up to this many joint widths away along mesh edges.
+JOINT_REACH = 2.0
 # The follow solve runs once per edit, not per frame, so it iterates further than a pose does.
 _MAX_ITERATIONS = 100
 _TOLERANCE = 1e-6
@@ -110,7 +118,7 @@ def follow(mesh, U, index, targets, *, radius=None, also_free=None, weights=(1.0
         return U.copy()
     move = float(np.hypot(*(targets - U[index]).T).max())
     if radius is None:
-        radius = max(4.0 * mesh.spacing, 2.0 * move)
+        radius = _default_radius(mesh, move)
     elif not (np.isscalar(radius) and np.isfinite(radius) and radius >= 0):
         raise EditError(f"the follow radius must be a finite number of pixels >= 0, got {radius!r}")
     free = _geodesic_near(mesh.F, U, index, float(radius))
@@ -208,7 +216,9 @@ def drag_points(deformer, U, start, end, *, radius=None):
     Returns
     -------
     (n, 2) float
-        New vertices: each dragged vertex exactly at its end point.
+        New vertices: each dragged vertex exactly at its end point; nothing farther than
+        ``radius`` and :data:`JOINT_REACH` joint widths from the dragged vertices (along mesh
+        edges) moves.
     """
     mesh = deformer.character.mesh
     U = _check_vertices(mesh, U)
@@ -227,6 +237,10 @@ def drag_points(deformer, U, start, end, *, radius=None):
         a, b = np.flatnonzero(index == v)[:2]
         raise EditError(f"drags {a} and {b} both start at vertex {v}; drag each vertex once")
     joint = _joint_areas_touched(mesh.F, deformer.free, index)
+    if joint.any():
+        width = float(deformer.joint_width_px[deformer.needles.bone[index]].max())
+        reach = JOINT_REACH * min(width, _default_radius(mesh, float(np.hypot(*(end - U[index]).T).max())))
+        joint &= _geodesic_near(mesh.F, U, index, reach)
     return follow(mesh, U, index, end, radius=radius, also_free=joint, weights=deformer.settings.weights)
 
 
@@ -392,6 +406,11 @@ def _edge_graph(F, n, *, U=None, keep=None):
         E = E[keep[E[:, 0]] & keep[E[:, 1]]]
     w = np.ones(len(E)) if U is None else np.maximum(np.hypot(*(U[E[:, 0]] - U[E[:, 1]]).T), 1e-12)
     return sp.csr_matrix((w, (E[:, 0], E[:, 1])), shape=(n, n))
+
+
+def _default_radius(mesh, move):
+    """The follow radius when none is given: a few triangles, or twice the largest move."""
+    return max(4.0 * mesh.spacing, 2.0 * move)
 
 
 def _geodesic_near(F, U, index, radius):
