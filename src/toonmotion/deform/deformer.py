@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver, SolveResult, joint_area, joint_radii
 from toonmotion.deform.needles import needle_model, stage_one, stretch_maps, triangle_shapes
-from toonmotion.deform.unfold import rings_round, untangle
+from toonmotion.deform.unfold import rings_round, topology, untangle
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.polygon import triangle_areas
@@ -23,6 +23,8 @@ from toonmotion.rig.pose import Pose, check_pose
 # Stage two widens its joint area round triangles left with less than this fraction of their
 # rest area (folded, or crushed into a spike on the way to folding).
 _CRUSHED = 0.2
+# Stage two widens its joint area by square cells this many mesh spacings wide.
+_CELL = 4.0
 # Widened joint-area solvers a Deformer keeps (each a factorisation of a few hundred vertices).
 _UNFOLD_SOLVERS = 8
 
@@ -49,8 +51,9 @@ class DeformSettings:
     unfold : int
         Times stage two may widen its joint area where a triangle is left inverted or crushed
         below a fifth of its rest area (two rings of triangles round each, then solved again from
-        the result); what is still inverted after that is untangled locally
-        (:mod:`toonmotion.deform.unfold`). 0 keeps to one solve and untangles nothing.
+        the result; a frame deformed after another starts from the other's widened area); what is
+        still inverted after that is untangled locally (:mod:`toonmotion.deform.unfold`). 0 keeps
+        to one solve and untangles nothing.
     edge_term : str
         ``"rigid"``: each joint triangle's edges keep their lengths *and* their orientation
         (the edges of a triangle turn together), so triangles do not flip; ``"length"``: the
@@ -165,6 +168,9 @@ class Deformer:
         self._rest_area = float(self._rest_triangle_areas.sum())
         self._F = np.asarray(mesh.F)
         self._unfold_solvers: dict[bytes, JointSolver] = {}
+        self._topology: tuple | None = None  # for untangling, built when first needed
+        cell = np.floor((mesh.V - mesh.V.min(axis=0)) / (_CELL * mesh.spacing)).astype(np.int64)
+        self._cell = cell[:, 0] * (cell[:, 1].max() + 1) + cell[:, 1]
 
     def stage_one(self, pose: Pose) -> NDArray[np.float64]:
         """The needle model alone for ``pose``: ``(n, 2)``."""
@@ -196,27 +202,44 @@ class Deformer:
                                energy=energy, converged=True)
         initial = None if previous is None else U1 + (previous.U - previous.stage_one)
         area = self._rest_area if s.preserve_area else None
-        result = self.solver.solve(U1, initial=initial, max_iterations=s.max_iterations,
-                                   tolerance=s.tolerance, shape=shape, area=area)
-        U, free, iterations, converged = result.U, self.free, result.iterations, result.converged
-        for _ in range(s.unfold):
-            folded = triangle_areas(U, self._F) <= _CRUSHED * self._rest_triangle_areas
-            if not folded.any():
-                break
-            free = free | rings_round(self._F, folded, len(free))
+        # An animation keeps the joint area the previous frame widened: it folds in the same
+        # places frame after frame, and one widened solve costs less than a plain one and another.
+        free = previous.free if previous is not None and previous.free is not None and s.unfold \
+            else self.free
+        iterations = 0
+        for round_ in range(s.unfold + 1):
             solver = self._solver_for(free)
-            again = solver.solve(U1, initial=U, max_iterations=s.max_iterations, tolerance=s.tolerance,
-                                 shape=self._shape_for(solver, pose), area=area)
-            U, iterations, converged = again.U, iterations + again.iterations, again.converged
+            result = solver.solve(U1, initial=initial, max_iterations=s.max_iterations, tolerance=s.tolerance,
+                                  shape=shape if solver is self.solver else self._shape_for(solver, pose),
+                                  area=area)
+            U, iterations, converged = result.U, iterations + result.iterations, result.converged
+            crushed = triangle_areas(U, self._F) <= _CRUSHED * self._rest_triangle_areas
+            wider = free | self._cells_round(crushed)
+            if round_ == s.unfold or not (wider != free).any():
+                break
+            free, initial = wider, U
         if s.unfold and (triangle_areas(U, self._F) <= 0).any():
-            U = untangle(U, self._F, free)
-        energy = result.energy if U is result.U else self.solver.energy(U, shape=shape)
-        return Deformation(U=U, stage_one=U1, iterations=iterations, energy_start=result.energy_start,
+            if self._topology is None:
+                self._topology = topology(self._F, len(U))
+            U = untangle(U, self._F, free, self._topology)
+        start = self.solver.energy(U1, shape=shape)
+        energy = self.solver.energy(U, shape=shape)
+        return Deformation(U=U, stage_one=U1, iterations=iterations, energy_start=start,
                            energy=energy, converged=converged, free=free)
 
+    def _cells_round(self, crushed):
+        """Every vertex in a cell of :data:`_CELL` mesh spacings that holds a vertex of a
+        ``crushed`` triangle (or of the two rings of triangles round it): widening by whole cells
+        changes the joint area in a few coarse steps, so an animation soon stops widening it and
+        reuses one factorisation."""
+        near = rings_round(self._F, crushed, len(self.free))
+        return np.isin(self._cell, np.unique(self._cell[near]))
+
     def _solver_for(self, free):
-        """A JointSolver for a widened joint area; the last few are kept, since an animation
-        folds in the same places frame after frame."""
+        """A JointSolver for the joint area ``free``, widened or not; the last few widened ones
+        are kept."""
+        if not (free != self.free).any():
+            return self.solver
         key = np.packbits(free).tobytes()
         if key not in self._unfold_solvers:
             if len(self._unfold_solvers) >= _UNFOLD_SOLVERS:
@@ -229,3 +252,4 @@ class Deformer:
         maps = stretch_maps(self.needles, pose.positions, preserve_area=self.settings.preserve_area)
         return triangle_shapes(maps, self.needles.bone, solver.triangles,
                                keep_area=self.settings.preserve_area)
+

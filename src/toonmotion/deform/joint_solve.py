@@ -24,10 +24,10 @@ where they were, and the band between them must widen: the needle model alone gr
 whose torso is stretched 1.5x by 6-16%. A solve may therefore be given the whole mesh's *area*
 to keep, a hard constraint: after each iteration's solve the free vertices move by the
 smallest correction, in the metric of the normal matrix, that brings the linearised total signed
-area to the target (one more triangular solve per frame, for ``N^-1 g`` with ``g`` the area's
-gradient, which lives on the free outline vertices only; the gradient is updated every
-iteration). The area lost or gained is spread over the joint areas' outline as smoothly as the
-energy allows. The matrix
+area to the target. The correction is along ``N^-1 g``, with ``g`` the area's gradient (a fixed
+Hermitian form times the positions, nonzero on free outline vertices only) at the last iterate,
+solved with the step as a second column. The area lost or gained is spread over the joint areas'
+outline as smoothly as the energy allows. The matrix
 of that linear system depends on the rest mesh only, so its normal matrix is factorised once
 (:class:`JointSolver`), and each iteration is a sparse product and two triangular solves.
 Each iteration fixes the edge directions at their best values for the current positions and
@@ -197,11 +197,10 @@ class JointSolver:
         free = np.asarray(free, dtype=bool)
         self.free = np.flatnonzero(free)
         self.fixed = np.flatnonzero(~free)
-        # Triangles that touch a free vertex: the only ones whose area a solve changes.
+        # The area of the triangles that touch a free vertex (the only ones a solve changes) is
+        # the Hermitian form area(z) = Re(z^H M z) / 2, its gradient M z.
         self._all_F = mesh.F
-        self._moving = np.asarray(mesh.F)[free[mesh.F].any(axis=1)]
-        self._position = np.full(len(free), -1)
-        self._position[self.free] = np.arange(len(self.free))
+        self._area_form = _area_form(np.asarray(mesh.F)[free[mesh.F].any(axis=1)], len(free))
         rest = as_complex(mesh.V)
         A1 = _laplacian_rows(mesh, rest, free)
         A2 = _mean_value_rows(mesh, free)
@@ -335,17 +334,8 @@ class JointSolver:
     def _moving_area(self, z):
         """The moving triangles' total signed area at ``z`` and its gradient over the free
         vertices, ``(m,)`` complex: ``d area = Re(conj(g) . dz)``."""
-        c = z[self._moving]
-        nxt, prv = np.roll(c, -1, axis=1), np.roll(c, 1, axis=1)
-        # triangle_areas' sign: -1/2 cross(b - a, c - a), positive counter-clockwise on screen.
-        total = -0.5 * float(np.sum((np.conj(c[:, 1] - c[:, 0]) * (c[:, 2] - c[:, 0])).imag))
-        corner = 0.5j * (nxt - prv)
-        where = self._position[self._moving].ravel()
-        keep = where >= 0
-        m = len(self.free)
-        gradient = (np.bincount(where[keep], corner.ravel().real[keep], minlength=m)
-                    + 1j * np.bincount(where[keep], corner.ravel().imag[keep], minlength=m))
-        return total, gradient
+        Mz = self._area_form @ z
+        return 0.5 * float(np.vdot(z, Mz).real), Mz[self.free]
 
     def _local(self, z):
         """The local step at positions ``z``: every E3 row's best target edge vector, and the
@@ -374,6 +364,17 @@ class JointSolver:
         targets = rotation[:, None] * self._rest
         r = e - targets
         return targets.ravel(), float(energy + self.weights[2] * np.vdot(r, r).real)
+
+
+def _area_form(F, n):
+    """``M``, ``(n, n)`` Hermitian, with ``Re(z^H M z) / 2`` the total signed area of triangles
+    ``F`` (as :func:`~toonmotion.geometry.polygon.triangle_areas`, positive counter-clockwise
+    on screen): each corner's gradient is ``i/2 (next corner - previous corner)``."""
+    F = np.asarray(F)
+    rows = np.concatenate([F.ravel(), F.ravel()])
+    cols = np.concatenate([np.roll(F, -1, axis=1).ravel(), np.roll(F, 1, axis=1).ravel()])
+    vals = np.concatenate([np.full(F.size, 0.5j), np.full(F.size, -0.5j)])
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
 
 
 def _laplacian_rows(mesh, rest, free):

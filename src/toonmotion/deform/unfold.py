@@ -38,7 +38,15 @@ def rings_round(F: NDArray[np.int_], folded: NDArray[np.bool_], n: int, rings: i
     return near
 
 
-def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bool_]
+def topology(F: NDArray[np.int_], n: int) -> tuple[list[NDArray[np.intp]], list[NDArray[np.int_]]]:
+    """``(incident, neighbours)``: each vertex's triangles and its neighbours along mesh edges,
+    as lists of index arrays, for :func:`untangle` (build once per mesh)."""
+    F = np.asarray(F)
+    return _incident(F, n), _neighbours(F, n)
+
+
+def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bool_],
+             mesh_topology: tuple[list[NDArray[np.intp]], list[NDArray[np.int_]]] | None = None
              ) -> NDArray[np.float64]:
     """``U`` with movable corners of inverted triangles moved so fewer (usually none) are inverted.
 
@@ -50,6 +58,8 @@ def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bo
         Triangles, counter-clockwise on screen at rest (positive :func:`triangle_areas`).
     movable : (n,) bool
         Vertices that may move (stage two's free vertices).
+    mesh_topology : tuple, optional
+        :func:`topology` of ``F``, when already built.
 
     Returns
     -------
@@ -68,8 +78,7 @@ def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bo
     """
     U = np.array(U, dtype=float)
     F = np.asarray(F)
-    incident = _incident(F, len(U))
-    neighbours = _neighbours(F, len(U))
+    incident, neighbours = mesh_topology if mesh_topology is not None else topology(F, len(U))
     for _ in range(_PASSES):
         folded = np.flatnonzero(triangle_areas(U, F) <= 0)
         if len(folded) == 0:
