@@ -2,6 +2,7 @@
 speed; JSON lines.
 
     python benchmarks/deform.py [DRAWING_DIR ...] [--decomposition straight|geodesic]
+                                [--skinning one-bone|weights ...]
 
 Each drawing folder (texture.png, mask.png, char_cfg.yaml; default: every drawing in
 ../shared/data/drawings) is rigged to about 1,500 vertices. Every pose is built from the
@@ -11,9 +12,10 @@ runs to a leaf; *above the root* is above it in the image (drawings stand uprigh
 Runs on one core (thread pools pinned before NumPy loads). Needs the benchmark extra:
 pip install -e '.[bench]'.
 
-Keys, one line per drawing:
+Keys, one line per drawing and binding (--skinning one-bone weights, both by default):
   drawing, vertices, free        mesh size; vertices stage two moves (the joint areas)
   decomposition, fallback        the rule; vertices without an inside path to their bone
+  skinning                       one-bone (the thesis) or weights (blended needles, 7.2 item 3)
   precompute_ms                  building the Deformer (needle model, joint area, factorisation)
   frame_ms                       median time per frame, stage one + stage two, each frame's solve
                                  warm-started from the previous frame; the sequence is rest,
@@ -52,7 +54,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from toonmotion.animate.timeline import interpolate_pose  # noqa: E402
-from toonmotion.deform.deformer import Deformer  # noqa: E402
+from toonmotion.deform.deformer import Deformer, DeformSettings  # noqa: E402
 from toonmotion.deform.depth import draw_order  # noqa: E402
 from toonmotion.geometry.polygon import triangle_areas  # noqa: E402
 from toonmotion.io.drawing_folder import rig_drawing_folder  # noqa: E402
@@ -83,14 +85,14 @@ def handles(mesh, skeleton):
     return np.unique(nearest)
 
 
-def bench_drawing(folder, decomposition):
+def bench_drawing(folder, decomposition, skinning):
     import igl  # the benchmark extra
 
     character = rig_drawing_folder(folder, settings=RigSettings(decomposition=decomposition))
     skeleton, mesh = character.skeleton, character.mesh
 
     start = time.perf_counter()
-    deformer = Deformer(character)
+    deformer = Deformer(character, DeformSettings(skinning=skinning))
     precompute_ms = (time.perf_counter() - start) * 1e3
 
     keys = key_poses(skeleton)
@@ -137,6 +139,7 @@ def bench_drawing(folder, decomposition):
     return {
         "drawing": folder.name,
         "decomposition": decomposition,
+        "skinning": skinning,
         "vertices": len(mesh.V),
         "free": int(deformer.free.sum()),
         "fallback": int(character.binding.fallback.sum()),
@@ -177,6 +180,9 @@ def main(argv=None):
     parser.add_argument("drawings", nargs="*", type=Path, help="drawing folders (default: the shared ones)")
     parser.add_argument("--decomposition", choices=("geodesic", "straight"), default="geodesic",
                         help="the decomposition rule to rig with (default: geodesic, toonmotion's default)")
+    parser.add_argument("--skinning", choices=("one-bone", "weights"), nargs="+",
+                        default=["one-bone", "weights"],
+                        help="the bindings to measure, a line each (default: both)")
     args = parser.parse_args(argv)
     try:
         import cv2
@@ -188,7 +194,8 @@ def main(argv=None):
     if not folders:
         sys.exit(f"no drawings found (looked in {DEFAULT_DIR})")
     for folder in folders:
-        print(json.dumps(bench_drawing(folder, args.decomposition)), flush=True)
+        for skinning in args.skinning:
+            print(json.dumps(bench_drawing(folder, args.decomposition, skinning)), flush=True)
     print(json.dumps(bench_render()), flush=True)
 
 

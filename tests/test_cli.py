@@ -373,6 +373,20 @@ def test_pose_writes_a_frame_of_the_asked_size(posable, tmp_path, capsys):
     assert "stage two" in capsys.readouterr().out
 
 
+def test_pose_with_blended_skinning_renders_another_frame(posable, tmp_path, capsys):
+    args = [str(posable / "hero"), str(posable / "pose.json"), "--size", "200x300", "--background", "white"]
+    assert _run("pose", *args, "-o", str(tmp_path / "one.png")) == 0
+    assert _run("pose", *args, "-o", str(tmp_path / "blended.png"), "--skinning", "weights") == 0
+    one = np.asarray(Image.open(tmp_path / "one.png"), dtype=int)
+    blended = np.asarray(Image.open(tmp_path / "blended.png"), dtype=int)
+    assert one.shape == blended.shape and (np.abs(one - blended).max(axis=2) > 48).mean() > 1e-3
+    capsys.readouterr()
+    assert _run("pose", *args, "-o", str(tmp_path / "x.png"), "--skinning", "linear") == 2
+    err = capsys.readouterr().err
+    assert "skinning must be one of one-bone, weights" in err and "Traceback" not in err
+    assert not (tmp_path / "x.png").exists()
+
+
 def test_sketch_writes_the_pose_its_strokes_draw(posable, tmp_path, capsys):
     from toonmotion.io.pose_json import load_pose
     from toonmotion.io.sketch_json import save_sketch

@@ -37,6 +37,7 @@ def pose(
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",
     joint_width: options.JointWidth = 1.5,
+    skinning: options.Skinning = "one-bone",
     accel: Annotated[str | None, typer.Option(
         "--accel", help="Cartoon filter: acceleration DX,DY at the root, pixels.")] = None,
     fixed: Annotated[str | None, typer.Option(
@@ -61,7 +62,7 @@ def pose(
         character, load_pose(pose_file, character.skeleton), edits=edits,
         accel=None if accel is None else options.point(accel, "--accel"),
         fixed=options.names(fixed) if fixed is not None else (), root=root,
-        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width))
+        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning))
     picture = api.render_pose(character, frame, size=options.size(size),
                               background=options.colour(background), overlays=options.overlays(overlay))
     save_png(output, picture)
@@ -128,6 +129,7 @@ def animate(
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",
     joint_width: options.JointWidth = 1.5,
+    skinning: options.Skinning = "one-bone",
 ) -> None:
     """Animate a rigged drawing through key-frames or a motion, to GIF, MP4 or PNGs.
 
@@ -139,7 +141,7 @@ def animate(
             options.suffix(path, ".json", "a motion file")
     character = api.load_project(project)
     exaggeration = options.filter_settings(exaggerate, sigma, shift)
-    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width)
+    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning)
     source: Motion | Timeline
     if is_motion_file(keys_file):
         if ease is not None:

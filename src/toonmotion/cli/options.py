@@ -27,6 +27,9 @@ NoArea = Annotated[bool, typer.Option(
     "area is not held.")]
 StageOne = Annotated[bool, typer.Option("--stage-one", help="Needle model only, no joint-area solve.")]
 Weights = Annotated[str, typer.Option("--weights", help="Stage-two weights w1,w2,w3.")]
+Skinning = Annotated[str, typer.Option(
+    "--skinning", help="one-bone (each part follows its own bone, the thesis) or weights (a few bones' "
+    "needles blended by smooth heat-diffusion weights: joints bend round).")]
 JointWidth = Annotated[
     float, typer.Option("--joint-width", help="Joint-area size, in limb half-thicknesses.", min=0)
 ]
@@ -51,12 +54,14 @@ AnimationBackground = Annotated[
 Report = Callable[[str, int, int], None]
 
 
-def deform_settings(no_area: bool, stage_one_only: bool, weights: str, joint_width: float) -> DeformSettings:
+def deform_settings(no_area: bool, stage_one_only: bool, weights: str, joint_width: float,
+                    skinning: str = "one-bone") -> DeformSettings:
     return DeformSettings(
         preserve_area=not no_area,
         stage_two=not stage_one_only,
         weights=numbers(weights, 3, "--weights"),
         joint_width=joint_width,
+        skinning=skinning,
     )
 
 

@@ -13,12 +13,15 @@ from numpy.typing import NDArray
 
 from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver, SolveResult, joint_area, joint_radii
 from toonmotion.deform.needles import needle_model, stage_one, stretch_maps, triangle_shapes
+from toonmotion.deform.skinning import heat_weights, skinned_needles, skinned_stage_one
 from toonmotion.deform.unfold import rings_round, topology, untangle
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.polygon import triangle_areas
 from toonmotion.rig.character import Character
 from toonmotion.rig.pose import Pose, check_pose
+
+SKINNINGS = ("one-bone", "weights")
 
 # Stage two widens its joint area round triangles left with less than this fraction of their
 # rest area (folded, or crushed into a spike on the way to folding).
@@ -48,6 +51,10 @@ class DeformSettings:
         Stop iterating when an iteration lowers the energy by less than this fraction.
     stage_two : bool
         Run stage two at all (off shows the needle model alone, as in fig. 3.9e).
+    skinning : str
+        ``"one-bone"``: every vertex follows its own bone's needle (the thesis); ``"weights"``:
+        it follows a few bones' needles blended by heat-diffusion weights
+        (:mod:`toonmotion.deform.skinning`, the thesis' future work 7.2 item 3).
     unfold : int
         Times stage two may widen its joint area where a triangle is left inverted or crushed
         below a fifth of its rest area (two rings of triangles round each, then solved again from
@@ -70,6 +77,7 @@ class DeformSettings:
     stage_two: bool = True
     edge_term: str = "rigid"
     unfold: int = 3
+    skinning: str = "one-bone"
 
     def __post_init__(self) -> None:
         for name in ("preserve_area", "stage_two"):
@@ -95,6 +103,8 @@ class DeformSettings:
             isinstance(self.max_iterations, int) and self.max_iterations >= 1
         ):
             raise SettingsError(f"max_iterations must be a whole number >= 1, got {self.max_iterations!r}")
+        if self.skinning not in SKINNINGS:
+            raise SettingsError(f"skinning must be one of {', '.join(SKINNINGS)}, got {self.skinning!r}")
         if isinstance(self.unfold, bool) or not (isinstance(self.unfold, int) and self.unfold >= 0):
             raise SettingsError(f"unfold must be a whole number >= 0, got {self.unfold!r}")
         if not (isinstance(self.tolerance, (int, float)) and np.isfinite(self.tolerance)
@@ -142,6 +152,8 @@ class Deformer:
     character : Character
     settings : DeformSettings
     needles : NeedleModel
+    skin : SkinnedNeedles or None
+        The blended needles with ``skinning="weights"``, else None.
     free : (n,) bool
         The joint-area vertices stage two moves.
     joint_width_px : (b,) float
@@ -156,6 +168,8 @@ class Deformer:
         self.settings = settings = settings or DeformSettings()
         mesh = character.mesh
         self.needles = needle_model(mesh.V, character.skeleton, character.binding.bone)
+        self.skin = None if settings.skinning == "one-bone" else skinned_needles(
+            mesh.V, character.skeleton, heat_weights(mesh, character.skeleton, character.binding.bone))
         self.free = joint_area(mesh, character.skeleton, character.binding, character.mask,
                                width=settings.joint_width)
         radius = joint_radii(character.skeleton, character.mask, width=settings.joint_width,
@@ -175,6 +189,8 @@ class Deformer:
     def stage_one(self, pose: Pose) -> NDArray[np.float64]:
         """The needle model alone for ``pose``: ``(n, 2)``."""
         check_pose(self.character.skeleton, pose)
+        if self.skin is not None:
+            return skinned_stage_one(self.skin, pose.positions, preserve_area=self.settings.preserve_area)
         return stage_one(self.needles, pose.positions, preserve_area=self.settings.preserve_area)
 
     def shape(self, pose: Pose) -> NDArray[np.complex128]:
