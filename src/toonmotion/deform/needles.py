@@ -79,6 +79,28 @@ class NeedleModel:
 
 def needle_model(V: NDArray[np.float64], skeleton: Skeleton, bone: NDArray[np.integer]) -> NeedleModel:
     """Needles of vertices ``V`` (``(n, 2)``) attached to bones ``bone`` (``(n,)``) of ``skeleton``."""
+    t, s, length, u, rigid, rel = needle_coordinates(V[:, None], skeleton, np.asarray(bone)[:, None])
+    return NeedleModel(
+        bones=skeleton.bones,
+        bone=np.asarray(bone),
+        t=t[:, 0],
+        s=s[:, 0],
+        rest_length=length,
+        rest_direction=u,
+        rigid=rigid,
+        offset=np.where(rigid[bone][:, None], rel[:, 0], 0.0),
+    )
+
+
+def needle_coordinates(points: NDArray[np.float64], skeleton: Skeleton, bone: NDArray[np.integer]):
+    """Points in their bones' rest frames: ``(t, s, rest_length, rest_direction, rigid, offset)``.
+
+    ``points`` ``(..., 2)`` and ``bone`` ``(...)`` (broadcast together) give ``t`` (the fraction of
+    the way along the bone) and ``s`` (the signed distance across it, along ``(-u_y, u_x)``), both
+    0 on rigid bones, and ``offset``, the point less the bone's start joint; the per-bone
+    ``rest_length`` ``(b,)``, unit ``rest_direction`` ``(b, 2)`` (``(1, 0)`` for rigid bones) and
+    ``rigid`` ``(b,)`` come with them.
+    """
     bones = skeleton.bones
     A = skeleton.positions[bones[:, 0]]
     d = skeleton.positions[bones[:, 1]] - A
@@ -86,22 +108,25 @@ def needle_model(V: NDArray[np.float64], skeleton: Skeleton, bone: NDArray[np.in
     rigid = length <= MIN_BONE_LENGTH
     u = d / np.where(rigid, 1.0, length)[:, None]
     u[rigid] = (1.0, 0.0)
-    rel = V - A[bone]
-    along = np.sum(rel * u[bone], axis=1)
-    across = rel[:, 1] * u[bone, 0] - rel[:, 0] * u[bone, 1]  # component along n = (-u_y, u_x)
-    scale = np.where(rigid, 1.0, length)[bone]
-    t = np.where(rigid[bone], 0.0, along / scale)
-    s = np.where(rigid[bone], 0.0, across)
-    return NeedleModel(
-        bones=bones,
-        bone=np.asarray(bone),
-        t=t,
-        s=s,
-        rest_length=length,
-        rest_direction=u,
-        rigid=rigid,
-        offset=np.where(rigid[bone][:, None], rel, 0.0),
-    )
+    rel = points - A[bone]
+    along = np.sum(rel * u[bone], axis=-1)
+    across = rel[..., 1] * u[bone][..., 0] - rel[..., 0] * u[bone][..., 1]
+    t = np.where(rigid[bone], 0.0, along / np.where(rigid, 1.0, length)[bone])
+    return t, np.where(rigid[bone], 0.0, across), length, u, rigid, rel
+
+
+def posed_frames(bones: NDArray[np.int64], rest_length: NDArray[np.float64], positions: NDArray[np.float64],
+                 *, preserve_area: bool = True) -> tuple[NDArray[np.float64], ...]:
+    """Each posed bone's start joint, vector to its end and needle direction, ``(b, 2)`` each; the
+    needle direction is the unit normal, shortened by the reciprocal of the bone's stretch
+    (rest / posed length) with area preservation (fig. 3.8)."""
+    A = positions[bones[:, 0]]
+    d = positions[bones[:, 1]] - A
+    length = np.hypot(d[:, 0], d[:, 1])
+    normal = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.maximum(length, 1e-300)[:, None]
+    if preserve_area:
+        normal *= (rest_length / np.maximum(length, 1e-300))[:, None]
+    return A, d, normal
 
 
 def stage_one(model: NeedleModel, positions: NDArray[np.float64], *, preserve_area: bool = True
@@ -113,13 +138,7 @@ def stage_one(model: NeedleModel, positions: NDArray[np.float64], *, preserve_ar
     (n, 2) float
         ``U``: each vertex at the end of its bone-carried needle.
     """
-    A = positions[model.bones[:, 0]]
-    d = positions[model.bones[:, 1]] - A
-    length = np.hypot(d[:, 0], d[:, 1])
-    normal = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.maximum(length, 1e-300)[:, None]
-    if preserve_area:
-        # Needles shorten by the reciprocal of the bone's stretch: rest / posed length.
-        normal *= (model.rest_length / np.maximum(length, 1e-300))[:, None]
+    A, d, normal = posed_frames(model.bones, model.rest_length, positions, preserve_area=preserve_area)
     b = model.bone
     U = A[b] + model.t[:, None] * d[b] + model.s[:, None] * normal[b]
     if model.rigid.any():

@@ -28,6 +28,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 
+from toonmotion.deform.needles import needle_coordinates, posed_frames
 from toonmotion.errors import MeshError
 from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.segments import closest_points_on_segments
@@ -130,17 +131,9 @@ def skinned_needles(V: NDArray[np.float64], skeleton: Skeleton, weights: NDArray
     w = np.take_along_axis(weights, order, axis=1)
     w = np.where(w >= SMALLEST, w, 0.0)
     w /= w.sum(axis=1, keepdims=True)
-    bones = skeleton.bones
-    A = skeleton.positions[bones[:, 0]]
-    d = skeleton.positions[bones[:, 1]] - A
-    length = np.linalg.norm(d, axis=1)
-    rigid = length <= MIN_BONE_LENGTH
-    u = d / np.where(rigid, 1.0, length)[:, None]
-    rel = V[:, None, :] - A[order]
-    along = np.einsum("nkj,nkj->nk", rel, u[order])
-    across = rel[..., 1] * u[order][..., 0] - rel[..., 0] * u[order][..., 1]
-    t = along / np.where(rigid, 1.0, length)[order]
-    return SkinnedNeedles(bones=bones, bone=order, weight=w, t=t, s=across, rest_length=length, rigid=rigid)
+    t, across, length, _, rigid, _ = needle_coordinates(V[:, None, :], skeleton, order)
+    return SkinnedNeedles(bones=skeleton.bones, bone=order, weight=w, t=t, s=across, rest_length=length,
+                          rigid=rigid)
 
 
 def skinned_stage_one(model: SkinnedNeedles, positions: NDArray[np.float64], *, preserve_area: bool = True
@@ -148,12 +141,7 @@ def skinned_stage_one(model: SkinnedNeedles, positions: NDArray[np.float64], *, 
     """Stage one with blended needles: each vertex at the weighted mean of where its bones'
     needles put it, ``(n, 2)`` (needles shortened by the reciprocal stretch with area
     preservation, as in :func:`~toonmotion.deform.needles.stage_one`)."""
-    A = positions[model.bones[:, 0]]
-    d = positions[model.bones[:, 1]] - A
-    length = np.hypot(d[:, 0], d[:, 1])
-    normal = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.maximum(length, 1e-300)[:, None]
-    if preserve_area:
-        normal *= (model.rest_length / np.maximum(length, 1e-300))[:, None]
+    A, d, normal = posed_frames(model.bones, model.rest_length, positions, preserve_area=preserve_area)
     b = model.bone
     placed = A[b] + model.t[..., None] * d[b] + model.s[..., None] * normal[b]
     return np.einsum("nk,nkj->nj", model.weight, placed)
