@@ -170,10 +170,10 @@ class Deformer:
         self.needles = needle_model(mesh.V, character.skeleton, character.binding.bone)
         self.skin = None if settings.skinning == "one-bone" else skinned_needles(
             mesh.V, character.skeleton, heat_weights(mesh, character.skeleton, character.binding.bone))
-        self.free = joint_area(mesh, character.skeleton, character.binding, character.mask,
-                               width=settings.joint_width)
         radius = joint_radii(character.skeleton, character.mask, width=settings.joint_width,
                              floor=mesh.spacing)
+        self.free = joint_area(mesh, character.skeleton, character.binding, character.mask,
+                               width=settings.joint_width, radius=radius)
         ends = radius[character.skeleton.bones]
         self.joint_width_px = np.maximum(ends.max(axis=1), mesh.spacing)
         self.solver = JointSolver(mesh, self.free, weights=settings.weights,
@@ -197,7 +197,8 @@ class Deformer:
         """The shape stage two asks of each joint triangle in ``pose``: its bones' stretch
         (:func:`~toonmotion.deform.needles.triangle_shapes`), for :meth:`JointSolver.solve`."""
         check_pose(self.character.skeleton, pose)
-        return self._shape_for(self.solver, pose)
+        maps = stretch_maps(self.needles, pose.positions, preserve_area=self.settings.preserve_area)
+        return self._shape_for(self.solver, maps)
 
     def deform(self, pose: Pose, *, previous: Deformation | None = None) -> Deformation:
         """Deform the character into ``pose``.
@@ -211,7 +212,8 @@ class Deformer:
         """
         U1 = self.stage_one(pose)
         s = self.settings
-        shape = self.shape(pose)
+        maps = stretch_maps(self.needles, pose.positions, preserve_area=s.preserve_area)
+        shape = self._shape_for(self.solver, maps)
         if not s.stage_two:
             energy = self.solver.energy(U1, shape=shape)
             return Deformation(U=U1, stage_one=U1, iterations=0, energy_start=energy,
@@ -226,20 +228,24 @@ class Deformer:
         for round_ in range(s.unfold + 1):
             solver = self._solver_for(free)
             result = solver.solve(U1, initial=initial, max_iterations=s.max_iterations, tolerance=s.tolerance,
-                                  shape=shape if solver is self.solver else self._shape_for(solver, pose),
+                                  shape=shape if solver is self.solver else self._shape_for(solver, maps),
                                   area=area)
+            if round_ == 0:
+                start = result.energy_start if solver is self.solver else self.solver.energy(U1, shape=shape)
             U, iterations, converged = result.U, iterations + result.iterations, result.converged
-            crushed = triangle_areas(U, self._F) <= _CRUSHED * self._rest_triangle_areas
-            wider = free | self._cells_round(crushed)
+            areas = triangle_areas(U, self._F)
+            wider = free | self._cells_round(areas <= _CRUSHED * self._rest_triangle_areas)
             if round_ == s.unfold or not (wider != free).any():
                 break
             free, initial = wider, U
-        if s.unfold and (triangle_areas(U, self._F) <= 0).any():
+        if s.unfold and (areas <= 0).any():
             if self._topology is None:
                 self._topology = topology(self._F, len(U))
             U = untangle(U, self._F, free, self._topology)
-        start = self.solver.energy(U1, shape=shape)
-        energy = self.solver.energy(U, shape=shape)
+        # Energies are eq. 3.8 over the deformer's own joint area, whichever solve ran (the start:
+        # the plain solve's, warm or not, or stage one's when the first solve was a widened one).
+        plain = solver is self.solver and U is result.U
+        energy = result.energy if plain else self.solver.energy(U, shape=shape)
         return Deformation(U=U, stage_one=U1, iterations=iterations, energy_start=start,
                            energy=energy, converged=converged, free=free)
 
@@ -264,8 +270,7 @@ class Deformer:
                                                     edge_term=self.settings.edge_term)
         return self._unfold_solvers[key]
 
-    def _shape_for(self, solver, pose):
-        maps = stretch_maps(self.needles, pose.positions, preserve_area=self.settings.preserve_area)
+    def _shape_for(self, solver, maps):
+        """Each of ``solver``'s triangles' shape from the bones' stretch ``maps``."""
         return triangle_shapes(maps, self.needles.bone, solver.triangles,
                                keep_area=self.settings.preserve_area)
-

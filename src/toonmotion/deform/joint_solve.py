@@ -110,7 +110,8 @@ class SolveResult:
 
 
 def joint_area(
-    mesh: Mesh, skeleton: Skeleton, binding: Binding, mask: NDArray[np.bool_], *, width: float = 1.5
+    mesh: Mesh, skeleton: Skeleton, binding: Binding, mask: NDArray[np.bool_], *, width: float = 1.5,
+    radius: NDArray[np.float64] | None = None,
 ) -> NDArray[np.bool_]:
     """Vertices that stage two moves: the joint areas, ``(n,) bool``.
 
@@ -119,7 +120,8 @@ def joint_area(
     inside of the bend by about the limb's half-thickness, and a one-triangle band cannot
     unfold that. So around every joint where two or more bones meet we also free the vertices
     of those bones within ``width`` times the thinner bone's half-thickness (the figure's
-    distance to its outline along the bone's middle). ``width=0`` gives the thesis' band alone.
+    distance to its outline along the bone's middle; :func:`joint_radii`, or ``radius`` when
+    the caller has them already). ``width=0`` gives the thesis' band alone.
     The default, 1.5, is also :class:`~toonmotion.deform.deformer.DeformSettings`'s
     ``joint_width``, which :class:`~toonmotion.deform.deformer.Deformer` passes.
     """
@@ -128,16 +130,13 @@ def joint_area(
     free = binding.joint_area.copy()
     if width == 0 or len(mesh.V) == 0:
         return free
-    bones = skeleton.bones
-    radius = joint_radii(skeleton, mask, width=width, floor=mesh.spacing)
-    usable = skeleton.bone_lengths > MIN_BONE_LENGTH
-    for j, joint in enumerate(skeleton.positions):
-        if radius[j] == 0:
-            continue
-        here = np.flatnonzero(np.hypot(*(skeleton.positions - joint).T) <= MIN_BONE_LENGTH)
-        meeting = np.flatnonzero(usable & (np.isin(bones[:, 0], here) | np.isin(bones[:, 1], here)))
-        near = np.hypot(mesh.V[:, 0] - joint[0], mesh.V[:, 1] - joint[1]) < radius[j]
-        free |= near & np.isin(binding.bone, meeting)
+    if radius is None:
+        radius = joint_radii(skeleton, mask, width=width, floor=mesh.spacing)
+    for j, meeting in enumerate(_meeting_bones(skeleton)):
+        if radius[j] > 0:
+            joint = skeleton.positions[j]
+            near = np.hypot(mesh.V[:, 0] - joint[0], mesh.V[:, 1] - joint[1]) < radius[j]
+            free |= near & np.isin(binding.bone, meeting)
     return free
 
 
@@ -145,17 +144,22 @@ def joint_radii(skeleton: Skeleton, mask: NDArray[np.bool_], *, width: float, fl
                 ) -> NDArray[np.float64]:
     """How far round each joint :func:`joint_area` frees vertices, ``(j,)`` pixels: ``width``
     times the thinnest half-thickness of the bones meeting there (each at least ``floor``), 0
-    where fewer than two bones meet. Joints at one place (AD's root and hip) count as one."""
+    where fewer than two bones meet."""
+    thickness = bone_half_thickness(skeleton, mask, floor=floor)
+    return np.array([width * thickness[meeting].min() if len(meeting) >= 2 else 0.0
+                     for meeting in _meeting_bones(skeleton)])
+
+
+def _meeting_bones(skeleton):
+    """The bones of length that meet at each joint; joints at one place (AD's root and hip)
+    count as one."""
     bones = skeleton.bones
     usable = skeleton.bone_lengths > MIN_BONE_LENGTH
-    thickness = bone_half_thickness(skeleton, mask, floor=floor)
-    radius = np.zeros(len(skeleton))
-    for j, joint in enumerate(skeleton.positions):
+    out = []
+    for joint in skeleton.positions:
         here = np.flatnonzero(np.hypot(*(skeleton.positions - joint).T) <= MIN_BONE_LENGTH)
-        meeting = np.flatnonzero(usable & (np.isin(bones[:, 0], here) | np.isin(bones[:, 1], here)))
-        if len(meeting) >= 2:
-            radius[j] = width * thickness[meeting].min()
-    return radius
+        out.append(np.flatnonzero(usable & (np.isin(bones[:, 0], here) | np.isin(bones[:, 1], here))))
+    return out
 
 
 class JointSolver:

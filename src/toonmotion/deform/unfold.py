@@ -125,9 +125,10 @@ def _tutte_patch(U, F, t, movable, incident, neighbours):
     folded[t] = True
     for rings in range(1, _PATCH_RINGS + 1):
         patch = rings_round(F, folded, len(U), rings)
-        inside = patch[F].all(axis=1)  # the patch's triangles
-        # Inner vertices: every triangle round them is the patch's; the rest of it is its edge.
-        inner = np.flatnonzero(patch & movable & np.array([inside[incident[v]].all() for v in range(len(U))]))
+        # Inner vertices: no triangle outside the patch touches them; the rest of it is its edge.
+        edge = np.zeros(len(U), dtype=bool)
+        edge[F[~patch[F].all(axis=1)].ravel()] = True
+        inner = np.flatnonzero(patch & movable & ~edge)
         if len(inner) == 0:
             continue
         where = np.full(len(U), -1)
