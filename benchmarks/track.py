@@ -1,17 +1,21 @@
 """Joint tracking on rendered motion capture, against OpenCV's trackers; JSON lines.
 
     python benchmarks/track.py [CLIP.bvh ...] [--frames N] [--trackers toonmotion,MIL,CSRT,KCF]
+                               [--style textured|flat ...] [--twos]
 
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
 usual naming conventions (CMU, FAIR, Mixamo, Rokoko), projected orthographically from the front,
 fitted into 640x480, resampled to about 30 fps (a leading T-pose frame the motion jumps away
-from is dropped), and rendered as a textured limb figure over a textured background, drawn far
-to near so limbs cross and hide each other (``toonmotion.testing.mocap_tracking``, which also
-scores). Every tracker starts from the true frame-1 rectangles (a square of the joint disc's
-diameter, ~30 px) and runs on one core.
+from is dropped), and rendered as a limb figure drawn far to near so limbs cross and hide each
+other (``toonmotion.testing.mocap_tracking``, which also scores): ``--style textured`` (the
+default) a textured figure over a textured background, ``--style flat`` a cel cartoon, flat
+colours from a small palette with dark outlines over a plain background. ``--twos`` holds each
+drawing two frames (animation on twos, with a grey level or two of noise). Every tracker starts
+from the true frame-1 rectangles (a square of the joint disc's diameter, ~30 px) and runs on
+one core.
 
-Keys, one line per clip and tracker:
-  clip, tracker, joints, frames
+Keys, one line per clip, style and tracker:
+  clip, style, twos, tracker, joints, frames
   mean_px, median_px   error of the tracked joint centres against the true ones, over every
                        joint and frame after the first
   pck5                 fraction of joint-frames within 5 px
@@ -62,8 +66,8 @@ def run_opencv(kind, images, start_points, side):
     return out, time.perf_counter() - start
 
 
-def bench(path, trackers, frames=None):
-    clip = render_bvh_clip(path, frames=frames)
+def bench(path, trackers, frames=None, style="textured", twos=False):
+    clip = render_bvh_clip(path, frames=frames, style=style, twos=twos)
     images = clip.images
     lines, ours = [], None
     for name in trackers:
@@ -71,7 +75,8 @@ def bench(path, trackers, frames=None):
             found, seconds = track_from_truth(clip)
         else:
             found, seconds = run_opencv(name, images, clip.truth[0], clip.side)
-        line = {"clip": Path(path).stem, "tracker": name, "joints": len(clip.skeleton), "frames": len(images),
+        line = {"clip": Path(path).stem, "style": style, "twos": twos, "tracker": name,
+                "joints": len(clip.skeleton), "frames": len(images),
                 **tracking_scores(found, clip.truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
         if name == "toonmotion":
             ours = line["mean_px"]
@@ -86,11 +91,16 @@ def main():
     parser.add_argument("clips", nargs="*", type=Path)
     parser.add_argument("--frames", type=int, default=None, help="Use only the first N frames.")
     parser.add_argument("--trackers", default="toonmotion,MIL,CSRT,KCF")
+    parser.add_argument("--style", nargs="+", choices=("textured", "flat"), default=["textured"],
+                        help="how the figure is drawn, a set of lines each (default: textured)")
+    parser.add_argument("--twos", action="store_true", help="hold each drawing two frames")
     args = parser.parse_args()
     clips = args.clips or sorted(DEFAULT_DIR.glob("*.bvh"))
     for clip in clips:
-        for line in bench(clip, args.trackers.split(","), frames=args.frames):
-            print(json.dumps(line), flush=True)
+        for style in args.style:
+            lines = bench(clip, args.trackers.split(","), frames=args.frames, style=style, twos=args.twos)
+            for line in lines:
+                print(json.dumps(line), flush=True)
 
 
 if __name__ == "__main__":

@@ -38,3 +38,23 @@ def test_the_nearer_part_hides_the_farther():
 def test_bad_points_are_refused():
     with pytest.raises(TrackingError, match=r"points must be \(frames, 3, 2\)"):
         limb_figure_frames(np.zeros((4, 2, 2)), PARENTS)
+
+
+def test_the_flat_style_is_flat_colours_and_outlines_over_plain_paper():
+    frames, radius = limb_figure_frames(_arm(2), PARENTS, size=(320, 200), width=12, seed=1, style="flat")
+    frame = frames[0]
+    assert radius == pytest.approx(9.0) and (frames == frame).all()
+    paper = frame[5, 5]
+    assert (frame[:60] == paper).all() and (frame[140:] == paper).all()  # nothing above or below the arm
+    # Inside a band the colour is one flat fill; across it, fill, then a dark outline, then paper.
+    assert len(np.unique(frame[100, 104:148], axis=0)) == 1
+    column = frame[85:116, 125].astype(int).sum(axis=1)
+    assert column.min() < 150 < frame[100, 125].astype(int).sum()  # the ink is darker than the fill
+    # Anti-aliased edges aside, the picture holds paper, ink and at most two fills.
+    _, counts = np.unique(frame.reshape(-1, 3), axis=0, return_counts=True)
+    assert np.sort(counts)[::-1][:4].sum() >= 0.98 * counts.sum()
+
+
+def test_an_unknown_style_is_refused():
+    with pytest.raises(TrackingError, match=r"the figure's style must be one of textured, flat, got 'oil'"):
+        limb_figure_frames(_arm(), PARENTS, style="oil")

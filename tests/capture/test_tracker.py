@@ -444,3 +444,82 @@ def test_a_hidden_child_is_carried_by_its_parent_not_coasted_away():
     assert errors[:, 0].max() < 1.0
     assert errors[15:45, 1].max() < 6.0  # hidden: carried along with the elbow
     assert errors[50:, 1].max() < 1.0  # found again
+
+
+def _swinging_hand(seed=12):
+    """A still upper arm and a forearm swinging 120 degrees about the elbow in 50 frames; a strip
+    hides the hand for frames 12-31, while it swings 48 degrees: frames, truth (T, 3, 2)."""
+    rng = np.random.default_rng(seed)
+    background = _texture(rng, 200, 260, blur=1.5)
+    shoulder_sprite, elbow_sprite, hand_sprite = (_texture(rng, SPRITE, SPRITE) for _ in range(3))
+    cover = _texture(rng, 70, 260)
+    shoulder, elbow, reach = np.array([60.0, 60.0]), np.array([120.0, 60.0]), 60.0
+    canvases, truth = [], []
+    for t in range(50):
+        theta = math.radians(-20 + 2.4 * t)  # from up-right round to down-left
+        hand = elbow + reach * np.array([math.cos(theta), math.sin(theta)])
+        canvas = background.copy()
+        _paint(canvas, shoulder_sprite, shoulder)
+        _paint(canvas, elbow_sprite, elbow)
+        _paint(canvas, hand_sprite, hand, theta)  # the hand turns with its forearm
+        if 12 <= t < 32:
+            for xy in (hand + (0.0, 16.0), hand - (0.0, 16.0)):
+                _paint(canvas, cover[:36, :40], xy)  # a cover that follows it
+        canvases.append(canvas)
+        truth.append([shoulder, elbow, hand])
+    return _film(rng, canvases), np.array(truth)
+
+
+def test_a_hand_hidden_while_its_forearm_swings_is_found_again_round_its_elbow():
+    """Carried by its elbow, whose own bone does not turn, the hidden hand stays where it hid;
+    its forearm meanwhile swings 48 degrees (50 px), far outside the search window. When it
+    re-emerges it is looked for round its elbow, within its bone's reach, and found."""
+    frames, truth = _swinging_hand()
+    setup = _setup([("shoulder", None), ("elbow", "shoulder"), ("hand", "elbow")], truth[0])
+    tracking = track(frames, setup)
+    errors = _errors(tracking, truth)
+    assert errors[:, :2].max() < 0.5
+    assert errors[:12, 2].max() < 0.5
+    assert (tracking.confidence[14:30, 2] < 0.5).all()  # hidden
+    assert errors[34:, 2].max() < 1.0, f"hand errors after it re-emerged: {np.round(errors[32:, 2], 1)}"
+    # The whole-sequence pass swings the hidden hand from where it hid to where it was found again:
+    # at a steady turn about a still elbow that is exact. Frame by frame it stays where it hid.
+    assert errors[12:34, 2].max() < 0.5
+    guessed = _errors(track(frames, setup, settings=TrackSettings(fill_gaps=False)), truth)
+    assert guessed[30, 2] > 40
+
+
+def _on_twos(frames, truth, rng):
+    """Each drawing held two frames, with fresh camera noise on the repeat."""
+    held = np.arange(len(frames)) // 2 * 2
+    noisy = frames[held].astype(float) + rng.normal(0, 1.5, frames.shape)
+    return np.clip(np.rint(noisy), 0, 255).astype(np.uint8), truth[held]
+
+
+def test_drawings_held_two_frames_are_found_and_stepped_over():
+    """On twos a joint moves twice as far per drawing, every other frame: the held frames are
+    found (and nothing else is), the prediction steps over them, and the error stays as on ones."""
+    frames, truth = _translation()
+    ones = track(frames, _setup([("dot", None)], truth[0]))
+    twos_frames, twos_truth = _on_twos(frames, truth, np.random.default_rng(5))
+    twos = track(twos_frames, _setup([("dot", None)], twos_truth[0]))
+    assert not ones.held.any()
+    assert twos.held.tolist() == [t % 2 == 1 for t in range(len(frames))]
+    assert _errors(ones, truth).max() < 0.5
+    assert _errors(twos, twos_truth).max() < 0.5
+    np.testing.assert_array_equal(twos.positions[1::2], twos.positions[0::2])
+
+
+def test_a_joint_that_leaves_the_picture_stays_at_its_edge():
+    rng = np.random.default_rng(8)
+    background, sprite = _texture(rng, 90, 160, blur=1.5), _texture(rng, SPRITE, SPRITE)
+    truth = np.array([[80.0 + 6 * t, 45.0 - 1.5 * t] for t in range(25)])  # out at the right and top
+    canvases = []
+    for xy in truth:
+        _paint(canvas := background.copy(), sprite, xy)
+        canvases.append(canvas)
+    tracking = track(_film(rng, canvases), _setup([("dot", None)], truth[:1]))
+    x, y = tracking.positions[:, 0].T
+    assert (x >= 0).all() and (x <= 159).all() and (y >= 0).all() and (y <= 89).all()
+    inside = truth[:, 0] + RECT / 2 <= 159
+    assert _errors(tracking, truth[:, None])[inside].max() < 0.5

@@ -1,4 +1,5 @@
-"""Image sequences with known joint positions: a textured limb figure over a textured background.
+"""Image sequences with known joint positions: a limb figure, textured over a textured background
+or flat-coloured and outlined over a plain one (a cel cartoon).
 
 Motion capture is measured on these (``benchmarks/track.py`` and the tests): real motion-capture
 clips, projected to 2D, drive a figure whose every bone is a textured band and every joint a
@@ -8,6 +9,13 @@ with their bone, so a joint's patch rotates as a drawn limb's would. The noise i
 features a few pixels across like crayon or cloth: pixel-sized noise would decorrelate under
 any sub-pixel resampling, which no drawing or footage does (a tracker lost the turning hand of
 a test arm on its first frame with it, and kept it to 0.1 px without).
+
+The *flat* style is the footage the thesis was written for (4.6): every bone a rounded band of
+one flat colour with a dark outline, over a plain paper-coloured background, drawn far to near
+so a nearer limb's outline crosses a farther one. Colours come from a small cartoon palette and
+repeat (a left and a right arm alike, as in most cartoons), so a joint's rectangle holds one or
+two flat colours and the outlines' shapes: nothing tells one place along a straight limb from
+another, and a look-alike of every joint is never far away.
 """
 
 from __future__ import annotations
@@ -19,6 +27,15 @@ from numpy.typing import ArrayLike, NDArray
 from toonmotion.errors import TrackingError
 from toonmotion.rig.kinematics import rotation
 
+STYLES = ("textured", "flat")
+
+# The flat style's background, outline and fill colours (RGB): a few cartoon colours, so that
+# parts repeat them.
+_PAPER = (246, 240, 226)
+_INK = (30, 24, 28)
+_PALETTE = ((238, 196, 160), (200, 60, 50), (60, 90, 170), (250, 200, 60), (90, 150, 80))
+_SHIFT = 4
+
 
 def limb_figure_frames(
     points: ArrayLike,
@@ -28,8 +45,9 @@ def limb_figure_frames(
     size: tuple[int, int] = (640, 480),
     width: float | None = None,
     seed: int = 0,
+    style: str = "textured",
 ) -> tuple[NDArray[np.uint8], float]:
-    """Render a textured limb figure at ``points`` for every frame.
+    """Render a limb figure at ``points`` for every frame.
 
     Parameters
     ----------
@@ -44,13 +62,19 @@ def limb_figure_frames(
     width : float, optional
         Limb width in pixels; default 6% of the figure's height in frame 0, at least 6.
     seed : int
+    style : {"textured", "flat"}
+        Textured bands and joint discs over a textured background, or flat-coloured outlined
+        bands with round ends over a plain background (module docstring).
 
     Returns
     -------
     frames : (T, h, w, 3) uint8
     radius : float
-        Radius of the joint discs (a tracker's rectangle of side ``2 * radius`` covers one).
+        Radius of the joint discs (a tracker's rectangle of side ``2 * radius`` covers one); in
+        the flat style, where no disc is drawn, the same size: 0.75 of the limb width.
     """
+    if style not in STYLES:
+        raise TrackingError(f"the figure's style must be one of {', '.join(STYLES)}, got {style!r}")
     points = np.asarray(points, dtype=float)
     parents = np.asarray(parents)
     if points.ndim != 3 or points.shape[2] != 2 or points.shape[1] != len(parents):
@@ -62,6 +86,8 @@ def limb_figure_frames(
     radius = 0.75 * width
     rng = np.random.default_rng(seed)
     w, h = size
+    if style == "flat":
+        return _flat_frames(points, parents, depth, (w, h), width, rng), radius
     background = _noise((h, w), rng, grain=0.1, blur=15, contrast=25)
     bones = [(int(p), j) for j, p in enumerate(parents) if p >= 0]
     longest = max(1.0, float(np.max([np.hypot(*(points[:, j] - points[:, p]).T).max() for p, j in bones])))
@@ -87,6 +113,30 @@ def limb_figure_frames(
                 _paste_disc(frame, disc_textures[k], points[t, k], _disc_angle(points[t], parents, k), radius)
         frames[t] = frame
     return frames, radius
+
+
+def _flat_frames(points, parents, depth, size, width, rng):
+    """The flat style: each bone a round-ended band of a palette colour with a dark outline."""
+    T, J = points.shape[:2]
+    w, h = size
+    bones = [(int(p), j) for j, p in enumerate(parents) if p >= 0]
+    colours = [_PALETTE[i] for i in rng.integers(0, len(_PALETTE), len(bones))]
+    outline = max(1.5, 0.12 * width)
+    # cv2 draws with fixed-point coordinates: SHIFT fractional bits keep sub-pixel positions.
+    scale = 1 << _SHIFT
+    frames = np.empty((T, h, w, 3), dtype=np.uint8)
+    for t in range(T):
+        frame = np.empty((h, w, 3), dtype=np.uint8)
+        frame[:] = _PAPER
+        order = sorted(range(len(bones)), key=lambda k: -(depth[t, bones[k][0]] + depth[t, bones[k][1]]))
+        for k in order:
+            p, j = bones[k]
+            a = tuple(int(v) for v in np.rint(points[t, p] * scale))
+            b = tuple(int(v) for v in np.rint(points[t, j] * scale))
+            cv2.line(frame, a, b, _INK, int(round(width + 2 * outline)), cv2.LINE_AA, _SHIFT)
+            cv2.line(frame, a, b, colours[k], int(round(width)), cv2.LINE_AA, _SHIFT)
+        frames[t] = frame
+    return frames
 
 
 def _noise(shape, rng, *, grain=0.25, blur=3, contrast=50):

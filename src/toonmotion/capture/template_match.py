@@ -39,6 +39,16 @@ DRIFT_TOLERANCE = 2.0
 # (radians).
 TURN_CONFIDENCE = 0.6
 TURNS = tuple(math.radians(sign * step) for step in (5, 10, 15) for sign in (1, -1))
+# A template is distinct when moved DISTINCT_SHIFT px in any direction it changes by at least
+# DISTINCT_RATIO of its change in the direction it changes most, and by a grey level (RMS per
+# channel); one that is not grows, up to MAX_GROWTH times its side (:func:`distinct_size`).
+DISTINCT_SHIFT = 2.0
+DISTINCT_RATIO = 0.1
+DISTINCT_LEVEL = 1.0
+MAX_GROWTH = 3.0
+
+# The coarse search for a hidden joint (:func:`locate`) also tries these turns (radians).
+COARSE_TURNS = (0.0, math.radians(25), math.radians(-25))
 
 _WARP = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
 
@@ -63,6 +73,8 @@ class JointPlan:
         The joint whose bone turns the rectangle; -1: the rectangle does not turn.
     hangs_from : int
         The joint's parent in the skeleton, -1 for a root (a hidden joint follows it).
+    turns : tuple of float
+        The turns (radians) tried when the predicted angle matches badly (see :func:`match`).
     geometric : (2R+1, 2R+1) float
         ``w_beta`` times the squared offset of each cell from the window centre.
     plain : float
@@ -77,18 +89,20 @@ class JointPlan:
     w_beta: float
     parent: int
     hangs_from: int
+    turns: tuple[float, ...]
     geometric: NDArray[np.float64]
     plain: float
     tie: float
 
 
 def plan_joint(size: tuple[int, int], r: float, w_alpha: float, w_beta: float, parent: int,
-               hangs_from: int) -> JointPlan:
-    """A :class:`JointPlan` for a ``size`` template searched within radius ``r`` (pixels, >= 1)."""
+               hangs_from: int, pace: float = 1.0) -> JointPlan:
+    """A :class:`JointPlan` for a ``size`` template searched within radius ``r`` (pixels, >= 1),
+    trying :data:`TURNS` times ``pace`` (the frames a step spans: 2 after a drawing held on twos)."""
     R = int(math.floor(r))
     offsets = np.arange(-R, R + 1, dtype=float) ** 2
     return JointPlan(size=size, radius=R, w_alpha=w_alpha / (size[0] * size[1]), w_beta=w_beta,
-                     parent=parent, hangs_from=hangs_from,
+                     parent=parent, hangs_from=hangs_from, turns=tuple(pace * turn for turn in TURNS),
                      geometric=w_beta * (offsets[:, None] + offsets[None, :]),
                      plain=ssd_at(UPDATE_CONFIDENCE, size), tie=0.25 * 3 * size[0] * size[1])
 
@@ -98,26 +112,82 @@ class Templates:
     """A joint's anchor (cut where tracking started) and latest (last confident match).
 
     Both ``(th, tw, 3)`` float32, in the rectangle's own frame (see :func:`sample`); the same
-    array while the latest has not been re-cut.
+    array while the latest has not been re-cut. ``coarse`` is the anchor at half resolution
+    (``cv2.pyrDown``), for :func:`locate`.
     """
 
     anchor: Patch
     latest: Patch
+    coarse: Patch
 
     @classmethod
     def cut(cls, image: NDArray[np.uint8], centre: NDArray[np.float64], angle: float,
             size: tuple[int, int]) -> Templates:
         """Both templates cut from ``image`` at ``centre``, turned by ``angle`` radians."""
         patch = sample(image, centre, angle, size)
-        return cls(anchor=patch, latest=patch)
+        return cls(anchor=patch, latest=patch, coarse=np.asarray(cv2.pyrDown(patch), dtype=np.float32))
+
+
+@dataclass(frozen=True)
+class BoneRule:
+    """The kinematic term beside eq. 4.6 for a joint with a parent tracked this frame: a cell
+    ``x`` costs ``weight (|x - parent| - length)^2`` more, so the joint keeps near the length its
+    bone had; beyond ``longest`` from the parent nothing is taken.
+
+    Attributes
+    ----------
+    parent : (2,) float
+        The parent joint's centre this frame, (x, y) pixels.
+    length : float
+        The bone's length last frame, pixels.
+    weight : float
+        Per squared pixel, as the prediction's ``w_beta``.
+    longest : float
+        How far from the parent the joint may be, pixels (inf: no bound).
+    """
+
+    parent: NDArray[np.float64]
+    length: float
+    weight: float
+    longest: float = math.inf
+
+
+def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: tuple[int, int]
+                  ) -> tuple[int, int]:
+    """The template size to track a joint by: ``size``, grown by half again (at most
+    :data:`MAX_GROWTH` times) while a patch of that size at ``centre`` looks like itself moved
+    :data:`DISTINCT_SHIFT` pixels in some direction: the mean squared difference in the direction
+    it changes least is under :data:`DISTINCT_RATIO` of that in the direction it changes most, or
+    under :data:`DISTINCT_LEVEL` grey levels squared. A rectangle inside one flat colour, or on a
+    straight outline, matches equally anywhere along it; a larger one takes in the outline's turns
+    and ends that pin it down (the "good features to track" criterion, applied to the
+    rectangle's size). A round outline changes few pixels when moved, but as many every way: it
+    is distinct.
+
+    >>> image = np.full((80, 80, 3), 200, np.uint8); image[:, 40:] = 40  # a straight edge
+    >>> image[60:, :] = 120  # a corner 20 px below
+    >>> distinct_size(image, np.array([40.0, 40.0]), (12, 12)), distinct_size(image, np.array([40.0, 60.0]), (12, 12))
+    ((36, 36), (12, 12))
+    """
+    w0, h0 = size
+    for growth in (1.0, 1.5, 2.25, MAX_GROWTH):
+        grown = (max(1, int(round(w0 * growth))), max(1, int(round(h0 * growth))))
+        patch = sample(image, centre, 0.0, grown)
+        change = [float(np.mean((sample(image, centre + DISTINCT_SHIFT * np.array([math.cos(a), math.sin(a)]),
+                                        0.0, grown) - patch) ** 2))
+                  for a in np.arange(8) * math.pi / 4]
+        if min(change) >= max(DISTINCT_RATIO * max(change), DISTINCT_LEVEL**2):
+            break
+    return grown
 
 
 def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.float64], angle: float,
-          joint: JointPlan) -> tuple[NDArray[np.float64], float, bool]:
+          joint: JointPlan, bone: BoneRule | None = None, *, turn: bool = True
+          ) -> tuple[NDArray[np.float64], float, bool]:
     """Match a joint's templates round ``predicted``, its rectangle turned by ``angle`` radians.
 
     A rectangle that turns and matches less confidently than :data:`TURN_CONFIDENCE` also tries
-    :data:`TURNS` more; the most confident match is kept.
+    the plan's turns more (:data:`TURNS`, scaled by its pace); the most confident match is kept.
 
     Parameters
     ----------
@@ -129,6 +199,11 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     angle : float
         The rectangle's predicted rotation, radians.
     joint : JointPlan
+    bone : BoneRule, optional
+        The kinematic term for a joint whose parent is tracked this frame.
+    turn : bool
+        Try the plan's extra turns where the angle matches badly; False where the angle is
+        known (a place :func:`search_round` found, turned with its bone).
 
     Returns
     -------
@@ -136,46 +211,189 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
         The centre found, (x, y) pixels, sub-pixel.
     confidence : float in [0, 1]
     agree : bool
-        Whether the anchor's match lies within :data:`DRIFT_TOLERANCE` of the latest's.
+        Whether the latest template may be re-cut at the match: the anchor's match lies within
+        :data:`DRIFT_TOLERANCE` of the latest's and is at least :data:`UPDATE_CONFIDENCE`
+        confident (or there is no latest apart from the anchor).
     """
-    found = _match_turned(image, templates, predicted, angle, joint)
-    for turn in TURNS if joint.parent >= 0 else ():
+    found = _match_turned(image, templates, predicted, angle, joint, bone)
+    for extra in joint.turns if joint.parent >= 0 and turn else ():
         if found[1] >= TURN_CONFIDENCE:
             break
-        other = _match_turned(image, templates, predicted, angle + turn, joint)
+        other = _match_turned(image, templates, predicted, angle + extra, joint, bone)
         if other[1] > found[1]:
             found = other
     return found
 
 
-def _match_turned(image, templates, predicted, angle, joint):
+def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.float64], angle: float,
+           joint: JointPlan, radius: float, bone: BoneRule | None = None
+           ) -> tuple[NDArray[np.float64], float]:
+    """Look for a hidden joint at half resolution, up to ``radius`` pixels (full resolution) from
+    ``centre``: the anchor's coarse template is matched in ``small`` (the frame after
+    ``cv2.pyrDown``) at the rectangle's angle and :data:`COARSE_TURNS` more, by eq. 4.6's mixed
+    cost with ``joint``'s colour weight, ``w_beta = 1 / radius^2`` and the kinematic term
+    (``bone``), among the plain cells if there are any (as :func:`match`). Only where to look
+    again: the place is to be refined by :func:`match`.
+
+    Returns
+    -------
+    xy : (2,) float
+        The best place, full-resolution (x, y) pixels, to about a pixel.
+    confidence : float
+        The coarse match's confidence.
+    """
+    template = templates.coarse
+    th, tw = template.shape[:2]
+    R = max(1, int(math.ceil(radius / 2)))
+    w_alpha = joint.w_alpha * joint.size[0] * joint.size[1] / (tw * th)
+    offsets = (2.0 * np.arange(-R, R + 1)) ** 2
+    geometric = (offsets[:, None] + offsets[None, :]) / radius**2
+    plain_ssd = ssd_at(UPDATE_CONFIDENCE, (tw, th))
+    # Pixel centres: full-resolution x is half-resolution 2 x + 0.5.
+    middle = (np.asarray(centre, dtype=float) - 0.5) / 2
+    best, best_conf = np.asarray(centre, dtype=float), 0.0
+    for turn in COARSE_TURNS:
+        a = angle + turn
+        window = sample(small, middle, a, (tw + 2 * R, th + 2 * R))
+        ssd = cv2.matchTemplate(window, template, cv2.TM_SQDIFF)
+        cost = w_alpha * ssd + geometric
+        if bone is not None:
+            cost += _bone_cost(centre, a, R, bone, step=2.0)
+        plain = (ssd <= plain_ssd) & np.isfinite(cost)  # as in the fine search: plain cells first
+        if plain.any():
+            cost[~plain] = np.inf
+        i, j = np.unravel_index(int(np.argmin(cost)), cost.shape)
+        if not np.isfinite(cost[i, j]):
+            continue
+        conf = confidence(float(ssd[i, j]), (tw, th))
+        if conf > best_conf:
+            c, s = math.cos(a), math.sin(a)
+            dx, dy = 2.0 * (j - R), 2.0 * (i - R)
+            best, best_conf = np.asarray(centre, dtype=float) + [c * dx - s * dy, s * dx + c * dy], conf
+    return best, best_conf
+
+
+def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPlan, bone: BoneRule,
+                 start: float, span: float, turn: float, count: int = 2
+                 ) -> list[tuple[NDArray[np.float64], float, float]]:
+    """Look for a hidden joint round its parent, found this frame: at every place within the
+    bone's reach (``bone.longest``, at least half the rectangle from the parent) whose direction
+    from the parent lies within ``span`` radians of ``start``, a quarter rectangle apart, with the
+    rectangle turned as its bone would be there (``turn`` plus the direction's change from
+    ``start``). The anchor's coarse template is compared with each place in ``small`` (the frame
+    after ``cv2.pyrDown``) by eq. 4.6's mixed cost with the kinematic term; only where to look
+    again, to be refined by :func:`match`.
+
+    Returns
+    -------
+    list of (xy, confidence, angle)
+        The ``count`` best places at least a rectangle apart, best first (none if no place lies
+        within reach): full-resolution (x, y) pixels, the coarse match's confidence, and the
+        rectangle's angle there (radians).
+    """
+    template = templates.coarse
+    th, tw = template.shape[:2]
+    side = max(joint.size)
+    step = side / 4
+    rings = np.arange(max(side / 2, step), bone.longest + step / 2, step)
+    places, directions = [], []
+    for rho in rings:
+        count = max(1, int(math.ceil(2 * span * rho / step)))
+        phi = start + np.linspace(-span, span, count) if span < math.pi else \
+            start + np.arange(count) * (2 * math.pi / count)
+        places.append(bone.parent + rho * np.column_stack([np.cos(phi), np.sin(phi)]))
+        directions.append(phi)
+    if not places:
+        return []
+    xy, phi = np.concatenate(places), np.concatenate(directions)
+    angles = turn + (phi - start)
+    patches = _patches(small, (xy - 0.5) / 2, angles, (tw, th))
+    d = patches - template[None]
+    ssd = np.einsum("nijc,nijc->n", d, d)
+    w_alpha = joint.w_alpha * joint.size[0] * joint.size[1] / (tw * th)
+    rho = np.hypot(*(xy - bone.parent).T)
+    cost = w_alpha * ssd + bone.weight * (rho - bone.length) ** 2
+    # The best places at least a rectangle apart: a coarse grid a quarter rectangle wide misses the
+    # joint by up to an eighth of one, which costs a fine texture most of its likeness, so
+    # likeness here only ranks places and :func:`match` decides.
+    picked: list[int] = []
+    while len(picked) < count and np.isfinite(cost).any():
+        best = int(np.argmin(cost))
+        picked.append(best)
+        cost[np.hypot(*(xy - xy[best]).T) < side] = np.inf
+    return [(xy[i], confidence(float(ssd[i]), (tw, th)), float(angles[i])) for i in picked]
+
+
+def _patches(image, centres, angles, size):
+    """``(n, h, w, 3)`` float32 patches of ``size = (w, h)`` at ``centres`` ``(n, 2)``, each turned
+    by its angle, as :func:`sample` cuts one: one ``cv2.remap`` for them all."""
+    w, h = size
+    u = np.arange(w, dtype=np.float32) - (w - 1) / 2
+    v = np.arange(h, dtype=np.float32) - (h - 1) / 2
+    c, s = np.cos(angles).astype(np.float32), np.sin(angles).astype(np.float32)
+    cx, cy = centres[:, 0].astype(np.float32), centres[:, 1].astype(np.float32)
+    map_x = cx[:, None, None] + c[:, None, None] * u[None, None, :] - s[:, None, None] * v[None, :, None]
+    map_y = cy[:, None, None] + s[:, None, None] * u[None, None, :] + c[:, None, None] * v[None, :, None]
+    n = len(centres)
+    out = cv2.remap(image, map_x.reshape(n * h, w), map_y.reshape(n * h, w), cv2.INTER_LINEAR,
+                    borderMode=cv2.BORDER_REPLICATE)
+    return out.reshape(n, h, w, 3).astype(np.float32)
+
+
+def _match_turned(image, templates, predicted, angle, joint, bone):
     """:func:`match` at one angle: the anchor's match where it is trusted, else the latest's."""
     R, (tw, th) = joint.radius, joint.size
     window = sample(image, predicted, angle, (tw + 2 * R, th + 2 * R))
-    latest = _best(window, templates.latest, joint)
+    prior = joint.geometric if bone is None else joint.geometric + _bone_cost(predicted, angle, R, bone)
+    latest = _best(window, templates.latest, joint, prior)
     (offset, confidence), agree = latest, True
     if templates.anchor is not templates.latest:
-        anchor = _best(window, templates.anchor, joint)
+        anchor = _best(window, templates.anchor, joint, prior)
         agree = bool(np.hypot(*(anchor[0] - latest[0])) <= DRIFT_TOLERANCE)
-        if anchor[1] >= latest[1] or (agree and anchor[1] >= VISIBLE_CONFIDENCE):
+        if agree and anchor[1] >= VISIBLE_CONFIDENCE:
+            # Both find the joint here: the anchor's place (it does not drift), and the latest's
+            # confidence when higher (the anchor is older, the joint's looks may have changed).
+            # The latest is re-cut only where the anchor itself is plainly there, or it would
+            # learn an occluder sliding over the joint.
+            offset, confidence = anchor[0], max(anchor[1], latest[1])
+            agree = anchor[1] >= UPDATE_CONFIDENCE
+        elif anchor[1] >= latest[1]:
             offset, confidence = anchor
     # The offset, in the window's frame, turned into the image's (a per-joint hot path: by hand).
     c, s = math.cos(angle), math.sin(angle)
     return predicted + [c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]], confidence, agree
 
 
-def _best(window, template, joint):
+def _bone_cost(predicted, angle, R, bone, step=1.0):
+    """The kinematic term (:class:`BoneRule`) of every cell of a window round ``predicted``
+    turned by ``angle``, ``(2R+1, 2R+1)``, cells ``step`` pixels apart; inf beyond the bone's
+    longest reach."""
+    c, s = math.cos(angle), math.sin(angle)
+    d = step * np.arange(-R, R + 1, dtype=float)
+    # Cell (i, j) lies at predicted + rotation(angle) (j - R, i - R) in the image.
+    x = predicted[0] - bone.parent[0] + c * d[None, :] - s * d[:, None]
+    y = predicted[1] - bone.parent[1] + s * d[None, :] + c * d[:, None]
+    reach = np.hypot(x, y)
+    cost = bone.weight * (reach - bone.length) ** 2
+    cost[reach > bone.longest] = np.inf
+    return cost
+
+
+def _best(window, template, joint, prior):
     """Best match of ``template`` in ``window``: sub-pixel ``(dx, dy)`` from the centre, confidence.
 
-    The mixed cost picks the cell among the plain ones, if any; the colour cost alone then
-    places the match: a descent to its local minimum and a parabola through it in x and in y.
+    The mixed cost (colour plus ``prior``, the geometric and kinematic terms per cell) picks the
+    cell among the plain ones, if any; the colour cost alone then places the match: a descent to
+    its local minimum and a parabola through it in x and in y.
     """
     R, (tw, th) = joint.radius, joint.size
     ssd = cv2.matchTemplate(window, template, cv2.TM_SQDIFF)
-    cost = joint.w_alpha * ssd + joint.geometric
-    plain = ssd <= joint.plain  # cells where the texture is plainly there
+    cost = joint.w_alpha * ssd + prior
+    plain = (ssd <= joint.plain) & np.isfinite(prior)  # cells where the texture is plainly there
     if plain.any():
         cost[~plain] = np.inf
+    if not np.isfinite(prior).any():  # the bone cannot reach the window: nothing is found here
+        return np.zeros(2), 0.0
     i, j = np.unravel_index(int(np.argmin(cost)), ssd.shape)
     i, j = _descend(ssd, i, j, joint.tie)
     # The map is float32 and its sums of squares round; the chosen cell's is recomputed exactly.

@@ -1,5 +1,6 @@
 """Where the joint tracker looks next: constant-acceleration prediction (thesis eq. 4.4), the
-turn of each joint's rectangle with its bone (eq. 4.2), and where a hidden joint is put.
+turn of each joint's rectangle with its bone (eq. 4.2), where a hidden joint is put, and which
+frames only repeat the drawing before (animation on twos), which the prediction steps over.
 
 Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, (x, y) pixels, y down, NaN at frames
 not tracked; ``C`` ``(T, k)`` confidence; time in frames (the thesis' ``tau`` is 1).
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -19,20 +21,28 @@ from toonmotion.rig.skeleton import MIN_BONE_LENGTH
 # A root that hides coasts at its mean velocity over this many visible steps (at most).
 COAST_STEPS = 4
 
+# A frame repeats the one before when fewer than HELD_FRACTION of its pixel values (any channel)
+# differ from it by more than HELD_LEVEL grey levels: noise and compression stay under that level,
+# and a figure that moves even half a pixel changes hundreds of values along its outline.
+HELD_LEVEL = 16
+HELD_FRACTION = 1e-4
+
 Points = NDArray[np.float64]
 
 
-def predict(P: Points, C: NDArray[np.float64], t: int, history: NDArray[np.int_]) -> tuple[Points, Points]:
+def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history: NDArray[np.int_]
+            ) -> tuple[Points, Points]:
     """Eq. 4.4 from each joint's last (up to) three positions, and where a hidden root coasts to.
 
     Parameters
     ----------
     P : (T, k, 2) float
-        Joint centres; frames before ``t`` are tracked.
+        Joint centres; ``frames`` are tracked.
     C : (T, k) float
         Confidence of each joint-frame.
-    t : int
-        The frame to predict.
+    frames : (n,) int
+        The last (up to) ``COAST_STEPS + 1`` tracked frames that showed a new drawing, oldest
+        first; held frames (animation on twos) are left out, so a step is one drawing to the next.
     history : (k,) int
         The frame each joint's history starts at (where tracking started or it was corrected):
         its velocity there is 0.
@@ -48,18 +58,19 @@ def predict(P: Points, C: NDArray[np.float64], t: int, history: NDArray[np.int_]
         to) :data:`COAST_STEPS` visible steps, less swayed than one step by a rectangle already
         partly covered, and without acceleration.
     """
-    k = len(history)
-    seen = (t - history)[:, None]  # tracked frames each joint's history has before t (>= 1)
-    first = max(t - COAST_STEPS - 1, 0)
-    visible = (C[first:t] >= VISIBLE_CONFIDENCE) & (np.arange(first, t)[:, None] >= history)
-    v1, v2, v3 = (visible[-i][:, None] if i <= len(visible) else np.zeros((k, 1), bool) for i in (1, 2, 3))
-    p1 = P[t - 1]
-    p2 = np.where(seen >= 2, P[max(t - 2, 0)], p1)
-    p3 = np.where(seen >= 3, P[max(t - 3, 0)], p2)
+    frames = np.asarray(frames)[-(COAST_STEPS + 1):]
+    k, n = len(history), len(frames)
+    mine = frames[:, None] >= history  # (n, k): frames in each joint's history
+    seen = mine.sum(axis=0)[:, None]
+    visible = (C[frames] >= VISIBLE_CONFIDENCE) & mine
+    v1, v2, v3 = (visible[-i][:, None] if i <= n else np.zeros((k, 1), bool) for i in (1, 2, 3))
+    p1 = P[frames[-1]]
+    p2 = np.where(seen >= 2, P[frames[max(n - 2, 0)]], p1)
+    p3 = np.where(seen >= 3, P[frames[max(n - 3, 0)]], p2)
     v = np.where(v1 & ~v2 & (seen >= 2), p2 - p3, p1 - p2)
     a = np.where(v1 & v2 & v3, v - (p2 - p3), 0.0)
-    steps = np.cumprod(visible[::-1], axis=0).sum(axis=0) - 1  # visible steps ending at t - 1
-    mean = (p1 - P[t - 1 - np.maximum(steps, 0), np.arange(k)]) / np.maximum(steps, 1)[:, None]
+    steps = np.cumprod(visible[::-1], axis=0).sum(axis=0) - 1  # visible steps ending at the last
+    mean = (p1 - P[frames[n - 1 - np.maximum(steps, 0)], np.arange(k)]) / np.maximum(steps, 1)[:, None]
     coast = np.where(v1 & (steps >= 1)[:, None], mean, v)
     return p1 + v + a / 2, p1 + coast
 
@@ -123,3 +134,18 @@ def hidden_at(P: Points, t: int, m: int, coast: Points, hangs_from: NDArray[np.i
             c, s = math.cos(turn), math.sin(turn)
             offset = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
     return P[t, p] + offset
+
+
+def is_held(image: NDArray[np.uint8], previous: NDArray[np.uint8]) -> bool:
+    """Whether ``image`` repeats ``previous`` (both ``(h, w, 3)`` uint8) up to noise: the same
+    drawing held another frame, as animation on twos or threes does.
+
+    >>> still = np.full((40, 40, 3), 128, np.uint8)
+    >>> moved = still.copy(); moved[10:20, 10:12] = 0
+    >>> is_held(still + 3, still), is_held(moved, still)
+    (True, False)
+    """
+    h, w = image.shape[:2]
+    diff = cv2.absdiff(image, previous).reshape(h, -1)
+    changed = cv2.countNonZero(cv2.threshold(diff, HELD_LEVEL, 255, cv2.THRESH_BINARY)[1])
+    return changed <= HELD_FRACTION * diff.size

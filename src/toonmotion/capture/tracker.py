@@ -28,15 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from toonmotion.capture.template_match import (
-    UPDATE_CONFIDENCE,
-    VISIBLE_CONFIDENCE,
-    JointPlan,
-    Templates,
-    match,
-    plan_joint,
-    sample,
-)
+from toonmotion.capture.template_match import UPDATE_CONFIDENCE, Templates, distinct_size
 from toonmotion.capture.track_checks import (
     Frames,
     check_corrections,
@@ -47,7 +39,9 @@ from toonmotion.capture.track_checks import (
     check_number,
     read_frame,
 )
-from toonmotion.capture.track_prediction import hidden_at, predict, turns
+from toonmotion.capture.track_gaps import fill_hidden_spans
+from toonmotion.capture.track_prediction import COAST_STEPS, is_held, predict, turns
+from toonmotion.capture.track_search import FrameSearch, Plans, hidden_for, longest_bones
 from toonmotion.errors import TrackingError
 from toonmotion.progress import Progress
 from toonmotion.rig.skeleton import Skeleton
@@ -55,6 +49,9 @@ from toonmotion.rig.skeleton import Skeleton
 # Default search radius: this fraction of a rectangle's larger side, at least MIN_SEARCH px.
 SEARCH_FRACTION = 0.5
 MIN_SEARCH = 8.0
+
+# After a drawing held n frames (twos, threes), search windows are n times as wide, up to this.
+MAX_HOLD = 3
 
 # progress(stage, index, count), as everywhere in the library; the stage is "tracking".
 
@@ -116,12 +113,16 @@ class TrackSettings:
         Weight of the squared distance from the prediction, >= 0. None: ``1 / r^2`` (thesis).
     rotate : bool
         Turn the rectangles of joints with a parent with their bone (eq. 4.2).
+    fill_gaps : bool
+        After tracking, re-place each joint where it was hidden between two frames where it was
+        found, from both ends (:mod:`~toonmotion.capture.track_gaps`).
     """
 
     search: float | None = None
     w_alpha: float = 1 / 255**2
     w_beta: float | None = None
     rotate: bool = True
+    fill_gaps: bool = True
 
     def __post_init__(self) -> None:
         if self.search is not None:
@@ -130,9 +131,10 @@ class TrackSettings:
         object.__setattr__(self, "w_alpha", check_number(self.w_alpha, "w_alpha", 0.0, "> 0", strict=True))
         if self.w_beta is not None:
             object.__setattr__(self, "w_beta", check_number(self.w_beta, "w_beta", 0.0, ">= 0"))
-        if not isinstance(self.rotate, (bool, np.bool_)):
-            raise TrackingError(f"rotate must be True or False, got {self.rotate!r}")
-        object.__setattr__(self, "rotate", bool(self.rotate))
+        for name in ("rotate", "fill_gaps"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, bool(getattr(self, name)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,28 +155,36 @@ class Tracking:
         root); 0 at frames not tracked.
     tracked : (T,) bool
         Frames that have been tracked: ``start`` up to ``stop``.
+    held : (T,) bool, optional
+        Tracked frames found to repeat the frame before (animation on twos or threes): their
+        joints are the frame before's. All False when not given.
     """
 
     positions: np.ndarray
     angles: np.ndarray
     confidence: np.ndarray
     tracked: np.ndarray
+    held: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        kinds = (("positions", float), ("angles", float), ("confidence", float), ("tracked", bool))
+        if self.held is None:
+            object.__setattr__(self, "held", np.zeros(np.shape(self.tracked), dtype=bool))
+        kinds = (("positions", float), ("angles", float), ("confidence", float), ("tracked", bool),
+                 ("held", bool))
         for name, dtype in kinds:
             array = np.array(getattr(self, name), dtype=dtype)
             array.setflags(write=False)
             object.__setattr__(self, name, array)
         T = len(self.tracked)
         k = self.angles.shape[1] if self.angles.ndim == 2 else -1
-        if (self.tracked.shape, self.angles.shape, self.confidence.shape, self.positions.shape) != (
-            (T,), (T, k), (T, k), (T, k, 2)
-        ):
+        held = np.asarray(self.held)
+        shapes = (self.tracked.shape, held.shape, self.angles.shape, self.confidence.shape,
+                  self.positions.shape)
+        if shapes != ((T,), (T,), (T, k), (T, k), (T, k, 2)):
             raise TrackingError(
-                "a Tracking needs positions (T, k, 2), angles and confidence (T, k) and tracked (T,); "
-                f"got {self.positions.shape}, {self.angles.shape}, {self.confidence.shape} "
-                f"and {self.tracked.shape}"
+                "a Tracking needs positions (T, k, 2), angles and confidence (T, k), tracked and held "
+                f"(T,); got {self.positions.shape}, {self.angles.shape}, {self.confidence.shape}, "
+                f"{self.tracked.shape} and {held.shape}"
             )
 
 
@@ -229,12 +239,12 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     out.angles[start] = 0.0
     out.confidence[start] = 1.0
     out.tracked[start] = True
-    joints = _plan(setup, settings, first.shape)
-    templates = [Templates.cut(first, initial[m], 0.0, joints[m].size) for m in range(k)]
+    plan = _plans(setup, settings, first, initial)
+    templates = [Templates.cut(first, initial[m], 0.0, plan(m).size) for m in range(k)]
     if progress:
         progress("tracking", start, stop)
-    _run(frames, first.shape, joints, templates, out, np.full(k, start), start + 1, stop, progress)
-    return out.freeze()
+    _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress)
+    return _filled(out, plan, settings).freeze()
 
 
 def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
@@ -290,23 +300,24 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     for m, xy in fixed.items():
         out.positions[frame, m] = xy
         out.confidence[frame, m] = 1.0
+    out.held[frame] = False  # a corrected frame is a drawing of its own
     if frame > begin:
         out.angles[frame] = out.angles[frame - 1] + turns(
             out.positions[frame - 1], out.positions[frame], setup.skeleton.parents, settings.rotate
         )
     current = read_frame(frames, frame, None)
     check_inside(setup.skeleton, setup.sizes, out.positions[frame], out.angles[frame], current, frame, fixed)
-    joints = _plan(setup, settings, current.shape)
+    plan = _plans(setup, settings, current, out.positions[frame])
     templates = []
     for m in range(k):
         cut = _anchor_frame(out.confidence[:, m], begin, frame, m in fixed)
         image = current if cut == frame else read_frame(frames, cut, current.shape)
-        templates.append(Templates.cut(image, out.positions[cut, m], out.angles[cut, m], joints[m].size))
+        templates.append(Templates.cut(image, out.positions[cut, m], out.angles[cut, m], plan(m).size))
     history = np.where(np.isin(np.arange(k), list(fixed)), frame, begin)
     if progress:
         progress("tracking", frame, stop)
-    _run(frames, current.shape, joints, templates, out, history, frame + 1, stop, progress)
-    return out.freeze()
+    _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress)
+    return _filled(out, plan, settings).freeze()
 
 
 # --- the tracking loop -----------------------------------------------------------------------------
@@ -320,68 +331,78 @@ class _Arrays:
     angles: np.ndarray
     confidence: np.ndarray
     tracked: np.ndarray
+    held: np.ndarray
 
     @classmethod
     def empty(cls, count: int, k: int) -> _Arrays:
         return cls(np.full((count, k, 2), np.nan), np.full((count, k), np.nan), np.zeros((count, k)),
-                   np.zeros(count, dtype=bool))
+                   np.zeros(count, dtype=bool), np.zeros(count, dtype=bool))
 
     @classmethod
     def copy(cls, tracking: Tracking) -> _Arrays:
+        assert tracking.held is not None  # Tracking fills it in
         return cls(tracking.positions.copy(), tracking.angles.copy(), tracking.confidence.copy(),
-                   tracking.tracked.copy())
+                   tracking.tracked.copy(), tracking.held.copy())
 
     def clear(self, begin: int, end: int) -> None:
         self.positions[begin:end] = np.nan
         self.angles[begin:end] = np.nan
         self.confidence[begin:end] = 0.0
         self.tracked[begin:end] = False
+        self.held[begin:end] = False
 
     def freeze(self) -> Tracking:
         return Tracking(positions=self.positions, angles=self.angles, confidence=self.confidence,
-                        tracked=self.tracked)
+                        tracked=self.tracked, held=self.held)
 
 
-def _plan(setup, settings, frame_shape):
-    """A :class:`JointPlan` per joint, for frames of ``frame_shape`` (h, w, ...)."""
-    joints = []
-    # A search wider than the frame finds nothing more; its size would only cost memory.
-    widest = math.hypot(frame_shape[0], frame_shape[1])
-    for m, (w, h) in enumerate(setup.sizes):
-        size = (max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5))))
-        r = settings.search if settings.search is not None else max(MIN_SEARCH, SEARCH_FRACTION * max(w, h))
-        w_beta = (1.0 / r) ** 2 if settings.w_beta is None else settings.w_beta
-        parent = int(setup.skeleton.parents[m]) if settings.rotate else -1
-        joints.append(plan_joint(size, min(r, widest), settings.w_alpha, w_beta, parent,
-                                 int(setup.skeleton.parents[m])))
-    return joints
-
-
-def _run(frames, shape, joints: list[JointPlan], templates: list[Templates], out: _Arrays, history,
-         begin, stop, progress):
+def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, history, begin, stop,
+         progress):
     """Track frames ``begin`` to ``stop - 1``; frame ``begin - 1`` is tracked; write into ``out``."""
-    parents = np.array([j.parent for j in joints])
-    hangs_from = np.array([j.hangs_from for j in joints])
+    P, C = out.positions, out.confidence
+    drawings = _drawings(out, begin)
+    search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
+                         longest_bones(P, C, drawings, plans.hangs_from))
+    previous = read_frame(frames, begin - 1, shape)
     for t in range(begin, stop):
         image = read_frame(frames, t, shape)
-        P = out.positions
-        predicted, coast = predict(P, out.confidence, t, history)
-        angle = out.angles[t - 1] + turns(P[t - 1], predicted, parents, True)
-        update = []
-        for m, joint in enumerate(joints):
-            xy, confidence, agree = match(image, templates[m], predicted[m], angle[m], joint)
-            if confidence < VISIBLE_CONFIDENCE:
-                xy = hidden_at(P, t, m, coast[m], hangs_from)
-            elif agree and confidence >= UPDATE_CONFIDENCE:
-                update.append(m)
-            P[t, m] = xy
-            out.confidence[t, m] = confidence
-        out.angles[t] = out.angles[t - 1] + turns(P[t - 1], P[t], parents, True)
         out.tracked[t] = True
-        for m in update:
-            templates[m].latest = sample(image, P[t, m], out.angles[t, m], joints[m].size)
+        if is_held(image, previous):
+            P[t], C[t], out.angles[t], out.held[t] = P[t - 1], C[t - 1], out.angles[t - 1], True
+        else:
+            predicted, coast = predict(P, C, np.array(drawings), history)
+            # A drawing held n frames moves n frames' worth by the next: the search widens with it.
+            search.frame(image, t, predicted, coast, pace=float(min(t - drawings[-1], MAX_HOLD)))
+            drawings = drawings[-COAST_STEPS:] + [t]
+            previous = image
         if progress:
             progress("tracking", t, stop)
+
+
+def _plans(setup, settings, image, centres):
+    """The joints' :class:`~toonmotion.capture.track_search.Plans` for ``setup`` and ``settings``:
+    templates cut from ``image`` at ``centres`` (grown where the rectangle is not distinct,
+    :func:`~toonmotion.capture.template_match.distinct_size`), windows as the rectangles ask."""
+    r = [settings.search if settings.search is not None else max(MIN_SEARCH, SEARCH_FRACTION * max(w, h))
+         for w, h in setup.sizes]
+    sizes = [distinct_size(image, centre, (max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5)))))
+             for centre, (w, h) in zip(centres, setup.sizes, strict=True)]
+    return Plans(sizes, setup.skeleton.parents, r, w_alpha=settings.w_alpha, w_beta=settings.w_beta,
+                 rotate=settings.rotate, frame_shape=image.shape)
+
+
+def _filled(out, plans, settings):
+    """``out`` after the whole-sequence pass, if ``settings`` ask for it."""
+    if settings.fill_gaps:
+        out.positions = fill_hidden_spans(out.positions, out.confidence, plans.hangs_from, out.tracked,
+                                          out.held)
+    return out
+
+
+def _drawings(out, begin):
+    """The last (up to) ``COAST_STEPS + 1`` tracked frames before ``begin`` that are not held."""
+    frames = [s for s in range(begin - 1, -1, -1) if out.tracked[s] and not out.held[s]][:COAST_STEPS + 1]
+    return frames[::-1] or [begin - 1]
 
 
 # --- retracking and input checks ---------------------------------------------------------------------

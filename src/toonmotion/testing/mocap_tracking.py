@@ -66,6 +66,11 @@ class RenderedClip:
         Side of a joint's square tracking rectangle: the joint disc's diameter, pixels.
     fps : float
         Frames per second after resampling.
+    style : str
+        ``"textured"`` or ``"flat"`` (:func:`~toonmotion.capture.synthetic.limb_figure_frames`).
+    twos : bool
+        Each drawing is held two frames (animation "on twos"), with noise of a grey level or two
+        so held frames are alike but not identical.
     """
 
     images: NDArray[np.uint8]
@@ -73,17 +78,22 @@ class RenderedClip:
     skeleton: Skeleton
     side: float
     fps: float
+    style: str = "textured"
+    twos: bool = False
 
 
 def render_bvh_clip(path: str | Path, *, frames: int | None = None, fps: float = FPS,
-                    size: tuple[int, int] = SIZE, seed: int = 0) -> RenderedClip:
+                    size: tuple[int, int] = SIZE, seed: int = 0, style: str = "textured",
+                    twos: bool = False) -> RenderedClip:
     """Read a BVH file and render it with :func:`render_mocap`."""
-    return render_mocap(load_bvh(path), frames=frames, fps=fps, size=size, seed=seed)
+    return render_mocap(load_bvh(path), frames=frames, fps=fps, size=size, seed=seed, style=style,
+                        twos=twos)
 
 
 def render_mocap(clip: BvhClip, *, frames: int | None = None, fps: float = FPS,
-                 size: tuple[int, int] = SIZE, seed: int = 0) -> RenderedClip:
-    """Render a motion-capture clip as a textured limb figure seen from the front.
+                 size: tuple[int, int] = SIZE, seed: int = 0, style: str = "textured",
+                 twos: bool = False) -> RenderedClip:
+    """Render a motion-capture clip as a limb figure seen from the front.
 
     Parameters
     ----------
@@ -97,7 +107,13 @@ def render_mocap(clip: BvhClip, *, frames: int | None = None, fps: float = FPS,
     size : (width, height)
         The frame, pixels; the whole clip is fitted inside it with a 10% margin.
     seed : int
-        Seed of the figure's and background's textures.
+        Seed of the figure's and background's textures (or colours).
+    style : {"textured", "flat"}
+        A textured figure over a textured background, or a flat-coloured outlined one over a
+        plain background (a cel cartoon).
+    twos : bool
+        Hold each drawing two frames, as animation "on twos": frame ``t`` shows (and its truth is)
+        the pose of frame ``t - t % 2``; every frame gets Gaussian noise of 1.5 grey levels.
 
     Returns
     -------
@@ -113,16 +129,22 @@ def render_mocap(clip: BvhClip, *, frames: int | None = None, fps: float = FPS,
     X = X[:, [picks[n] for n in STANDARD_JOINTS]]
     points, depth = project_orthographic(X, with_depth=True)
     truth = fit_to_frame(points, size)
+    if twos:
+        held = np.arange(len(truth)) // 2 * 2
+        truth, depth = truth[held], depth[held]
     parents_by_name = standard_skeleton_parents()
     parents = np.array([-1 if parents_by_name[n] is None else STANDARD_JOINTS.index(parents_by_name[n])
                         for n in STANDARD_JOINTS])
-    images, radius = limb_figure_frames(truth, parents, depth=depth, size=size, seed=seed)
+    images, radius = limb_figure_frames(truth, parents, depth=depth, size=size, seed=seed, style=style)
+    if twos:
+        noise = np.random.default_rng(seed + 1).normal(0.0, 1.5, images.shape)
+        images = np.clip(np.rint(images + noise), 0, 255).astype(np.uint8)
     skeleton = Skeleton.from_joints(
         [(n, parents_by_name[n], tuple(truth[0, i])) for i, n in enumerate(STANDARD_JOINTS)]
     )
     order = [STANDARD_JOINTS.index(n) for n in skeleton.names]
     return RenderedClip(images=images, truth=truth[:, order], skeleton=skeleton, side=2 * radius,
-                        fps=clip.fps / step)
+                        fps=clip.fps / step, style=style, twos=twos)
 
 
 def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None = None

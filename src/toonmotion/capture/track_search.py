@@ -1,0 +1,278 @@
+"""One frame of the joint tracker: where each joint is looked for, and where it is put when it is
+not found (thesis 4.4, with re-acquisition).
+
+A frame is searched in three passes over the skeleton:
+
+1. **Down** (parents before children). A joint seen last drawing is matched round its
+   prediction (eq. 4.4-4.6). A joint with a parent found this frame is held near its bone's last
+   length, a kinematic term beside eq. 4.6 (:class:`~toonmotion.capture.template_match.BoneRule`).
+   A *hidden* joint is looked for afresh: round its parent, if that was found, at every place its
+   bone can reach in directions widening from where it was last (:data:`SPAN_STEP` a drawing),
+   its rectangle turned with its bone there (:func:`~toonmotion.capture.template_match.search_round`);
+   else near where its parent carries it, in a window that widens for every drawing it stays
+   hidden (:func:`~toonmotion.capture.template_match.locate`). The best places are then matched
+   finely, and the joint is taken as found again only by a match at least
+   :data:`REACQUIRE_CONFIDENCE` confident, within :data:`REACH_SLACK` times the longest its bone
+   has been seen.
+2. **Up** (children before parents). A joint still not found is looked for where the joints
+   hanging from it that were found put it (each moved as its child moved).
+3. **Place the rest** (parents first): at the mean of where its parent carries it and where the
+   joints below it put it; a root with neither coasts.
+
+Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` confidence,
+``angles`` ``(T, k)`` the rectangles' turns; skeletons list parents before children.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from toonmotion.capture.template_match import (
+    UPDATE_CONFIDENCE,
+    VISIBLE_CONFIDENCE,
+    BoneRule,
+    JointPlan,
+    Templates,
+    locate,
+    match,
+    plan_joint,
+    sample,
+    search_round,
+)
+from toonmotion.capture.track_prediction import hidden_at, turns
+
+# A hidden joint's window widens by WIDEN_STEP of its search radius for every drawing it stays
+# hidden, up to MAX_WIDEN times the radius.
+WIDEN_STEP = 0.5
+MAX_WIDEN = 3.0
+# A hidden joint whose parent is found is looked for round it, in directions up to this many
+# radians from where it was last for every drawing it has been hidden (all round at most).
+SPAN_STEP = math.radians(45)
+# Places whose coarse match is less confident than this are not looked at closely.
+COARSE_CONFIDENCE = 0.1
+# A hidden joint is found again only by a match at least this confident, no farther from its
+# parent than REACH_SLACK times the longest its bone has been seen. The anchor may have been cut
+# with a neighbour overlapping the joint; 0.6 still tells a joint from a different texture (0.1
+# at most) and from plain background.
+REACQUIRE_CONFIDENCE = 0.6
+REACH_SLACK = 1.2
+# The kinematic term's weight per squared pixel of bone-length change, relative to w_beta.
+BONE_WEIGHT = 1.0
+
+# The confidence a joint taken to be hidden is saved with, at most: just under VISIBLE_CONFIDENCE.
+_HIDDEN = float(np.nextafter(VISIBLE_CONFIDENCE, 0))
+
+
+class Plans:
+    """Each joint's :class:`~toonmotion.capture.template_match.JointPlan`, and its plan with the
+    search widened: ``plans(m)``, ``plans(m, factor)`` (cached).
+
+    Parameters
+    ----------
+    sizes : (k, 2) float
+        Rectangle widths and heights, pixels.
+    parents : (k,) int
+        Each joint's parent, -1 for a root.
+    radius : (k,) float
+        Each joint's search radius, pixels.
+    w_alpha : float
+    w_beta : float or None
+        As :class:`~toonmotion.capture.tracker.TrackSettings`; None: ``1 / r^2``.
+    rotate : bool
+        Rectangles turn with their bones.
+    frame_shape : tuple
+        ``(h, w, ...)`` of the frames: no search goes wider than the frame.
+
+    Attributes
+    ----------
+    parents : (k,) int
+        The joint whose bone turns each rectangle, -1 for none.
+    hangs_from : (k,) int
+        Each joint's parent in the skeleton, -1 for a root.
+    """
+
+    def __init__(self, sizes: ArrayLike, parents: ArrayLike, radius: ArrayLike, *, w_alpha: float,
+                 w_beta: float | None, rotate: bool, frame_shape: tuple[int, ...]) -> None:
+        self._w_alpha, self._w_beta = w_alpha, w_beta
+        self._widest = math.hypot(frame_shape[0], frame_shape[1])
+        radii = np.asarray(radius, dtype=float)
+        self._joints = [((max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5)))), float(r))
+                        for (w, h), r in zip(np.asarray(sizes, dtype=float), radii, strict=True)]
+        self.hangs_from = np.asarray(parents, dtype=int)
+        self.parents = self.hangs_from if rotate else np.full(len(self.hangs_from), -1)
+        self._cache: dict[tuple[int, float], JointPlan] = {}
+
+    def __len__(self) -> int:
+        return len(self._joints)
+
+    def __call__(self, m: int, factor: float = 1.0) -> JointPlan:
+        if (m, factor) not in self._cache:
+            size, r = self._joints[m]
+            r = min(r * factor, self._widest)
+            w_beta = (1.0 / r) ** 2 if self._w_beta is None else self._w_beta
+            self._cache[m, factor] = plan_joint(size, r, self._w_alpha, w_beta, int(self.parents[m]),
+                                                int(self.hangs_from[m]), pace=factor)
+        return self._cache[m, factor]
+
+
+class FrameSearch:
+    """The joints' search, frame after frame of one run (module docstring).
+
+    Parameters
+    ----------
+    plans : Plans
+    templates : list of Templates
+        One per joint; their latest templates are re-cut as joints are found.
+    P, C, angles : arrays
+        The run's positions, confidence and angles, written frame by frame.
+    lost : (k,) int
+        Drawings each joint has been hidden for (0: found last drawing); updated.
+    longest : (k,) float
+        The longest each joint's bone has been seen, pixels (0 for roots); updated.
+    """
+
+    def __init__(self, plans: Plans, templates: list[Templates], P: NDArray[np.float64],
+                 C: NDArray[np.float64], angles: NDArray[np.float64], lost: NDArray[np.int_],
+                 longest: NDArray[np.float64]) -> None:
+        self.plans, self.templates = plans, templates
+        self.P, self.C, self.angles = P, C, angles
+        self.lost: NDArray[np.int_] = np.array(lost, dtype=int)
+        self.longest: NDArray[np.float64] = np.array(longest, dtype=float)
+
+    def frame(self, image: NDArray[np.uint8], t: int, predicted: NDArray[np.float64],
+              coast: NDArray[np.float64], *, pace: float = 1.0) -> None:
+        """Track frame ``t`` (``image``; frame ``t - 1`` is tracked) from the joints' predicted
+        centres and where hidden roots coast to (``(k, 2)`` each); every window is ``pace`` times
+        as wide (the frames since the last drawing). Writes ``P[t]``, ``C[t]``, ``angles[t]``."""
+        P, plans = self.P, self.plans
+        k = len(plans)
+        angle = self.angles[t - 1] + turns(P[t - 1], predicted, plans.parents, True)
+        seen, agree = np.zeros(k, dtype=bool), np.zeros(k, dtype=bool)
+        self.C[t] = 0.0
+        small = None  # the frame at half resolution, made when a hidden joint needs it
+        for m in range(k):  # down
+            if not self.lost[m]:
+                self._try(image, t, m, plans(m, pace), predicted[m], angle[m], VISIBLE_CONFIDENCE, seen,
+                          agree)
+                continue
+            small = cv2.pyrDown(image) if small is None else small
+            for centre, turned in self._places_to_look(small, t, m, coast[m], angle[m], seen):
+                if self._try(image, t, m, plans(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen, agree,
+                             bounded=True, turn=False):
+                    break
+        moves = moves_below(P, t, seen, plans.hangs_from)
+        for m in range(k - 1, -1, -1):  # up
+            if not seen[m] and np.isfinite(moves[m]).all():
+                self._try(image, t, m, plans(m), P[t - 1, m] + moves[m], angle[m], REACQUIRE_CONFIDENCE, seen,
+                          agree, bounded=True)
+        _place_hidden(P, t, coast, seen, plans.hangs_from)
+        # A joint leaving the picture stays at its edge.
+        np.clip(P[t], 0.0, [image.shape[1] - 1, image.shape[0] - 1], out=P[t])
+        self.lost = np.where(seen, 0, self.lost + 1)
+        self.angles[t] = self.angles[t - 1] + turns(P[t - 1], P[t], plans.parents, True)
+        for j in np.flatnonzero(seen & agree & (self.C[t] >= UPDATE_CONFIDENCE)):
+            self.templates[j].latest = sample(image, P[t, j], self.angles[t, j], plans(int(j)).size)
+        lengthen(self.longest, P[t], self.C[t], plans.hangs_from)
+
+    def _places_to_look(self, small, t, m, coast, angle, seen):
+        """Where to look for hidden joint ``m`` at full resolution, with its rectangle's angle
+        there: round its parent if that was found, else near where its parent carries it or it
+        coasts (module docstring). Places whose coarse match is hopeless are left out."""
+        P, plans = self.P, self.plans
+        joint = plans(m)
+        bone = self._bone_rule(t, m, seen, bounded=True)
+        if bone is not None and math.isfinite(bone.longest):
+            g = plans.hangs_from[m]
+            start = math.atan2(*(P[t - 1, m] - P[t - 1, g])[::-1])
+            span = min(math.pi, SPAN_STEP * self.lost[m])
+            turned = float(self.angles[t - 1, m])
+            found = search_round(small, self.templates[m], joint, bone, start, span, turned)
+            return [(xy, turned) for xy, coarse, turned in found if coarse >= COARSE_CONFIDENCE]
+        carried = hidden_at(P, t, m, coast, plans.hangs_from)
+        radius = joint.radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
+        xy, coarse = locate(small, self.templates[m], carried, angle, joint, radius, bone)
+        return [(xy, angle)] if coarse >= COARSE_CONFIDENCE else []
+
+    def _try(self, image, t, m, joint, centre, angle, needed, seen, agree, *, bounded=False, turn=True):
+        """Match joint ``m`` round ``centre``; if at least ``needed`` confident, write it into
+        ``P[t]``, ``C[t]``, ``seen`` and ``agree`` (its latest template may be re-cut there) and
+        return True, else keep its best confidence so far (below VISIBLE_CONFIDENCE)."""
+        bone = self._bone_rule(t, m, seen, bounded=bounded)
+        xy, confidence, agreed = match(image, self.templates[m], centre, angle, joint, bone, turn=turn)
+        if confidence < needed:
+            self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
+            return False
+        self.P[t, m], self.C[t, m], seen[m], agree[m] = xy, confidence, True, agreed
+        return True
+
+    def _bone_rule(self, t, m, seen, *, bounded):
+        """The kinematic term for joint ``m`` at ``t`` if its parent was found there, else None:
+        its bone's length at ``t - 1``, weight ``BONE_WEIGHT * w_beta``, and with ``bounded`` a
+        reach of REACH_SLACK times the longest the bone has been seen."""
+        g = self.plans.hangs_from[m]
+        if g < 0 or not seen[g]:
+            return None
+        P = self.P
+        length = float(np.hypot(*(P[t - 1, m] - P[t - 1, g])))
+        reach = REACH_SLACK * self.longest[m] if bounded and self.longest[m] > 0 else math.inf
+        return BoneRule(P[t, g], length, BONE_WEIGHT * self.plans(m).w_beta, reach)
+
+
+def _place_hidden(P, t, coast, seen, hangs_from):
+    """Put every joint not found, parents first: at the mean of where its parent carries it and
+    where the joints hanging from it put it (:func:`moves_below`); a root with neither coasts."""
+    moves = moves_below(P, t, seen, hangs_from)
+    for m in range(len(seen)):
+        if seen[m]:
+            continue
+        guesses = [] if hangs_from[m] < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
+        if np.isfinite(moves[m]).all():
+            guesses.append(P[t - 1, m] + moves[m])
+        P[t, m] = np.mean(guesses, axis=0) if guesses else coast[m]
+
+
+def moves_below(P: NDArray[np.float64], t: int, seen: NDArray[np.bool_], hangs_from: NDArray[np.int_]
+                ) -> NDArray[np.float64]:
+    """How far each joint moved from ``t - 1`` to ``t`` by the joints hanging from it, ``(k, 2)``:
+    the mean move of its children, a child found at ``t`` (``seen``) by its own move, one not
+    found by its children's, recursively; NaN where no joint below it was found."""
+    k = len(seen)
+    moves = np.full((k, 2), np.nan)
+    own = np.where(seen[:, None], P[t] - P[t - 1], np.nan)
+    for m in range(k - 1, -1, -1):  # children come after their parents
+        kids = np.flatnonzero(hangs_from == m)
+        below = np.where(seen[kids, None], own[kids], moves[kids])
+        below = below[np.isfinite(below).all(axis=1)]
+        if len(below):
+            moves[m] = below.mean(axis=0)
+    return moves
+
+
+def hidden_for(C: NDArray[np.float64], drawings: list[int], history: NDArray[np.int_]) -> NDArray[np.int_]:
+    """For each joint, the drawings it has been hidden for up to ``drawings[-1]`` (0: visible),
+    counting only frames in its history (from ``history``)."""
+    hidden = (C[drawings] < VISIBLE_CONFIDENCE) & (np.array(drawings)[:, None] >= history)
+    return np.cumprod(hidden[::-1], axis=0).sum(axis=0)
+
+
+def longest_bones(P: NDArray[np.float64], C: NDArray[np.float64], drawings: list[int],
+                  hangs_from: NDArray[np.int_]) -> NDArray[np.float64]:
+    """Each joint's bone (from its parent) at its longest over ``drawings``, pixels; 0 for roots."""
+    longest = np.zeros(len(hangs_from))
+    for s in drawings:
+        lengthen(longest, P[s], C[s], hangs_from)
+    return longest
+
+
+def lengthen(longest: NDArray[np.float64], points: NDArray[np.float64], confidence: NDArray[np.float64],
+             hangs_from: NDArray[np.int_]) -> None:
+    """Raise ``longest`` to the bones seen (both ends visible) at ``points``."""
+    child = np.flatnonzero(hangs_from >= 0)
+    visible = confidence >= VISIBLE_CONFIDENCE
+    seen = child[visible[child] & visible[hangs_from[child]]]
+    length = np.hypot(*(points[seen] - points[hangs_from[seen]]).T)
+    longest[seen] = np.maximum(longest[seen], length)

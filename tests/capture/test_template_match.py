@@ -1,0 +1,93 @@
+"""Tests for toonmotion.capture.template_match: the kinematic term and the searches for a hidden
+joint (coarse, round its parent)."""
+
+import math
+
+import cv2
+import numpy as np
+
+from toonmotion.capture.template_match import BoneRule, Templates, locate, match, plan_joint, search_round
+
+SIDE = 21
+
+
+def _patch(rng, blur=2.0):
+    """``(SIDE, SIDE, 3)`` float32 noise, smooth enough to keep its looks at half resolution."""
+    noise = cv2.GaussianBlur(rng.uniform(0, 255, (SIDE, SIDE, 3)).astype(np.float32), (0, 0), blur)
+    return np.clip((noise - noise.mean()) / noise.std() * 60 + 128, 0, 255).astype(np.float32)
+
+
+def _scene(seed=0):
+    """A plain grey picture with two copies of one textured patch, at (60, 50) and (90, 50)."""
+    patch = _patch(np.random.default_rng(seed))
+    image = np.full((100, 140, 3), 128, np.uint8)
+    for x in (60, 90):
+        image[50 - SIDE // 2:50 + SIDE // 2 + 1, x - SIDE // 2:x + SIDE // 2 + 1] = patch.astype(np.uint8)
+    return image
+
+
+def _plan(radius=18.0):
+    return plan_joint((SIDE, SIDE), radius, 1 / 255**2, 1 / radius**2, parent=0, hangs_from=0)
+
+
+def test_a_look_alike_at_the_wrong_bone_length_loses_to_the_joint():
+    """Two identical patches equally far from the prediction: the colour and the prediction
+    cannot tell them apart, the bone's length can."""
+    image = _scene()
+    templates = Templates.cut(image, np.array([60.0, 50.0]), 0.0, (SIDE, SIDE))
+    predicted = np.array([75.0, 50.0])  # midway
+    joint = _plan()
+    near = BoneRule(parent=np.array([20.0, 50.0]), length=40.0, weight=joint.w_beta)
+    far = BoneRule(parent=np.array([20.0, 50.0]), length=70.0, weight=joint.w_beta)
+    assert np.allclose(match(image, templates, predicted, 0.0, joint, near)[0], (60, 50), atol=0.05)
+    assert np.allclose(match(image, templates, predicted, 0.0, joint, far)[0], (90, 50), atol=0.05)
+
+
+def test_nothing_is_taken_beyond_the_bones_reach():
+    image = _scene()
+    templates = Templates.cut(image, np.array([90.0, 50.0]), 0.0, (SIDE, SIDE))
+    joint = _plan()
+    short = BoneRule(parent=np.array([20.0, 50.0]), length=70.0, weight=joint.w_beta, longest=45.0)
+    xy, confidence, _ = match(image, templates, np.array([75.0, 50.0]), 0.0, joint, short)
+    assert np.hypot(*(xy - (20, 50))) <= 45.0 + 1.0  # the copy within reach, not the template's own place
+    assert np.allclose(xy, (60, 50), atol=0.05) and confidence > 0.9
+
+
+def test_a_hidden_joint_is_found_round_its_parent_turned_with_its_bone():
+    """A patch 40 px from its parent, cut pointing right, is found after its bone turned 130
+    degrees, far from where it was; the coarse search gives the place to within a few pixels
+    and the angle its bone has there."""
+    patch = _patch(np.random.default_rng(3))
+    parent = np.array([70.0, 60.0])
+
+    def picture(theta):
+        image = np.full((120, 140, 3), 128, np.float32)
+        centre = parent + 40 * np.array([math.cos(theta), math.sin(theta)])
+        c, s = math.cos(theta), math.sin(theta)
+        h = (SIDE - 1) / 2
+        M = np.array([[c, -s, centre[0] - c * h + s * h], [s, c, centre[1] - s * h - c * h]])
+        warped = cv2.warpAffine(patch, M, (140, 120), flags=cv2.INTER_LINEAR, borderValue=(128, 128, 128))
+        cover = np.ones((SIDE, SIDE), np.float32)
+        mask = cv2.warpAffine(cover, M, (140, 120), flags=cv2.INTER_LINEAR)[..., None]
+        return np.clip(image * (1 - mask) + warped * mask, 0, 255).astype(np.uint8), centre
+
+    first, start = picture(0.0)
+    templates = Templates.cut(first, start, 0.0, (SIDE, SIDE))
+    later, truth = picture(math.radians(130))
+    joint = _plan()
+    bone = BoneRule(parent=parent, length=40.0, weight=joint.w_beta, longest=48.0)
+    places = search_round(cv2.pyrDown(later), templates, joint, bone, 0.0, math.pi, 0.0)
+    (xy, coarse, angle), *_ = places
+    assert np.hypot(*(xy - truth)) < SIDE / 4 and abs(angle - math.radians(130)) < math.radians(15)
+    found, confidence, _ = match(later, templates, xy, angle, joint, bone)
+    assert np.hypot(*(found - truth)) < 0.5 and confidence > 0.8
+    # Only where the bone reaches: a span of 60 degrees from where it was does not get there.
+    assert all(np.hypot(*(p - truth)) > SIDE for p, _, _ in
+               search_round(cv2.pyrDown(later), templates, joint, bone, 0.0, math.radians(60), 0.0))
+
+
+def test_the_coarse_search_finds_a_joint_far_outside_the_fine_window():
+    image = _scene()
+    templates = Templates.cut(image, np.array([60.0, 50.0]), 0.0, (SIDE, SIDE))
+    xy, confidence = locate(cv2.pyrDown(image), templates, np.array([30.0, 40.0]), 0.0, _plan(), 40.0)
+    assert np.hypot(*(xy - (60, 50))) <= 2.0 and confidence > 0.5
