@@ -341,14 +341,19 @@ def _patches(image, centres, angles, size):
 
 
 def _match_turned(image, templates, predicted, angle, joint, bone):
-    """:func:`match` at one angle: the anchor's match where it is trusted, else the latest's."""
+    """:func:`match` at one angle: the anchor's match where it is trusted, else the latest's.
+
+    An anchor matching plainly (:data:`UPDATE_CONFIDENCE`) is taken without matching the latest:
+    it does not drift, and the joint is plainly there (the latest may be re-cut).
+    """
     R, (tw, th) = joint.radius, joint.size
     window = sample(image, predicted, angle, (tw + 2 * R, th + 2 * R))
     prior = joint.geometric if bone is None else joint.geometric + _bone_cost(predicted, angle, R, bone)
-    latest = _best(window, templates.latest, joint, prior)
-    (offset, confidence), agree = latest, True
-    if templates.anchor is not templates.latest:
-        anchor = _best(window, templates.anchor, joint, prior)
+    anchor = _best(window, templates.anchor, joint, prior)
+    (offset, confidence), agree = anchor, True
+    if anchor[1] < UPDATE_CONFIDENCE and templates.anchor is not templates.latest:
+        latest = _best(window, templates.latest, joint, prior)
+        (offset, confidence) = latest
         agree = bool(np.hypot(*(anchor[0] - latest[0])) <= DRIFT_TOLERANCE)
         if agree and anchor[1] >= VISIBLE_CONFIDENCE:
             # Both find the joint here: the anchor's place (it does not drift), and the latest's
