@@ -700,6 +700,23 @@ def test_track_writes_a_motion_csv_and_overlay(footage, tmp_path, capsys):
     assert Image.open(tmp_path / "o.gif").n_frames == 12
 
 
+def test_track_says_how_many_frames_repeat_a_drawing(footage, tmp_path, capsys):
+    from toonmotion.io.motion_json import load_motion
+
+    folder, truth = footage
+    twos = tmp_path / "twos"
+    twos.mkdir()
+    for t, name in enumerate(sorted((folder / "frames").iterdir())[:6]):
+        for copy in (0, 1):  # each drawing held two frames
+            (twos / f"f_{2 * t + copy:02d}.png").write_bytes(name.read_bytes())
+    out = tmp_path / "m.json"
+    assert _run("track", twos, "--joints", folder / "joints.json", "-o", out) == 0
+    assert "tracked 3 joints through 12 frames (from frame 0); 6 frames repeat the frame before" in \
+        capsys.readouterr().out
+    held = np.arange(12) // 2
+    assert np.hypot(*(load_motion(out).positions - truth[held]).reshape(-1, 2).T).max() < 2.0
+
+
 def test_track_corrections_resume_from_a_frame(footage, tmp_path):
     from toonmotion.io.motion_json import load_motion
 

@@ -41,11 +41,14 @@ class Capture:
         The footage frame the motion's frame 0 is.
     angles : (T, k) float
         Each joint rectangle's rotation in every motion frame, radians (for drawing the rectangles).
+    held : (T,) bool
+        Motion frames that repeat the frame before (animation on twos or threes).
     """
 
     motion: Motion
     first: int
     angles: NDArray[np.float64]
+    held: NDArray[np.bool_]
 
 
 def suggest_joints(
@@ -170,4 +173,6 @@ def _capture(result: Tracking, skeleton: Skeleton, fps: float) -> Capture:
         fps=fps,
         confidence=result.confidence[first:last],
     )
-    return Capture(motion=motion, first=first, angles=np.array(result.angles[first:last]))
+    assert result.held is not None  # a Tracking fills it in
+    return Capture(motion=motion, first=first, angles=np.array(result.angles[first:last]),
+                   held=np.array(result.held[first:last]))

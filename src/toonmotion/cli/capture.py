@@ -90,9 +90,11 @@ def track(
             overlay, _tracking_pictures(frames, captured, sizes), fps=rate, background=(255, 255, 255)
         )
     unsure = float((motion.confidence < 0.5).mean()) if motion.confidence is not None else 0.0
+    held = int(captured.held.sum())
+    repeats = f"{held} frames repeat the frame before (drawn on twos or threes); " if held else ""
     typer.echo(
         f"tracked {len(skeleton)} joints through {motion.frame_count} frames (from frame {captured.first}); "
-        f"{unsure:.0%} of joint-frames matched poorly (hidden or changed) -> {output}"
+        f"{repeats}{unsure:.0%} of joint-frames matched poorly (hidden or changed) -> {output}"
     )
 
 
