@@ -391,6 +391,7 @@ def test_bad_tracking_options_are_an_error(small, kwargs, message):
         ({"w_beta": -1.0}, r"w_beta must be a finite number >= 0"),
         ({"w_beta": "1"}, r"w_beta must be a number >= 0, got '1'"),
         ({"rotate": "yes"}, r"rotate must be True or False"),
+        ({"fill_gaps": 1}, r"fill_gaps must be True or False, got 1"),
     ],
 )
 def test_bad_settings_are_an_error(kwargs, message):

@@ -166,7 +166,8 @@ def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: t
 
     >>> image = np.full((80, 80, 3), 200, np.uint8); image[:, 40:] = 40  # a straight edge
     >>> image[60:, :] = 120  # a corner 20 px below
-    >>> distinct_size(image, np.array([40.0, 40.0]), (12, 12)), distinct_size(image, np.array([40.0, 60.0]), (12, 12))
+    >>> on_edge, at_corner = np.array([40.0, 40.0]), np.array([40.0, 60.0])
+    >>> distinct_size(image, on_edge, (12, 12)), distinct_size(image, at_corner, (12, 12))
     ((36, 36), (12, 12))
     """
     w0, h0 = size

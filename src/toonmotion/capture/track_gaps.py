@@ -2,15 +2,19 @@
 known.
 
 Frame by frame, a hidden joint can only be guessed from the past: carried by its parent, or by
-the joints below it (:mod:`~toonmotion.capture.tracker`). Once the whole clip is tracked, a span
-where a joint was hidden between two frames where it was found has a known end as well as a known
-start, and the guesses inside it can be bent to meet both: for a joint with a parent, its bone
-(the offset from the parent, as an angle and a length) is interpolated linearly in time from the
-frame before the span to the frame after it; a root's guesses are corrected by the mismatch at the
-span's end, growing linearly across the span (the correction of a smoother with a random-walk
-model). Spans at the end of the clip, where the joint is never found again, keep their guesses,
-and joints keep their confidence (below ``VISIBLE_CONFIDENCE``): they are still guesses, only
-better ones.
+the joints below it (:mod:`~toonmotion.capture.track_search`). Once the whole clip is tracked, a
+span where a joint was hidden between two frames where it was found has a known end as well as a
+known start, and the guesses inside it can be bent to meet both. For a joint with a parent, its
+guessed bones (offsets from the parent) are turned and scaled by a blend, linear in time, of the
+turn and scale that take the guesses, carried on one frame each way as they went, to the bones
+found before and after the span, when they meet both within a tenth of the bone
+(:data:`TRUSTED`): guesses that were right (a hand carried by an elbow that turned) stay as they
+were. Guesses that miss are dropped: the bone found before the span turns and stretches steadily
+into the bone found after it (exact for a limb turning steadily about a still joint). A root's
+guesses are corrected by the mismatch at the span's end, growing linearly across the span (the
+correction of a smoother with a random-walk model). Spans at the end of the clip, where the joint
+is never found again, keep their guesses, and joints keep their confidence (below
+``VISIBLE_CONFIDENCE``): they are still guesses, only better ones.
 
 Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` confidence.
 """
@@ -21,6 +25,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+
+# A joint's guesses are kept, and bent, where carried on they meet both ends of their span within
+# this fraction of the bone; else they are dropped for the found bones' steady turn.
+TRUSTED = 0.1
 
 
 def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: NDArray[np.int_],
@@ -66,16 +74,43 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
                 step = last - out[inside[-2], m] if len(inside) > 1 else 0.0
                 out[inside, m] += s * (out[after, m] - (last + step))
             else:
-                start = complex(*(out[before, m] - out[before, g]))
-                end = complex(*(out[after, m] - out[after, g]))
-                turn = np.angle(end / start) if start != 0 and end != 0 else 0.0
-                length = abs(start) + s[:, 0] * (abs(end) - abs(start))
-                bone = length * np.exp(1j * (np.angle(start) + s[:, 0] * turn))
+                # The guessed bones (offsets from the parent, as guessed), turned and scaled by a
+                # blend of the two ends' mismatches: what takes the guesses, carried on one frame
+                # each way as they went, to the bones found before and after the span.
+                guess = _complex(P[inside, m] - P[inside, g])
+                start = _complex(out[before, m] - out[before, g])
+                end = _complex(out[after, m] - out[after, g])
+                if start == 0 or end == 0:
+                    continue
+                first = last = 0.0
+                if (guess != 0).all():
+                    step_in = guess[0] / guess[1] if len(guess) > 1 else 1.0
+                    step_out = guess[-1] / guess[-2] if len(guess) > 1 else 1.0
+                    first = start / (guess[0] * step_in)
+                    last = end / (guess[-1] * step_out)
+                if abs(first - 1) > TRUSTED or abs(last - 1) > TRUSTED:
+                    # Guesses that missed an end by more than that: the bone found before the span
+                    # turns and stretches steadily into the bone found after it.
+                    guess = np.full(len(inside), start)
+                    first, last = 1.0, end / start
+                t = s[:, 0]
+                scale = (1 - t) * abs(first) + t * abs(last)
+                # The two turns within half a turn of each other, so the blend goes the short way.
+                start_turn = np.angle(first)
+                end_turn = start_turn + np.angle(last / first)
+                turn = (1 - t) * start_turn + t * end_turn
+                bone = guess * scale * np.exp(1j * turn)
                 out[inside, m] = out[inside, g] + np.column_stack([bone.real, bone.imag])
     held_frames = np.flatnonzero(held)
     for t in held_frames:  # in order, so a drawing held three frames passes its place on
         out[t] = out[t - 1]
     return out
+
+
+def _complex(xy):
+    """(x, y) pairs as complex numbers."""
+    xy = np.asarray(xy, dtype=float)
+    return xy[..., 0] + 1j * xy[..., 1]
 
 
 def _spans(found):

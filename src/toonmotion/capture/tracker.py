@@ -385,8 +385,8 @@ def _plans(setup, settings, image, centres):
     :func:`~toonmotion.capture.template_match.distinct_size`), windows as the rectangles ask."""
     r = [settings.search if settings.search is not None else max(MIN_SEARCH, SEARCH_FRACTION * max(w, h))
          for w, h in setup.sizes]
-    sizes = [distinct_size(image, centre, (max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5)))))
-             for centre, (w, h) in zip(centres, setup.sizes, strict=True)]
+    whole = [(max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5)))) for w, h in setup.sizes]
+    sizes = [distinct_size(image, centre, size) for centre, size in zip(centres, whole, strict=True)]
     return Plans(sizes, setup.skeleton.parents, r, w_alpha=settings.w_alpha, w_beta=settings.w_beta,
                  rotate=settings.rotate, frame_shape=image.shape)
 
