@@ -77,6 +77,7 @@ def test_a_hidden_joint_is_found_round_its_parent_turned_with_its_bone():
     joint = _plan()
     bone = BoneRule(parent=parent, length=40.0, weight=joint.w_beta, longest=48.0)
     places = search_round(cv2.pyrDown(later), templates, joint, bone, 0.0, math.pi, 0.0)
+    assert len(places) == 2  # the best two, a rectangle apart
     (xy, coarse, angle), *_ = places
     assert np.hypot(*(xy - truth)) < SIDE / 4 and abs(angle - math.radians(130)) < math.radians(15)
     found, confidence, _ = match(later, templates, xy, angle, joint, bone)
@@ -91,3 +92,14 @@ def test_the_coarse_search_finds_a_joint_far_outside_the_fine_window():
     templates = Templates.cut(image, np.array([60.0, 50.0]), 0.0, (SIDE, SIDE))
     xy, confidence = locate(cv2.pyrDown(image), templates, np.array([30.0, 40.0]), 0.0, _plan(), 40.0)
     assert np.hypot(*(xy - (60, 50))) <= 2.0 and confidence > 0.5
+
+
+def test_a_search_round_a_long_bone_with_many_places_is_made_in_batches():
+    """Thousands of places, stacked taller than OpenCV's remap takes in one call (32767 rows)."""
+    image = np.full((900, 900, 3), 128, np.uint8)
+    image[440:461, 740:761] = _patch(np.random.default_rng(4)).astype(np.uint8)
+    templates = Templates.cut(image, np.array([750.0, 450.0]), 0.0, (SIDE, SIDE))
+    joint = _plan()
+    bone = BoneRule(parent=np.array([450.0, 450.0]), length=300.0, weight=joint.w_beta, longest=400.0)
+    places = search_round(cv2.pyrDown(image), templates, joint, bone, 0.0, math.pi, 0.0)
+    assert len(places) == 2 and np.hypot(*(places[0][0] - (750, 450))) < SIDE / 4

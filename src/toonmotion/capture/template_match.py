@@ -51,6 +51,7 @@ MAX_GROWTH = 3.0
 COARSE_TURNS = (0.0, math.radians(25), math.radians(-25))
 
 _WARP = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+_REMAP_ROWS = 32000
 
 Patch = NDArray[np.float32]
 
@@ -299,9 +300,9 @@ def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPla
     rings = np.arange(max(side / 2, step), bone.longest + step / 2, step)
     places, directions = [], []
     for rho in rings:
-        count = max(1, int(math.ceil(2 * span * rho / step)))
-        phi = start + np.linspace(-span, span, count) if span < math.pi else \
-            start + np.arange(count) * (2 * math.pi / count)
+        around = max(1, int(math.ceil(2 * span * rho / step)))
+        phi = start + np.linspace(-span, span, around) if span < math.pi else \
+            start + np.arange(around) * (2 * math.pi / around)
         places.append(bone.parent + rho * np.column_stack([np.cos(phi), np.sin(phi)]))
         directions.append(phi)
     if not places:
@@ -335,10 +336,15 @@ def _patches(image, centres, angles, size):
     cx, cy = centres[:, 0].astype(np.float32), centres[:, 1].astype(np.float32)
     map_x = cx[:, None, None] + c[:, None, None] * u[None, None, :] - s[:, None, None] * v[None, :, None]
     map_y = cy[:, None, None] + s[:, None, None] * u[None, None, :] + c[:, None, None] * v[None, :, None]
-    n = len(centres)
-    out = cv2.remap(image, map_x.reshape(n * h, w), map_y.reshape(n * h, w), cv2.INTER_LINEAR,
-                    borderMode=cv2.BORDER_REPLICATE)
-    return out.reshape(n, h, w, 3).astype(np.float32)
+    # cv2.remap takes maps under 32767 rows: the patches go in batches stacked that high at most.
+    n, batch = len(centres), max(1, _REMAP_ROWS // h)
+    out = np.empty((n, h, w, 3), np.float32)
+    for i in range(0, n, batch):
+        j = min(n, i + batch)
+        rows = cv2.remap(image, map_x[i:j].reshape(-1, w), map_y[i:j].reshape(-1, w), cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_REPLICATE)
+        out[i:j] = rows.reshape(j - i, h, w, 3)
+    return out
 
 
 def _match_turned(image, templates, predicted, angle, joint, bone):

@@ -52,8 +52,13 @@ MAX_WIDEN = 3.0
 # A hidden joint whose parent is found is looked for round it, in directions up to this many
 # radians from where it was last for every drawing it has been hidden (all round at most).
 SPAN_STEP = math.radians(45)
-# Places whose coarse match is less confident than this are not looked at closely.
+# Places whose coarse match is less confident than this are not looked at closely; of the others,
+# a rectangle apart, the PLACES best are matched finely, best first, until one is found. The coarse
+# match only ranks places (a quarter-rectangle grid misses a fine texture by up to an eighth of a
+# rectangle): refining the best 2 instead of the best 64 lost joints on 4 of the 14 rendered
+# clips (e.g. the flat walk's mean error 5.7 -> 7.7 px) at no gain in speed.
 COARSE_CONFIDENCE = 0.1
+PLACES = 64
 # A hidden joint is found again only by a match at least this confident, no farther from its
 # parent than REACH_SLACK times the longest its bone has been seen. The anchor may have been cut
 # with a neighbour overlapping the joint; 0.6 still tells a joint from a different texture (0.1
@@ -190,7 +195,7 @@ class FrameSearch:
             start = math.atan2(*(P[t - 1, m] - P[t - 1, g])[::-1])
             span = min(math.pi, SPAN_STEP * self.lost[m])
             turned = float(self.angles[t - 1, m])
-            found = search_round(small, self.templates[m], joint, bone, start, span, turned)
+            found = search_round(small, self.templates[m], joint, bone, start, span, turned, count=PLACES)
             return [(xy, turned) for xy, coarse, turned in found if coarse >= COARSE_CONFIDENCE]
         carried = hidden_at(P, t, m, coast, plans.hangs_from)
         radius = joint.radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
