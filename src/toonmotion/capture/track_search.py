@@ -174,7 +174,10 @@ class FrameSearch:
             if not seen[m] and np.isfinite(moves[m]).all():
                 self._try(image, t, m, plans(m), P[t - 1, m] + moves[m], angle[m], REACQUIRE_CONFIDENCE, seen,
                           agree, bounded=True)
-        _place_hidden(P, t, coast, seen, plans.hangs_from)
+        # A joint not found goes no farther in one frame than its search could have reached.
+        reach = np.array([plans(m, pace).radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
+                          for m in range(k)])
+        _place_hidden(P, t, coast, seen, plans.hangs_from, reach)
         # A joint leaving the picture stays at its edge.
         np.clip(P[t], 0.0, [image.shape[1] - 1, image.shape[0] - 1], out=P[t])
         self.lost = np.where(seen, 0, self.lost + 1)
@@ -227,9 +230,12 @@ class FrameSearch:
         return BoneRule(P[t, g], length, BONE_WEIGHT * self.plans(m).w_beta, reach)
 
 
-def _place_hidden(P, t, coast, seen, hangs_from):
+def _place_hidden(P, t, coast, seen, hangs_from, reach):
     """Put every joint not found, parents first: at the mean of where its parent carries it and
-    where the joints hanging from it put it (:func:`moves_below`); a root with neither coasts."""
+    where the joints hanging from it put it (:func:`moves_below`); a root with neither coasts.
+    None moves farther than its ``reach`` (pixels, ``(k,)``) beyond its parent's own move (its
+    own move, for a root): a bone seen end-on that turns half round in one frame would otherwise
+    fling it across the figure."""
     moves = moves_below(P, t, seen, hangs_from)
     for m in range(len(seen)):
         if seen[m]:
@@ -237,7 +243,11 @@ def _place_hidden(P, t, coast, seen, hangs_from):
         guesses = [] if hangs_from[m] < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
         if np.isfinite(moves[m]).all():
             guesses.append(P[t - 1, m] + moves[m])
-        P[t, m] = np.mean(guesses, axis=0) if guesses else coast[m]
+        g = hangs_from[m]
+        carried = P[t - 1, m] + (P[t, g] - P[t - 1, g] if g >= 0 else 0.0)
+        step = (np.mean(guesses, axis=0) if guesses else coast[m]) - carried
+        length = float(np.hypot(*step))
+        P[t, m] = carried + (step if length <= reach[m] else step * (reach[m] / length))
 
 
 def moves_below(P: NDArray[np.float64], t: int, seen: NDArray[np.bool_], hangs_from: NDArray[np.int_]
