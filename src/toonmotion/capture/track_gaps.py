@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.geometry.coordinates import as_complex, as_points
 
 # A joint's guesses are kept, and bent, where carried on they meet both ends of their span within
 # this fraction of the bone; else they are dropped for the found bones' steady turn.
@@ -77,9 +78,9 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
                 # The guessed bones (offsets from the parent, as guessed), turned and scaled by a
                 # blend of the two ends' mismatches: what takes the guesses, carried on one frame
                 # each way as they went, to the bones found before and after the span.
-                guess = _complex(P[inside, m] - P[inside, g])
-                start = _complex(out[before, m] - out[before, g])
-                end = _complex(out[after, m] - out[after, g])
+                guess = as_complex(P[inside, m] - P[inside, g])
+                start = as_complex(out[before, m] - out[before, g])
+                end = as_complex(out[after, m] - out[after, g])
                 if start == 0 or end == 0:
                     continue
                 first = last = 0.0
@@ -100,17 +101,11 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
                 end_turn = start_turn + np.angle(last / first)
                 turn = (1 - t) * start_turn + t * end_turn
                 bone = guess * scale * np.exp(1j * turn)
-                out[inside, m] = out[inside, g] + np.column_stack([bone.real, bone.imag])
+                out[inside, m] = out[inside, g] + as_points(bone)
     held_frames = np.flatnonzero(held)
     for t in held_frames:  # in order, so a drawing held three frames passes its place on
         out[t] = out[t - 1]
     return out
-
-
-def _complex(xy):
-    """(x, y) pairs as complex numbers."""
-    xy = np.asarray(xy, dtype=float)
-    return xy[..., 0] + 1j * xy[..., 1]
 
 
 def _spans(found):

@@ -26,6 +26,7 @@ Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` co
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import cv2
 import numpy as np
@@ -78,8 +79,8 @@ class Plans:
 
     Parameters
     ----------
-    sizes : (k, 2) float
-        Rectangle widths and heights, pixels.
+    sizes : (k, 2) int
+        Template widths and heights, whole pixels (at least 1).
     parents : (k,) int
         Each joint's parent, -1 for a root.
     radius : (k,) float
@@ -100,13 +101,12 @@ class Plans:
         Each joint's parent in the skeleton, -1 for a root.
     """
 
-    def __init__(self, sizes: ArrayLike, parents: ArrayLike, radius: ArrayLike, *, w_alpha: float,
-                 w_beta: float | None, rotate: bool, frame_shape: tuple[int, ...]) -> None:
+    def __init__(self, sizes: Sequence[tuple[int, int]], parents: ArrayLike, radius: ArrayLike, *,
+                 w_alpha: float, w_beta: float | None, rotate: bool, frame_shape: tuple[int, ...]) -> None:
         self._w_alpha, self._w_beta = w_alpha, w_beta
         self._widest = math.hypot(frame_shape[0], frame_shape[1])
         radii = np.asarray(radius, dtype=float)
-        self._joints = [((max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5)))), float(r))
-                        for (w, h), r in zip(np.asarray(sizes, dtype=float), radii, strict=True)]
+        self._joints = [((int(w), int(h)), float(r)) for (w, h), r in zip(sizes, radii, strict=True)]
         self.hangs_from = np.asarray(parents, dtype=int)
         self.parents = self.hangs_from if rotate else np.full(len(self.hangs_from), -1)
         self._cache: dict[tuple[int, float], JointPlan] = {}
