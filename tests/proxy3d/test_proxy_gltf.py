@@ -5,17 +5,13 @@ The file is read with pygltflib and its scene evaluated here at every keyframe (
 reproduce the proxy to float32 precision. The Khronos validator checks the file itself.
 """
 
-import json
-import os
 import shutil
 import subprocess
-from pathlib import Path
 
 import numpy as np
-import pygltflib as gl
 import pytest
-from scipy.spatial.transform import Rotation
 
+from tests.gltf_reader import Scene, validator_installed, validator_report
 from tests.proxy3d.synthetic_proxy import BRANCHING, FOREST, synthetic_proxy
 from toonmotion.errors import ProxyError
 from toonmotion.io.bvh import save_bvh
@@ -23,71 +19,8 @@ from toonmotion.io.exchange.proxy_gltf import save_proxy_glb
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.proxy3d.skeleton_bvh import limb_tree, skeleton_clip
 
-ROOT = Path(__file__).resolve().parents[2]
-VALIDATE = Path(__file__).with_name("validate_gltf.mjs")
 # float32 storage: positions to this many metres, pixels to this many.
 METRES, PIXELS = 1e-5, 1e-3
-
-
-class Scene:
-    """A .glb read back: accessors as arrays, and the nodes' world matrices at each keyframe."""
-
-    def __init__(self, path):
-        self.gltf = gl.GLTF2.load_binary(path)
-        self.blob = self.gltf.binary_blob()
-        self.by_name = {}
-        for i, node in enumerate(self.gltf.nodes):
-            self.by_name.setdefault(node.name, []).append(i)
-        (animation,) = self.gltf.animations
-        self.tracks = {}
-        for channel in animation.channels:
-            sampler = animation.samplers[channel.sampler]
-            assert sampler.interpolation == "LINEAR"
-            self.times = self.read(sampler.input)[:, 0]
-            self.tracks[channel.target.node, channel.target.path] = self.read(sampler.output)
-        self.parent = {c: i for i, node in enumerate(self.gltf.nodes) for c in node.children}
-
-    def read(self, index):
-        accessor = self.gltf.accessors[index]
-        view = self.gltf.bufferViews[accessor.bufferView]
-        dtype = {5126: np.float32, 5123: np.uint16, 5125: np.uint32}[accessor.componentType]
-        width = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}[accessor.type]
-        assert view.byteStride is None
-        start = view.byteOffset + (accessor.byteOffset or 0)
-        data = np.frombuffer(self.blob, dtype=dtype, count=accessor.count * width, offset=start)
-        return data.reshape(accessor.count, width).astype(np.float64 if dtype == np.float32 else np.int64)
-
-    def node(self, name):
-        (index,) = self.by_name[name]
-        return index
-
-    def value(self, node, path, t):
-        if (node, path) in self.tracks:
-            track = self.tracks[node, path]
-            return track.reshape(len(self.times), -1)[t]
-        static = getattr(self.gltf.nodes[node], path)
-        default = {"translation": [0, 0, 0], "rotation": [0, 0, 0, 1], "scale": [1, 1, 1]}[path]
-        return np.array(default if static is None else static, dtype=float)
-
-    def local(self, node, t):
-        M = np.eye(4)
-        turn = Rotation.from_quat(self.value(node, "rotation", t)).as_matrix()
-        M[:3, :3] = turn * self.value(node, "scale", t)  # R @ diag(scale)
-        M[:3, 3] = self.value(node, "translation", t)
-        return M
-
-    def world(self, node, t):
-        M = self.local(node, t)
-        while node in self.parent:
-            node = self.parent[node]
-            M = self.local(node, t) @ M
-        return M
-
-    def at(self, name, t, local_point=(0, 0, 0)):
-        return (self.world(self.node(name), t) @ [*local_point, 1])[:3]
-
-    def weights(self, node, t):
-        return self.tracks[node, "weights"].reshape(len(self.times), -1)[t]
 
 
 @pytest.fixture(scope="module", params=["branching", "forest"])
@@ -211,8 +144,8 @@ def test_no_limbs_no_radii_and_one_frame(tmp_path):
     assert not scene.gltf.skins and "collision" not in scene.by_name
     assert np.abs(scene.at("ball", 0) - proxy.skeleton[0, 0]).max() < METRES
     assert np.abs(scene.at("point/ball", 0) - proxy.points[0, 0]).max() < METRES
-    if _validator():
-        report = _issues(tmp_path / "ball.glb")
+    if validator_installed():
+        report = validator_report(tmp_path / "ball.glb")
         assert report["numErrors"] == 0 and report["numWarnings"] == 0, report["messages"][:10]
 
 
@@ -228,34 +161,13 @@ def test_values_beyond_float32_are_refused_and_nothing_is_written(tmp_path):
 # -- the Khronos validator and Blender -----------------------------------------------------------
 
 
-def _validator():
-    """True when node and node_modules/gltf-validator are there; skip (fail under CI=true) if not."""
-    missing = None
-    if shutil.which("node") is None:
-        missing = "node is not installed"
-    elif not (ROOT / "node_modules" / "gltf-validator").is_dir():
-        missing = "node_modules/gltf-validator is not installed (make test runs npm ci)"
-    if missing is None:
-        return True
-    if os.environ.get("CI") == "true":
-        pytest.fail(f"the glTF validator is missing under CI: {missing}")
-    return False
-
-
-def _issues(path):
-    done = subprocess.run(["node", str(VALIDATE), str(path)], cwd=ROOT, capture_output=True, text=True,
-                          timeout=120, check=False)
-    assert done.returncode == 0, done.stderr
-    return json.loads(done.stdout)
-
-
 @pytest.mark.parametrize("radii", [True, False], ids=["radii", "no radii"])
 def test_khronos_validator_finds_no_errors(tmp_path, radii):
-    if not _validator():
+    if not validator_installed():
         pytest.skip("the glTF validator is not installed: run make test (npm ci)")
     path = tmp_path / "proxy.glb"
     save_proxy_glb(path, synthetic_proxy(FOREST, frames=5, radii=radii, gimbal=True))
-    report = _issues(path)
+    report = validator_report(path)
     assert report["numErrors"] == 0 and report["numWarnings"] == 0, (
         f"{report['numErrors']} errors, {report['numWarnings']} warnings: {report['messages'][:10]}")
 

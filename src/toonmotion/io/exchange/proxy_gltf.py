@@ -43,12 +43,10 @@ from scipy.spatial.transform import Rotation
 
 from toonmotion.errors import ProxyError
 from toonmotion.io.atomic import write_bytes
+from toonmotion.io.exchange.glb import GlbDocument, continuous
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.proxy3d.skeleton_bvh import LimbTree, limb_tree
 
-_FLOAT, _USHORT, _UINT = 5126, 5123, 5125
-_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
-_KINDS = {1: "SCALAR", 3: "VEC3", 4: "VEC4", 16: "MAT4"}
 # Segments around a cylinder or a sphere, and rings from pole to pole of a sphere.
 SEGMENTS, SPHERE_RINGS = 16, 8
 # The camera's near plane, metres.
@@ -90,7 +88,8 @@ def save_proxy_glb(path: str | Path, proxy: Proxy) -> None:
 
 def proxy_glb_bytes(proxy: Proxy) -> bytes:
     """The ``.glb`` file :func:`save_proxy_glb` writes, as bytes."""
-    doc = _Document(np.arange(proxy.frame_count) / proxy.fps)
+    doc = GlbDocument(np.arange(proxy.frame_count) / proxy.fps, name="proxy", error=ProxyError,
+                      units="proxy's units (metres)")
     group, joints, tree = _skeleton(doc, proxy)
     scene = [group]
     skinned = _skin(doc, proxy, group, joints, tree)
@@ -107,10 +106,10 @@ def proxy_glb_bytes(proxy: Proxy) -> bytes:
 # -- the parts ---------------------------------------------------------------------------------
 
 
-def _skeleton(doc: _Document, proxy: Proxy) -> tuple[int, list[int], LimbTree]:
+def _skeleton(doc: GlbDocument, proxy: Proxy) -> tuple[int, list[int], LimbTree]:
     """The joint nodes under a ``skeleton`` group node: the group's index, the joints' and the tree."""
     tree = limb_tree(proxy)
-    local = _continuous(tree.local_rotations(proxy.limb_rotations))
+    local = continuous(tree.local_rotations(proxy.limb_rotations))
     group = doc.node("skeleton")
     root_marker = {int(tree.markers[m]): int(m) for m in np.flatnonzero(proxy.parents < 0)}
     nodes: list[int] = []
@@ -128,7 +127,7 @@ def _skeleton(doc: _Document, proxy: Proxy) -> tuple[int, list[int], LimbTree]:
     return group, nodes, tree
 
 
-def _skin(doc: _Document, proxy: Proxy, group: int, nodes: list[int], tree: LimbTree) -> int | None:
+def _skin(doc: GlbDocument, proxy: Proxy, group: int, nodes: list[int], tree: LimbTree) -> int | None:
     """The skinned mesh node (an octahedron per limb), or None for a proxy without limbs."""
     if not np.any(tree.limbs >= 0):
         return None
@@ -161,7 +160,7 @@ def _skin(doc: _Document, proxy: Proxy, group: int, nodes: list[int], tree: Limb
     return doc.node("skeleton mesh", mesh=mesh, skin=len(doc.gltf.skins) - 1)
 
 
-def _collision(doc: _Document, proxy: Proxy, radii: NDArray[np.float64], sphere_radii: NDArray[np.float64]
+def _collision(doc: GlbDocument, proxy: Proxy, radii: NDArray[np.float64], sphere_radii: NDArray[np.float64]
                ) -> int:
     """Cylinder and sphere nodes under a ``collision`` group node; the radii are the proxy's."""
     group = doc.node("collision")
@@ -171,7 +170,7 @@ def _collision(doc: _Document, proxy: Proxy, radii: NDArray[np.float64], sphere_
         axis = ends[:, :, 1] - ends[:, :, 0]
         height = np.linalg.norm(axis, axis=-1)
         for k, (p, c) in enumerate(proxy.limbs):
-            turn = _continuous(_turn_from_y(axis[:, k]))
+            turn = continuous(_turn_from_y(axis[:, k]))
             scale = np.stack([np.ones_like(height[:, k]), height[:, k], np.ones_like(height[:, k])], axis=1)
             name = f"cylinder/{proxy.names[p]}-{proxy.names[c]}"
             # A mesh per limb, sharing the cylinder's data: its weights are the radii on frame 0
@@ -193,7 +192,7 @@ def _collision(doc: _Document, proxy: Proxy, radii: NDArray[np.float64], sphere_
     return group
 
 
-def _points(doc: _Document, proxy: Proxy) -> int:
+def _points(doc: GlbDocument, proxy: Proxy) -> int:
     group = doc.node("points")
     for n, name in enumerate(proxy.names):
         node = doc.node(f"point/{name}", translation=proxy.points[0, n])
@@ -202,14 +201,14 @@ def _points(doc: _Document, proxy: Proxy) -> int:
     return group
 
 
-def _camera(doc: _Document, proxy: Proxy) -> int:
+def _camera(doc: GlbDocument, proxy: Proxy) -> int:
     camera = proxy.camera
     yfov = 2 * np.arctan(camera.height / (2 * camera.focal))
     doc.gltf.cameras.append(gl.Camera(name="camera", type="perspective", perspective=gl.Perspective(
         yfov=float(yfov), aspectRatio=camera.width / camera.height, znear=ZNEAR)))
     # Columns: glTF's camera axes in the world: +X image right, +Y image up, +Z backwards.
     to_world = np.transpose(camera.rotations, (0, 2, 1)) @ np.diag([1.0, -1, -1])
-    turn = _continuous(Rotation.from_matrix(to_world).as_quat())
+    turn = continuous(Rotation.from_matrix(to_world).as_quat())
     node = doc.node("camera", camera=len(doc.gltf.cameras) - 1, translation=camera.centres[0],
                     rotation=turn[0])
     doc.track(node, "translation", camera.centres)
@@ -237,7 +236,7 @@ def _octahedron(base: NDArray[np.float64], limb: NDArray[np.float64]) -> tuple[N
     return V, np.array(F)
 
 
-def _cylinder_primitive(doc: _Document) -> gl.Primitive:
+def _cylinder_primitive(doc: GlbDocument) -> gl.Primitive:
     """The unit tapered cylinder with its two ring targets (module docstring)."""
     a = 2 * np.pi * np.arange(SEGMENTS) / SEGMENTS
     ring = np.stack([np.cos(a), np.zeros_like(a), np.sin(a)], axis=1)
@@ -256,7 +255,7 @@ def _cylinder_primitive(doc: _Document) -> gl.Primitive:
     return doc.primitive(gl.Attributes(POSITION=doc.vertices(V, bounds=True)), F, targets=targets)
 
 
-def _sphere_mesh(doc: _Document) -> int:
+def _sphere_mesh(doc: GlbDocument) -> int:
     """A unit UV sphere: poles on Y, ``SPHERE_RINGS`` bands of ``SEGMENTS`` quads, outwards."""
     polar = np.pi * np.arange(1, SPHERE_RINGS) / SPHERE_RINGS
     a = 2 * np.pi * np.arange(SEGMENTS) / SEGMENTS
@@ -290,105 +289,3 @@ def _turn_from_y(direction: NDArray[np.float64]) -> NDArray[np.float64]:
     unit = np.where(sine > 1e-12, axis / np.where(sine > 1e-12, sine, 1), [1.0, 0, 0])
     angle = np.arctan2(sine[:, 0], u[:, 1])
     return Rotation.from_rotvec(unit * angle[:, None]).as_quat()
-
-
-def _continuous(quaternions: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Quaternions ``(T, ..., 4)`` with signs flipped so that each frame's is near the last's."""
-    q = np.array(quaternions, dtype=float)
-    for t in range(1, len(q)):
-        flip = np.sum(q[t] * q[t - 1], axis=-1) < 0
-        q[t][flip] *= -1
-    return q
-
-
-# -- the file ----------------------------------------------------------------------------------
-
-
-class _Document:
-    """A glTF document being built: its JSON objects, binary blob and one animation."""
-
-    def __init__(self, times: NDArray[np.float64]) -> None:
-        self.gltf = gl.GLTF2(asset=gl.Asset(generator="toonmotion", version="2.0"))
-        self.blob = bytearray()
-        self.animation = gl.Animation(name="proxy")
-        self.times = self.accessor(times, bounds=True)
-
-    def accessor(self, array: NDArray[Any], *, target: int | None = None, bounds: bool = False) -> int:
-        """An accessor over a new buffer view holding ``array`` ``(count,)`` or ``(count, width)``.
-
-        Floats are stored as float32, integers as they come (uint16 or uint32).
-        """
-        a = np.ascontiguousarray(array)
-        if a.dtype.kind == "f":
-            if a.size and not np.abs(a).max() <= np.finfo(np.float32).max:
-                raise ProxyError("a proxy value is too large for glTF's 32-bit floats (beyond 3.4e38); "
-                                 "check the proxy's units (metres)")
-            a = a.astype(np.float32)
-        component = {np.dtype(np.float32): _FLOAT, np.dtype(np.uint16): _USHORT,
-                     np.dtype(np.uint32): _UINT}[a.dtype]
-        rows = a.reshape(len(a), -1)
-        view = gl.BufferView(buffer=0, byteOffset=len(self.blob), byteLength=a.nbytes, target=target)
-        self.blob += a.tobytes()
-        self.blob += bytes(-len(self.blob) % 4)
-        self.gltf.bufferViews.append(view)
-        accessor = gl.Accessor(bufferView=len(self.gltf.bufferViews) - 1, componentType=component,
-                               count=len(a), type=_KINDS[rows.shape[1]])
-        if bounds:
-            accessor.min = [_number(v) for v in rows.min(axis=0)]
-            accessor.max = [_number(v) for v in rows.max(axis=0)]
-        self.gltf.accessors.append(accessor)
-        return len(self.gltf.accessors) - 1
-
-    def vertices(self, array: NDArray[Any], *, bounds: bool = False) -> int:
-        """A vertex attribute accessor."""
-        return self.accessor(array, target=_ARRAY_BUFFER, bounds=bounds)
-
-    def primitive(self, attributes: gl.Attributes, triangles: NDArray[Any],
-                  targets: list[gl.Attributes] | None = None) -> gl.Primitive:
-        flat = np.asarray(triangles, dtype=np.uint32).reshape(-1)
-        indices = self.accessor(flat, target=_ELEMENT_ARRAY_BUFFER)
-        return gl.Primitive(attributes=attributes, indices=indices, targets=targets or [])
-
-    def mesh(self, name: str, primitive: gl.Primitive, *, weights: NDArray[np.float64] | None = None) -> int:
-        """A mesh of one primitive; ``weights``: its morph targets' default weights."""
-        default = [] if weights is None else [float(w) for w in weights]
-        self.gltf.meshes.append(gl.Mesh(name=name, primitives=[primitive], weights=default))
-        return len(self.gltf.meshes) - 1
-
-    def node(self, name: str, **fields: Any) -> int:
-        """A node; array fields (translation, rotation, scale) become lists of floats."""
-        for key in ("translation", "rotation", "scale"):
-            if key in fields:
-                fields[key] = [float(v) for v in np.asarray(fields[key], dtype=float)]
-        self.gltf.nodes.append(gl.Node(name=name, **fields))
-        return len(self.gltf.nodes) - 1
-
-    def child(self, parent: int, node: int) -> None:
-        self.gltf.nodes[parent].children.append(node)
-
-    def track(self, node: int, path: str, values: NDArray[np.float64]) -> None:
-        """A LINEAR track of ``values`` ``(T, width)``, one key per frame."""
-        v = np.asarray(values, dtype=float)
-        if path == "rotation":  # unit length after the cast to float32 too
-            v = v / np.linalg.norm(v, axis=-1, keepdims=True)
-        output = self.accessor(v.reshape(-1) if path == "weights" else v)
-        self.animation.samplers.append(gl.AnimationSampler(input=self.times, output=output,
-                                                           interpolation="LINEAR"))
-        self.animation.channels.append(gl.AnimationChannel(
-            sampler=len(self.animation.samplers) - 1, target=gl.AnimationChannelTarget(node=node, path=path)))
-
-    def finish(self, scene: list[int]) -> bytes:
-        """The ``.glb`` bytes of the document with ``scene`` as its one scene's root nodes."""
-        gltf = self.gltf
-        gltf.scenes = [gl.Scene(name="proxy", nodes=scene)]
-        gltf.scene = 0
-        if self.animation.channels:
-            gltf.animations = [self.animation]
-        gltf.buffers = [gl.Buffer(byteLength=len(self.blob))]
-        gltf.set_binary_blob(bytes(self.blob))
-        return b"".join(gltf.save_to_bytes())
-
-
-def _number(value: Any) -> float | int:
-    """An accessor bound as JSON: the stored value exactly (a float32 widens to float64 exactly)."""
-    return int(value) if isinstance(value, np.integer) else float(value)

@@ -1,5 +1,5 @@
 // Validate a .glb with the Khronos glTF validator; print its report's issue summary as JSON.
-// Usage: node tests/proxy3d/validate_gltf.mjs FILE.glb (run from the repository root, where
+// Usage: node tests/validate_gltf.mjs FILE.glb (run from the repository root, where
 // node_modules/gltf-validator is installed by `make test` from package.json).
 import { readFile } from "node:fs/promises";
 import { createRequire } from "node:module";
