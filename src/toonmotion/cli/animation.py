@@ -10,16 +10,18 @@ import numpy as np
 import typer
 
 from toonmotion import api
+from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
 from toonmotion.animate.timeline import Timeline, make_timeline
 from toonmotion.cli import options
 from toonmotion.cli.app import app
+from toonmotion.deform.deformer import DeformSettings
 from toonmotion.errors import SettingsError
 from toonmotion.io.image import save_png
 from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion
 from toonmotion.io.pose_json import load_keyframes, load_pose, load_pose_edits, save_pose
 from toonmotion.io.sketch_json import load_sketch
-from toonmotion.io.video import animation_format
+from toonmotion.io.video import TRANSPARENT_FORMATS, animation_format
 from toonmotion.rig.character import Character
 
 
@@ -139,22 +141,10 @@ def animate(
     for path in (save_motion_to, save_frame_motion_to):
         if path is not None:
             options.suffix(path, ".json", "a motion file")
-    character = api.load_project(project)
     exaggeration = options.filter_settings(exaggerate, sigma, shift)
     settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning)
-    source: Motion | Timeline
-    if is_motion_file(keys_file):
-        if ease is not None:
-            raise SettingsError("--ease applies to key-frames; a motion has a pose for every frame")
-        motion = load_motion(keys_file)
-        source, what = motion, f"a motion of {motion.frame_count} frames"
-    else:
-        timeline = load_keyframes(keys_file, character.skeleton, fps=fps)
-        if ease is not None:
-            timeline = make_timeline(character.skeleton, timeline.keys, fps=timeline.fps, ease=ease)
-        source, what = timeline, f"{len(timeline.keys)} key-frames"
-    animation = api.animate_character(character, source, settings=settings, exaggeration=exaggeration,
-                                      fps=fps, method="solve" if solve_inbetweens else "interpolate")
+    character, animation, what = make_animation(project, keys_file, settings=settings, fps=fps, ease=ease,
+                                                exaggeration=exaggeration, solve_inbetweens=solve_inbetweens)
     count, out_size = write(
         output, character, animation, kind=kind, size=size, background=background, overlay=overlay
     )
@@ -198,10 +188,32 @@ def filter_motion(
     )
 
 
+def make_animation(project: Path, keys_file: Path, *, settings: DeformSettings, fps: float | None,
+                   ease: str | None, exaggeration: FilterSettings | None, solve_inbetweens: bool
+                   ) -> tuple[Character, api.Animation, str]:
+    """The project's character, its animation through key-frames or a motion file, and what that
+    file held (for the summary line): what ``animate`` and ``export`` share."""
+    character = api.load_project(project)
+    source: Motion | Timeline
+    if is_motion_file(keys_file):
+        if ease is not None:
+            raise SettingsError("--ease applies to key-frames; a motion has a pose for every frame")
+        motion = load_motion(keys_file)
+        source, what = motion, f"a motion of {motion.frame_count} frames"
+    else:
+        timeline = load_keyframes(keys_file, character.skeleton, fps=fps)
+        if ease is not None:
+            timeline = make_timeline(character.skeleton, timeline.keys, fps=timeline.fps, ease=ease)
+        source, what = timeline, f"{len(timeline.keys)} key-frames"
+    animation = api.animate_character(character, source, settings=settings, exaggeration=exaggeration,
+                                      fps=fps, method="solve" if solve_inbetweens else "interpolate")
+    return character, animation, what
+
+
 def write(output: Path, character: Character, animation: api.Animation, *, kind: str,
           size: str | None, background: str | None, overlay: str) -> tuple[int, tuple[int, int]]:
     """Render and save an animation with the shared output options; ``(frames, (w, h))``."""
-    colour = options.colour(background or ("transparent" if kind == "png" else "white"))
+    colour = options.colour(background or ("transparent" if kind in TRANSPARENT_FORMATS else "white"))
     with options.progress("rendering") as report:
         return api.write_animation(output, character, animation, size=options.size(size),
                                    background=colour, overlays=options.overlays(overlay), progress=report)

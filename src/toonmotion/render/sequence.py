@@ -91,7 +91,8 @@ def write_animation(path: str | Path, character: Character, animation: Animation
     Parameters
     ----------
     path : str or Path
-        ``.gif``, ``.mp4``, ``.webp``, a folder (numbered PNGs) or a pattern like ``f_%04d.png``.
+        ``.gif``, ``.mp4``, ``.webm``, ``.webp``, ``.apng`` or ``.png`` (one animated PNG), a folder
+        (numbered PNGs) or a pattern like ``f_%04d.png``; see :func:`toonmotion.io.video.save_animation`.
         Nothing is left half-written if rendering fails.
     character : Character
     animation : Animation
