@@ -137,7 +137,7 @@ def _options(command):
 COMMANDS = ("rig", "show", "sample", "pose", "sketch", "animate", "filter", "depth", "correct", "undo",
             "redo", "track", "retarget", "keyshapes", "capture-contours", "retarget-keyshapes",
             "retarget-line", "capture-video", "lift", "proxy-export", "proxy-preview", "edits", "remesh",
-            "tune", "edit", "scene")
+            "tune", "edit", "scene", "export")
 
 
 def test_every_command_is_in_the_readme_command_reference():
@@ -431,6 +431,61 @@ def test_animate_writes_every_frame_of_the_timeline(posable, tmp_path):
     gif = Image.open(out)
     assert gif.n_frames == 37  # the built-in key-frames end at frame 36
     assert gif.size == (84, 120)
+
+
+def test_export_writes_a_glb_a_spine_rig_and_a_sprite_sheet(posable, tmp_path, capsys):
+    import pygltflib as gl
+
+    project, keys = str(posable / "hero"), str(posable / "keys.json")
+    assert _run("export", project, keys, "-o", str(tmp_path / "hero.glb")) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("exported 7 key-frames as glb: 37 frames at 12 fps ->"), out
+    glb = gl.GLTF2.load_binary(tmp_path / "hero.glb")
+    assert len(glb.animations) == 1 and len(glb.skins) == 1 and glb.meshes[0].primitives[0].targets
+    assert _run("export", project, keys, "-o", str(tmp_path / "hero.json"), "--format", "spine") == 0
+    assert sorted(p.name for p in tmp_path.glob("hero.*")) == ["hero.atlas", "hero.glb", "hero.json",
+                                                              "hero.png"]
+    assert _run("export", project, keys, "-o", str(tmp_path / "sheet.json"), "--format", "sheet",
+                "--padding", "0", "--no-trim", "--size", "42x60") == 0
+    atlas = json.loads((tmp_path / "sheet.json").read_text())
+    assert len(atlas["frames"]) == 37 and atlas["meta"]["image"] == "sheet.png"
+    first = next(iter(atlas["frames"].values()))
+    assert first["sourceSize"] == {"w": 42, "h": 60} and not first["trimmed"]
+    assert "42x60 ->" in capsys.readouterr().out
+
+
+def test_export_keeps_transparency_in_webm_and_plays_a_motion(posable, tmp_path, capsys):
+    from toonmotion.io.video import read_webm_rgba
+
+    project = str(posable / "hero")
+    motion = tmp_path / "motion.json"
+    assert _run("animate", project, str(posable / "keys.json"), "-o", str(tmp_path / "a.gif"),
+                "--size", "42x60", "--save-motion", str(motion)) == 0
+    assert _run("export", project, str(motion), "-o", str(tmp_path / "hero.webm"), "--size", "42x60") == 0
+    assert "exported a motion of 37 frames as webm" in capsys.readouterr().out
+    frames = read_webm_rgba(tmp_path / "hero.webm")
+    assert frames.shape == (37, 60, 42, 4)
+    assert frames[..., 3].min() < 16 and frames[..., 3].max() > 240  # see-through and solid both
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["-o", "hero.json"], "give --format spine or --format sheet"),
+        (["-o", "hero.glb", "--format", "fbx"], "unknown export format 'fbx'"),
+        (["-o", "hero.glb", "--format", "spine"], "a spine export is a .json file"),
+        (["-o", "hero.json", "--format", "sheet", "--max-size", "64"], "more than max_size 64"),
+    ],
+)
+def test_export_refuses_what_it_cannot_write_in_one_line(posable, tmp_path, capsys, extra, message):
+    (tmp_path / "hero.json").write_text("previous")
+    argv = [str(posable / "hero"), str(posable / "keys.json"), *extra]
+    argv[argv.index("-o") + 1] = str(tmp_path / argv[argv.index("-o") + 1])
+    code = _run("export", *argv)
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["hero.json"]
+    assert (tmp_path / "hero.json").read_text() == "previous"
 
 
 def test_animate_to_png_frames(posable, tmp_path):

@@ -19,10 +19,11 @@ __version__ = "0.1.0"
 
 _API = (
     "Animation", "Balloon", "Balls", "Capture", "Character", "ContourCapture", "DeformSettings",
-    "FilterSettings", "KeyShapeSpace", "LiftReport", "Markers", "Motion", "PosedFrame", "Proxy",
+    "Exported", "FilterSettings", "KeyShapeSpace", "LiftReport", "Markers", "Motion", "PosedFrame", "Proxy",
     "RigSettings", "SameDepthOverlap", "SceneMotion", "SketchMatch", "TrackSettings", "VideoCapture",
     "animate_character", "animate_drawing", "animation_frames", "capture_contours", "capture_parts",
-    "capture_video", "composite_scene", "correct_regions", "delete_key", "exaggerate", "filter_motion",
+    "capture_video", "composite_scene", "correct_regions", "delete_key", "exaggerate", "export_animation",
+    "export_format", "filter_motion",
     "keyshape_sheet", "keyshape_space", "lift_proxy", "load_project", "motion_in_frames", "move_key",
     "pick_layer", "pose_character", "pose_view", "preview_proxy", "redo_edits", "render_elements",
     "render_pose", "retarget", "retarget_keyposes", "retarget_keyshapes", "retarget_line_of_action",

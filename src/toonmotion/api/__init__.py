@@ -32,6 +32,7 @@ from toonmotion.api.animation import (
     set_key,
 )
 from toonmotion.api.capture import track_footage
+from toonmotion.api.export import Exported, export_animation, export_format
 from toonmotion.api.keyshapes import (
     animate_drawing,
     capture_contours,
@@ -87,6 +88,7 @@ __all__ = [
     "Character",
     "ContourCapture",
     "DeformSettings",
+    "Exported",
     "FilterSettings",
     "Motion",
     "PosedFrame",
@@ -110,6 +112,8 @@ __all__ = [
     "correct_regions",
     "delete_key",
     "exaggerate",
+    "export_animation",
+    "export_format",
     "filter_motion",
     "keyshape_sheet",
     "keyshape_space",

@@ -5,8 +5,9 @@ One module per command group registers its commands on the shared Typer ``app``:
 (pose, animate, filter), :mod:`~toonmotion.cli.editing` (depth, correct, undo, redo, edits, tune)
 and :mod:`~toonmotion.cli.capture` (track, retarget), :mod:`~toonmotion.cli.keyshapes`
 (keyshapes, capture-contours), :mod:`~toonmotion.cli.proxy3d` (lift, proxy-export,
-proxy-preview) and :mod:`~toonmotion.cli.scene3d` (scene). Errors the user can fix print one line,
-``toonmotion: error: ...``, and exit with status 2 (:func:`~toonmotion.cli.app.main`).
+proxy-preview), :mod:`~toonmotion.cli.scene3d` (scene) and :mod:`~toonmotion.cli.export`
+(export). Errors the user can fix print one line, ``toonmotion: error: ...``, and exit with
+status 2 (:func:`~toonmotion.cli.app.main`).
 """
 
 # The order the groups register their commands in is the order --help lists them: the workflow's.
@@ -24,9 +25,11 @@ from toonmotion.cli import proxy3d  # isort: split
 
 from toonmotion.cli import scene3d  # isort: split
 
+from toonmotion.cli import export  # isort: split
+
 from toonmotion.cli import editor  # isort: split
 
 from toonmotion.cli.app import app, main
 
-__all__ = ["animation", "app", "capture", "editing", "editor", "keyshapes", "main", "proxy3d", "rigging",
-           "scene3d"]
+__all__ = ["animation", "app", "capture", "editing", "editor", "export", "keyshapes", "main", "proxy3d",
+           "rigging", "scene3d"]
