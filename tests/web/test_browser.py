@@ -8,6 +8,7 @@ Without Chromium these tests skip, except under CI=true, where a missing browser
 from __future__ import annotations
 
 import io
+import json
 import os
 import shutil
 import socket
@@ -397,6 +398,31 @@ def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
         corner = np.asarray(gif.convert("RGB"))[0, 0]
     assert corner.tolist() == [0, 0, 0]
     assert page.locator("#error").is_hidden()
+
+
+def test_export_a_spine_rig_and_a_sprite_sheet_with_a_link_per_file(page, editor):
+    folder = editor[1]
+    page.click("nav button[data-panel=export]")
+    page.fill("#export-name", "hero")
+    page.select_option("#export-format", "spine")
+    # Size and background do not apply to a rig: the panel says so and disables them.
+    assert page.locator("#export-rig-note").is_visible() and page.locator("#export-width").is_disabled()
+    page.click("#export-go")
+    page.wait_for_function("document.getElementById('export-result').textContent.includes('hero.spine.json')")
+    links = page.locator("#export-result a")
+    assert [links.nth(i).get_attribute("download") for i in range(links.count())] == [
+        "hero.spine.json", "hero.spine.atlas", "hero.spine.png"]
+    skeleton = json.loads((folder / "exports" / "hero.spine.json").read_text())
+    assert skeleton["skeleton"]["spine"].startswith("4.2")
+    page.select_option("#export-format", "sheet")
+    assert page.locator("#export-width").is_enabled()
+    page.click("#export-go")
+    page.wait_for_function("document.getElementById('export-result').textContent.includes('hero.sheet.json')")
+    atlas = json.loads((folder / "exports" / "hero.sheet.json").read_text())
+    assert len(atlas["frames"]) == 19 and atlas["meta"]["image"] == "hero.sheet.png"
+    page.wait_for_function("document.getElementById('export-preview').complete")
+    assert page.locator("#export-preview").is_visible()  # the sheet shows in the page
+    assert page.errors == [] and page.locator("#error").is_hidden()
 
 
 def test_exaggerate_fix_the_feet_and_draw_the_acceleration(page, editor):

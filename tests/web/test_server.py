@@ -423,6 +423,7 @@ def test_an_export_reports_progress_and_writes_the_animation_into_the_project(ed
         "id": 9,
         "type": "exported",
         "file": "exports/wave.gif",
+        "files": ["exports/wave.gif"],
         "frames": 7,
         "size": done["size"],
     }
@@ -430,6 +431,31 @@ def test_an_export_reports_progress_and_writes_the_animation_into_the_project(ed
         assert (gif.n_frames, list(gif.size)) == (7, done["size"])
     download = _get(client, "/api/exports/wave.gif")
     assert download.status_code == 200 and download.content == (folder / "exports" / "wave.gif").read_bytes()
+
+
+@pytest.mark.parametrize(("kind", "files", "media"), [
+    ("glb", ["wave.glb"], ["model/gltf-binary"]),
+    ("spine", ["wave.spine.json", "wave.spine.atlas", "wave.spine.png"],
+     ["application/json", "text/plain", "image/png"]),
+    ("sheet", ["wave.sheet.json", "wave.sheet.png"], ["application/json", "image/png"]),
+    ("webp", ["wave.webp"], ["image/webp"]),
+])
+def test_rigs_sheets_and_transparent_pictures_export_and_download_every_file(editable, kind, files, media):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _keyed(folder, socket)
+        socket.send_text(json.dumps({"type": "export", "format": kind, "name": "wave"}))
+        done = socket.receive_json()
+        while done["type"] == "progress":
+            done = socket.receive_json()
+    assert done["type"] == "exported" and done["files"] == [f"exports/{f}" for f in files], done
+    assert done["frames"] == 7 and (done["size"] is None) == (kind in ("glb", "spine"))
+    for name, kind_of in zip(files, media, strict=True):
+        download = _get(client, f"/api/exports/{name}")
+        assert download.status_code == 200 and download.headers["content-type"].startswith(kind_of)
+        assert download.content == (folder / "exports" / name).read_bytes()
+    assert _get(client, "/api/exports/wave.spine.exe").status_code == 404
+    assert _get(client, "/api/exports/..%2Fkeys.json").status_code == 404
 
 
 def test_an_export_takes_the_size_background_and_overlays_the_cli_takes(editable):

@@ -37,8 +37,7 @@ from toonmotion.io.frames import load_frames
 from toonmotion.io.image import load_image, png_bytes
 from toonmotion.io.skeleton_json import load_skeleton_file
 from toonmotion.web.session import (
-    EXPORT_FORMATS,
-    EXPORT_NAME,
+    EXPORT_FILE,
     EXPORTS,
     FOOTAGE,
     MAX_MESSAGE_BYTES,
@@ -69,6 +68,10 @@ PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "te
 # Images a folder of frames may hold (sent one by one).
 FRAME_SUFFIXES = ("png", "jpg", "jpeg", "webp")
 # Footage the editor takes: what toonmotion.io.frames reads as one file.
+# What an export's download is served as, by suffix.
+EXPORT_MEDIA_TYPES = {"gif": "image/gif", "mp4": "video/mp4", "apng": "image/apng", "webp": "image/webp",
+                      "webm": "video/webm", "glb": "model/gltf-binary", "json": "application/json",
+                      "atlas": "text/plain", "png": "image/png"}
 FOOTAGE_SUFFIXES = ("mp4", "mov", "avi", "mkv", "webm", "gif", "png", "apng", "webp")
 
 log = logging.getLogger("toonmotion.web")
@@ -238,13 +241,11 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
 
     @app.get("/api/exports/{name}")
     def exported(name: str) -> FileResponse:
-        stem, dot, suffix = name.rpartition(".")
+        allowed = EXPORT_FILE.fullmatch(name)
         file = editing.folder / EXPORTS / name
-        if not (dot and EXPORT_NAME.fullmatch(stem) and f".{suffix}" in EXPORT_FORMATS.values()
-                and file.is_file()):
+        if allowed is None or not file.is_file():
             raise HTTPException(404, f"no export {name!r}")
-        return FileResponse(file, media_type="image/gif" if suffix == "gif" else "video/mp4",
-                            filename=name)
+        return FileResponse(file, media_type=EXPORT_MEDIA_TYPES[allowed["suffix"]], filename=name)
 
     @app.websocket("/ws")
     async def live(socket: WebSocket) -> None:

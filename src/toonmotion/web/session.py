@@ -51,14 +51,17 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   "width": w, "height": h, "joints": n}``.
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
   Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
-* ``{"type": "export", "format": "gif" | "mp4" | "png", "name": "walk", "size": [w, h] | null,
-  "background": [r, g, b] | null, "overlays": ["mesh", "skeleton", "rest"]}`` (the last three
-  optional, as the CLI's ``--size``, ``--background`` and ``--overlay``): render the key-frames'
-  animation into the project folder's ``exports/`` (``walk.gif``, ``walk.mp4`` or the folder
-  ``walk/`` of PNG frames), through the CLI's atomic writes. While it runs, progress messages
-  ``{"type": "progress", "index": i, "count": n}`` carry the request's id; the reply is
-  ``{"type": "exported", "file": "exports/walk.gif", "frames": n, "size": [w, h]}``. The name is
-  letters, digits, ``-`` and ``_``: a request never names a path.
+* ``{"type": "export", "format": "gif" | "mp4" | "png" | "apng" | "webp" | "webm" | "glb" |
+  "spine" | "sheet", "name": "walk", "size": [w, h] | null, "background": [r, g, b] | null,
+  "overlays": ["mesh", "skeleton", "rest"]}`` (the last three optional, as the CLI's ``--size``,
+  ``--background`` and ``--overlay``; rigs, glb and spine, take none of them): export the
+  key-frames' animation into the project folder's ``exports/`` (``walk.gif``, the folder
+  ``walk/`` of PNG frames, ``walk.glb``, ``walk.spine.json`` with its ``.atlas`` and ``.png``,
+  ``walk.sheet.json`` with its ``.png``; see :data:`EXPORT_FORMATS`), through the CLI's atomic
+  writes. While it runs, progress messages ``{"type": "progress", "index": i, "count": n}`` carry
+  the request's id; the reply is ``{"type": "exported", "file": "exports/walk.gif", "files":
+  [...every file written], "frames": n, "size": [w, h] | null}``. The name is letters, digits,
+  ``-`` and ``_``: a request never names a path.
 """
 
 from __future__ import annotations
@@ -119,7 +122,13 @@ SNAPSHOTS = "history"
 # Where the editor's exports go, in the project folder; and what an export's name may be.
 EXPORTS = "exports"
 EXPORT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
-EXPORT_FORMATS = {"gif": ".gif", "mp4": ".mp4", "png": ""}
+# Each format's file name after the export's name: Spine's skeleton and a sprite sheet's atlas are
+# both JSON, so they carry a second suffix (their .atlas and .png are written beside them).
+EXPORT_FORMATS = {"gif": ".gif", "mp4": ".mp4", "png": "", "apng": ".apng", "webp": ".webp", "webm": ".webm",
+                  "glb": ".glb", "spine": ".spine.json", "sheet": ".sheet.json"}
+# The files an export may leave, which the editor serves for download, by suffix.
+EXPORT_FILE = re.compile(r"(?P<stem>[A-Za-z0-9][A-Za-z0-9_-]{0,63})(?:\.spine|\.sheet)?"
+                         r"\.(?P<suffix>gif|mp4|apng|webp|webm|glb|json|atlas|png)")
 # A WebSocket message longer than this is refused unread (a pose of 10,000 joints fits easily).
 MAX_MESSAGE_BYTES = 1_000_000
 
@@ -341,12 +350,25 @@ def export(editing: Editing, message: dict[str, Any],
     with editing.lock:
         character, animation = editing.character, editing.animated(exaggeration_of(message))
     relative = f"{EXPORTS}/{name}{EXPORT_FORMATS[kind]}"
-    count, size = api.write_animation(editing.folder / relative, character, animation,
-                                      size=_export_size(message.get("size")),
-                                      background=_export_background(message.get("background")),
-                                      overlays=check_overlays(_names(message.get("overlays", []))),
-                                      progress=lambda stage, index, total: progress(index, total))
-    return {"type": "exported", "file": relative, "frames": count, "size": list(size)}
+    overlays = check_overlays(_names(message.get("overlays", [])))
+    size, background = _export_size(message.get("size")), _export_background(message.get("background"))
+
+    def report(stage: str, index: int, total: int) -> None:
+        progress(index, total)
+
+    if overlays and kind in ("gif", "mp4", "png"):
+        count, out_size = api.write_animation(editing.folder / relative, character, animation, size=size,
+                                              background=background, overlays=overlays, progress=report)
+        return {"type": "exported", "file": relative, "files": [relative], "frames": count,
+                "size": list(out_size)}
+    if overlays:
+        raise KeyframeError("overlays are drawn on GIF, MP4 and PNG frames only")
+    done = api.export_animation(editing.folder / relative, character, animation, format=kind,
+                                settings=editing.deformer.settings, size=size, background=background,
+                                progress=report)
+    files = [f"{EXPORTS}/{path.name}" for path in done.files]
+    return {"type": "exported", "file": relative, "files": files, "frames": done.frames,
+            "size": None if done.size is None else list(done.size)}
 
 
 @_off_loop("open the drawing")

@@ -1,5 +1,6 @@
-// The Export panel: the key-frames' animation to a GIF, an MP4 or a folder of PNG frames, in the
-// project folder's exports/, with a progress bar. A GIF or an MP4 can then be downloaded.
+// The Export panel: the key-frames' animation into the project folder's exports/, with a progress
+// bar: pictures (GIF, MP4, PNG frames, APNG, WebP, WebM, a sprite sheet) or rigs other tools replay
+// (glTF, Spine). Every file written can then be downloaded.
 
 export const name = "export";
 export const title = "Export";
@@ -11,8 +12,19 @@ export function mount(ctx) {
     <p><label>Name <input id="export-name" value="animation" pattern="[A-Za-z0-9][A-Za-z0-9_-]*"
        maxlength="64"></label></p>
     <p><label>Format <select id="export-format">
-      <option value="gif">GIF</option><option value="mp4">MP4</option><option value="png">PNG frames</option>
+      <optgroup label="pictures">
+        <option value="gif">GIF</option><option value="mp4">MP4</option><option value="png">PNG frames</option>
+        <option value="apng">APNG (transparent)</option><option value="webp">WebP (transparent)</option>
+        <option value="webm">WebM VP9 (transparent)</option>
+        <option value="sheet">sprite sheet (PNG + JSON atlas: Phaser, PixiJS, Godot)</option>
+      </optgroup>
+      <optgroup label="rigs (the drawing, skinned)">
+        <option value="glb">glTF .glb (Blender, game engines, three.js)</option>
+        <option value="spine">Spine 4.2 JSON + atlas</option>
+      </optgroup>
     </select></label></p>
+    <p id="export-rig-note" hidden>A rig replays the animation on the drawing in the other tool: size,
+      background and overlays do not apply.</p>
     <p><label><input id="export-exaggerated" type="checkbox"> exaggerated (the Exaggerate panel's
       strength and width, or 1.5 and 3)</label></p>
     <p><label>Size <input id="export-width" type="number" min="1" max="16384" placeholder="auto" style="width: 5em"></label>
@@ -28,6 +40,16 @@ export function mount(ctx) {
     <p><progress id="export-progress" max="1" value="0" hidden></progress></p>
     <p id="export-result"></p>
     <img id="export-preview" alt="the exported animation" hidden style="max-width: 100%">`;
+  const formatChoice = document.getElementById("export-format");
+  const pictureOnly = ["export-width", "export-height", "export-background"];
+  formatChoice.onchange = () => {
+    const rig = ["glb", "spine"].includes(formatChoice.value);
+    document.getElementById("export-rig-note").hidden = !rig;
+    for (const id of pictureOnly) document.getElementById(id).disabled = rig;
+    for (const box of side.querySelectorAll("input[name=export-overlay]")) {
+      box.disabled = !["gif", "mp4", "png"].includes(formatChoice.value);
+    }
+  };
   const colourChoice = document.getElementById("export-background");
   colourChoice.onchange = () => { document.getElementById("export-colour").hidden = colourChoice.value !== "custom"; };
   const button = document.getElementById("export-go");
@@ -37,11 +59,14 @@ export function mount(ctx) {
   button.onclick = async () => {
     const format = document.getElementById("export-format").value;
     const message = { type: "export", format, name: document.getElementById("export-name").value };
-    const width = document.getElementById("export-width").value, height = document.getElementById("export-height").value;
-    if (width || height) message.size = [Number(width), Number(height)];
-    const hex = colourChoice.value === "custom" ? document.getElementById("export-colour").value : colourChoice.value;
-    if (hex) message.background = [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
-    message.overlays = [...side.querySelectorAll("input[name=export-overlay]:checked")].map((box) => box.value);
+    if (!["glb", "spine"].includes(format)) {
+      const width = document.getElementById("export-width").value, height = document.getElementById("export-height").value;
+      if (width || height) message.size = [Number(width), Number(height)];
+      const hex = colourChoice.value === "custom" ? document.getElementById("export-colour").value : colourChoice.value;
+      if (hex) message.background = [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
+      message.overlays = [...side.querySelectorAll("input[name=export-overlay]:checked:not(:disabled)")]
+        .map((box) => box.value);
+    }
     if (document.getElementById("export-exaggerated").checked) {
       Object.assign(message, ctx.exaggeration || { strength: 1.5, sigma: 3 });
     }
@@ -55,17 +80,23 @@ export function mount(ctx) {
         bar.max = count;
         bar.value = index;
       });
-      const [w, h] = reply.size;
-      result.textContent = `${reply.frames} frames, ${w}×${h} → ${reply.file} `;
+      const size = reply.size ? `, ${reply.size[0]}×${reply.size[1]}` : "";
+      result.textContent = `${reply.frames} frames${size} → ${reply.file} `;
+      const preview = document.getElementById("export-preview");
+      preview.hidden = true;
       if (format !== "png") {
-        const link = document.createElement("a");
-        link.href = `api/exports/${reply.file.split("/").pop()}?token=${encodeURIComponent(token)}`;
-        link.textContent = "download";
-        link.download = reply.file.split("/").pop();
-        result.append(link);
-        if (format === "gif") {
-          const preview = document.getElementById("export-preview");
-          preview.src = `${link.href}&t=${Date.now()}`;
+        for (const file of reply.files) {
+          const name = file.split("/").pop();
+          const link = document.createElement("a");
+          link.href = `api/exports/${name}?token=${encodeURIComponent(token)}`;
+          link.textContent = reply.files.length > 1 ? `download ${name}` : "download";
+          link.download = name;
+          result.append(link, " ");
+        }
+        // What plays (or, for a sheet, shows) in the page: the picture itself, or the sheet's PNG.
+        const shown = [...result.querySelectorAll("a")].find((a) => /\.(gif|apng|webp|png)$/.test(a.download));
+        if (shown && ["gif", "apng", "webp", "sheet"].includes(format)) {
+          preview.src = `${shown.href}&t=${Date.now()}`;
           preview.hidden = false;
         }
       }
