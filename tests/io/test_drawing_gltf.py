@@ -15,7 +15,7 @@ import pytest
 from PIL import Image
 
 from tests.conftest import SAMPLE
-from tests.gltf_reader import Scene, validator_installed, validator_report
+from tests.gltf_reader import validator_installed, validator_report
 from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.api import animate_character, set_depth
 from toonmotion.deform.deformer import DeformSettings
@@ -24,28 +24,11 @@ from toonmotion.errors import ExportError
 from toonmotion.io.exchange.drawing_gltf import PIXELS_PER_METRE, save_animation_glb
 from toonmotion.io.exchange.drawing_rig import drawing_rig
 from toonmotion.sample_animation import sample_keyframes
+from toonmotion.testing.export_playback import GlbScene, glb_mesh
 
 # Measured: 2.2e-5 to 4.4e-5 px over the cases below: float32 rounding of the skin, where a
 # vertex carries no offset (drawing_gltf.MORPH_FLOOR_PX is 5e-5 px).
 BOUND_PX = 1e-4
-
-
-def evaluate(scene, frame):
-    """The skinned, morphed mesh at ``frame``: ``(n, 3)`` in the file's units."""
-    gltf = scene.gltf
-    (mesh_node,) = [i for i, node in enumerate(gltf.nodes) if node.skin is not None]
-    node = gltf.nodes[mesh_node]
-    primitive = gltf.meshes[node.mesh].primitives[0]
-    skin = gltf.skins[node.skin]
-    P = scene.read(primitive.attributes.POSITION)
-    if primitive.targets:
-        for weight, target in zip(scene.weights(mesh_node, frame), primitive.targets, strict=True):
-            P = P + weight * scene.read(target["POSITION"])
-    joints = scene.read(primitive.attributes.JOINTS_0).astype(int)
-    weights = scene.read(primitive.attributes.WEIGHTS_0)
-    inverse_bind = scene.read(skin.inverseBindMatrices).reshape(-1, 4, 4).transpose(0, 2, 1)
-    M = np.stack([scene.world(j, frame) @ inverse_bind[i] for i, j in enumerate(skin.joints)])
-    return np.einsum("ns,nsij,nj->ni", weights, M[joints], np.column_stack([P, np.ones(len(P))]))[:, :3]
 
 
 def in_pixels(points, character):
@@ -58,7 +41,7 @@ def in_pixels(points, character):
 
 def export(character, animation, settings, path):
     save_animation_glb(path, drawing_rig(character, animation, settings=settings, unit=PIXELS_PER_METRE))
-    return Scene(path)
+    return GlbScene(path)
 
 
 CASES = {
@@ -83,7 +66,7 @@ def test_every_frame_lands_on_the_deformed_drawing(rigs, tmp_path, name):
                           .astype(np.float32))
     worst = 0.0
     for t, U in animation.meshes:
-        points = evaluate(scene, t)
+        points = glb_mesh(scene, t)
         assert np.abs(points[:, 2]).max() == 0
         worst = max(worst, np.abs(in_pixels(points, hero) - U).max())
     assert worst < BOUND_PX, f"{name}: {worst:.3g} px"
@@ -95,7 +78,7 @@ def test_a_shared_drawing_too(rigs, drawing_dir, tmp_path):
     character = rigs.character(drawing_dir.name)
     animation = animate_character(character, sample_keyframes(character.skeleton))
     scene = export(character, animation, DeformSettings(), tmp_path / "drawing.glb")
-    worst = max(np.abs(in_pixels(evaluate(scene, t), character) - U).max() for t, U in animation.meshes)
+    worst = max(np.abs(in_pixels(glb_mesh(scene, t), character) - U).max() for t, U in animation.meshes)
     assert worst < BOUND_PX, f"{drawing_dir.name}: {worst:.3g} px"
 
 

@@ -8,7 +8,6 @@ for weighted vertices plus deform offsets) and reads only the JSON file, not the
 """
 
 import json
-import math
 
 import numpy as np
 import pytest
@@ -25,6 +24,7 @@ from toonmotion.io.exchange.spine_json import _hull_first, save_spine, spine_ske
 from toonmotion.io.exchange.spine_schema import read_spine_json
 from toonmotion.sample_animation import sample_keyframes
 from toonmotion.samples import sample_rig
+from toonmotion.testing.export_playback import spine_mesh
 
 # Measured max error over every frame and vertex, in drawing pixels (float64 evaluation):
 # one-bone 1.2e-11, weights 1.2e-11, one-bone without area 1.2e-11, weights without area 1.2e-11,
@@ -54,89 +54,6 @@ def animated(hero):
 # -- an evaluator from Spine's documented runtime math -----------------------------------------
 
 
-def spine_world(bones, local):
-    """World ``(a, b, c, d, x, y)`` per bone from local ``(x, y, rotation, scaleX, scaleY)`` by name,
-    ``inherit: normal`` (the only kind written), skeleton at the origin, unscaled."""
-    world = {}
-    for bone in bones:
-        x, y, rotation, sx, sy = local[bone["name"]]
-        la, lb = math.cos(math.radians(rotation)) * sx, math.cos(math.radians(rotation + 90)) * sy
-        lc, ld = math.sin(math.radians(rotation)) * sx, math.sin(math.radians(rotation + 90)) * sy
-        if "parent" not in bone:
-            world[bone["name"]] = (la, lb, lc, ld, x, y)
-            continue
-        pa, pb, pc, pd, px, py = world[bone["parent"]]
-        world[bone["name"]] = (pa * la + pb * lc, pa * lb + pb * ld, pc * la + pd * lc, pc * lb + pd * ld,
-                               pa * x + pb * y + px, pc * x + pd * y + py)
-    return world
-
-
-def key_value(keys, time, fields, default):
-    """A linear timeline's values at ``time`` (Spine's default curve)."""
-    times = [key.get("time", 0.0) for key in keys]
-    i = max(k for k, t in enumerate(times) if t <= time)
-    values = [keys[i].get(f, default) for f in fields]
-    if i + 1 == len(keys):
-        return values
-    after = [keys[i + 1].get(f, default) for f in fields]
-    share = (time - times[i]) / (times[i + 1] - times[i])
-    return [v + share * (w - v) for v, w in zip(values, after, strict=True)]
-
-
-def evaluate(doc, animation, time):
-    """The mesh's world vertices ``(n, 2)`` at ``time`` seconds of ``animation``."""
-    bones = doc["bones"]
-    timelines = doc["animations"][animation].get("bones", {})
-    local = {}
-    for bone in bones:
-        x, y, rotation = bone.get("x", 0.0), bone.get("y", 0.0), bone.get("rotation", 0.0)
-        sx, sy = bone.get("scaleX", 1.0), bone.get("scaleY", 1.0)
-        keyed = timelines.get(bone["name"], {})
-        if "rotate" in keyed:  # relative to the setup pose
-            rotation = rotation + key_value(keyed["rotate"], time, ["value"], 0.0)[0]
-        if "translate" in keyed:
-            dx, dy = key_value(keyed["translate"], time, ["x", "y"], 0.0)
-            x, y = x + dx, y + dy
-        if "scale" in keyed:  # multiplies the setup scale
-            kx, ky = key_value(keyed["scale"], time, ["x", "y"], 1.0)
-            sx, sy = kx * sx, ky * sy
-        local[bone["name"]] = (x, y, rotation, sx, sy)
-    world = spine_world(bones, local)
-    table = np.array([world[bone["name"]] for bone in bones])  # (bones, 6): a, b, c, d, x, y
-    mesh = doc["skins"][0]["attachments"]["drawing"]["drawing"]
-    vertex, bone, bind, weight = weighted_entries(mesh)
-    deform = np.zeros((len(bone), 2))
-    keys = doc["animations"][animation].get("attachments", {}).get("default", {}).get("drawing", {}) \
-        .get("drawing", {}).get("deform", [])
-    if keys:
-        times = [key.get("time", 0.0) for key in keys]
-        assert time in times, "the test evaluates deform keys at their own times only"
-        key = keys[times.index(time)]
-        if "vertices" in key:  # offsets from 'offset' on, zeros elsewhere
-            flat = deform.reshape(-1)
-            start = key.get("offset", 0)
-            flat[start:start + len(key["vertices"])] = key["vertices"]
-    a, b, c, d, wx, wy = table[bone].T
-    vx, vy = bind[:, 0] + deform[:, 0], bind[:, 1] + deform[:, 1]
-    out = np.zeros((len(mesh["uvs"]) // 2, 2))
-    np.add.at(out, vertex, np.stack([(vx * a + vy * b + wx) * weight, (vx * c + vy * d + wy) * weight], -1))
-    return out
-
-
-def weighted_entries(mesh):
-    """A weighted mesh's entries: vertex, bone index, bind x, y and weight of each, vertex by vertex."""
-    numbers, n = mesh["vertices"], len(mesh["uvs"]) // 2
-    assert len(numbers) != 2 * n  # weighted, by Spine's own test
-    rows, i = [], 0
-    for v in range(n):
-        count = numbers[i]
-        rows += [(v, *numbers[i + 1 + 4 * k:i + 5 + 4 * k]) for k in range(count)]
-        i += 1 + 4 * count
-    assert i == len(numbers)
-    table = np.array(rows)
-    return table[:, 0].astype(int), table[:, 1].astype(int), table[:, 2:4], table[:, 4]
-
-
 def max_error(path, rig, animation, order, name="animation"):
     """The largest distance, pixels, between the file's mesh and the animation's, over all frames."""
     doc = json.loads(path.read_text())
@@ -144,7 +61,7 @@ def max_error(path, rig, animation, order, name="animation"):
     worst = 0.0
     for t, (_, U) in enumerate(animation.meshes):
         pixels = np.empty_like(U)
-        pixels[order] = to_pixels(evaluate(doc, name, t / fps), rig)
+        pixels[order] = to_pixels(spine_mesh(doc, name, t / fps), rig)
         worst = max(worst, float(np.hypot(*(pixels - U).T).max()))
     return worst
 

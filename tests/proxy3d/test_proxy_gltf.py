@@ -11,13 +11,14 @@ import subprocess
 import numpy as np
 import pytest
 
-from tests.gltf_reader import Scene, validator_installed, validator_report
+from tests.gltf_reader import validator_installed, validator_report
 from tests.proxy3d.synthetic_proxy import BRANCHING, FOREST, synthetic_proxy
 from toonmotion.errors import ProxyError
 from toonmotion.io.bvh import save_bvh
 from toonmotion.io.exchange.proxy_gltf import save_proxy_glb
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.proxy3d.skeleton_bvh import limb_tree, skeleton_clip
+from toonmotion.testing.export_playback import GlbScene
 
 # float32 storage: positions to this many metres, pixels to this many.
 METRES, PIXELS = 1e-5, 1e-3
@@ -28,7 +29,7 @@ def exported(request, tmp_path_factory):
     proxy = synthetic_proxy(BRANCHING if request.param == "branching" else FOREST, frames=8, seed=5)
     path = tmp_path_factory.mktemp("glb") / "proxy.glb"
     save_proxy_glb(path, proxy)
-    return proxy, Scene(path)
+    return proxy, GlbScene(path)
 
 
 def test_one_key_per_frame_at_frame_over_fps(exported):
@@ -140,7 +141,7 @@ def test_the_camera_sees_points_where_the_proxy_camera_projects_them(exported):
 def test_no_limbs_no_radii_and_one_frame(tmp_path):
     proxy = synthetic_proxy({"ball": None}, frames=1, radii=False)
     save_proxy_glb(tmp_path / "ball.glb", proxy)
-    scene = Scene(tmp_path / "ball.glb")
+    scene = GlbScene(tmp_path / "ball.glb")
     assert not scene.gltf.skins and "collision" not in scene.by_name
     assert np.abs(scene.at("ball", 0) - proxy.skeleton[0, 0]).max() < METRES
     assert np.abs(scene.at("point/ball", 0) - proxy.points[0, 0]).max() < METRES

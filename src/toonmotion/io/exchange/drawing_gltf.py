@@ -36,7 +36,7 @@ import pygltflib as gl
 from numpy.typing import NDArray
 from PIL import Image
 
-from toonmotion.animate.skin_tracks import bind_offsets
+from toonmotion.animate.skin_tracks import bind_offsets, skinned
 from toonmotion.errors import ExportError
 from toonmotion.io.atomic import write_bytes
 from toonmotion.io.exchange.drawing_rig import DrawingRig
@@ -192,8 +192,11 @@ def _mesh(doc: GlbDocument, rig: DrawingRig, joints: list[int], bones: list[int]
     names: list[str] = []
     hit = np.full(rig.frame_count, -1)
     for t in range(rig.frame_count):
-        offset = bind_offsets(V32, rig.bone, w, skin[t][:, :2], rig.U[t])
-        moved = np.flatnonzero(np.hypot(offset[:, 0], offset[:, 1]) * rig.unit > MORPH_FLOOR_PX)
+        matrices = skin[t][:, :2]
+        offset = bind_offsets(V32, rig.bone, w, matrices, rig.U[t])
+        # What the skin alone misses, in the frame's own pixels (a stretched bone enlarges an offset).
+        missed = rig.U[t] - skinned(V32, rig.bone, w, matrices)
+        moved = np.flatnonzero(np.hypot(missed[:, 0], missed[:, 1]) * rig.unit > MORPH_FLOOR_PX)
         if len(moved):
             hit[t] = len(targets)
             values = np.column_stack([offset[moved], np.zeros(len(moved))])
