@@ -26,6 +26,10 @@ demo: $(STAMP)
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo.mp4
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/demo_exaggerated.gif --exaggerate 1.5
 	$(BIN)/toonmotion animate demo/hero demo/keys.json -o demo/frames --save-frame-motion demo/motion.json
+	$(BIN)/toonmotion export demo/hero demo/keys.json -o demo/demo.glb
+	$(BIN)/toonmotion export demo/hero demo/keys.json -o demo/demo_sheet.json --format sheet
+	$(BIN)/toonmotion export demo/hero demo/keys.json -o demo/spine/demo.json --format spine
+	$(BIN)/toonmotion export demo/hero demo/keys.json -o demo/demo.webm
 	$(BIN)/toonmotion lift demo/motion.json --prior $(MOCAP)/cmu_16_07_jump.bvh --frames demo/frames \
 	  --view 0,0 -o demo/proxy.json --glb demo/proxy.glb
 	$(BIN)/toonmotion scene demo/proxy.json --project demo/hero --keys demo/keys.json \
