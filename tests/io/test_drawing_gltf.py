@@ -74,6 +74,22 @@ def test_every_frame_lands_on_the_deformed_drawing(rigs, tmp_path, name):
     assert (len(targets) == 0) == (name == "stage one only")
 
 
+def test_stretched_bones_stay_within_the_morph_floor(rigs, tmp_path):
+    """A figure grown to 1.8 times its size: the skin's float32 rounding grows with the stretch, and
+    every vertex it misses by more than the floor carries an offset."""
+    from toonmotion.animate.motion import Motion
+    from toonmotion.io.exchange.drawing_gltf import MORPH_FLOOR_PX
+
+    hero = rigs.character(SAMPLE)
+    rest = hero.skeleton.positions
+    grow = np.linspace(1.0, 1.8, 12)[:, None, None]
+    motion = Motion(hero.skeleton, rest[0] + (rest - rest[0]) * grow, fps=12.0)
+    animation = animate_character(hero, motion)
+    scene = export(hero, animation, DeformSettings(), tmp_path / "grown.glb")
+    worst = max(np.abs(in_pixels(glb_mesh(scene, t), hero) - U).max() for t, U in animation.meshes)
+    assert worst <= MORPH_FLOOR_PX, f"{worst:.3g} px"
+
+
 def test_a_shared_drawing_too(rigs, drawing_dir, tmp_path):
     character = rigs.character(drawing_dir.name)
     animation = animate_character(character, sample_keyframes(character.skeleton))
