@@ -105,18 +105,14 @@ def sketch(
 @app.command()
 def animate(
     project: options.Project,
-    keys_file: Annotated[Path, typer.Argument(
-        metavar="KEYS.json", help="Key-frames (poses at frame numbers) or a motion (a pose per frame).")],
+    keys_file: options.KeysFile,
     output: options.AnimationOutput,
-    fps: Annotated[float | None, typer.Option(
-        "--fps", help="Frames per second \\[default: the file's, else 24].")] = None,
+    fps: options.Fps = None,
     size: options.Size = None,
     background: options.AnimationBackground = None,
     overlay: options.Overlay = "",
-    ease: Annotated[str | None, typer.Option(
-        "--ease", help="linear, in-out, in or out \\[default: the key file's].")] = None,
-    exaggerate: Annotated[float | None, typer.Option(
-        "--exaggerate", help="Cartoon filter strength A: anticipation and follow-through.")] = None,
+    ease: options.Ease = None,
+    exaggerate: options.Exaggerate = None,
     sigma: options.Sigma = 3.0,
     shift: options.Shift = 0.0,
     save_motion_to: Annotated[Path | None, typer.Option(
@@ -125,8 +121,7 @@ def animate(
     save_frame_motion_to: Annotated[Path | None, typer.Option(
         "--save-frame-motion", help="Also write the joint positions in the written frames' pixels (.json: "
         "what tracking the frames finds; what 'lift' needs beside them).")] = None,
-    solve_inbetweens: Annotated[bool, typer.Option(
-        "--solve-inbetweens", help="Run stage two on every frame, not only the keys.")] = False,
+    solve_inbetweens: options.SolveInbetweens = False,
     no_area: options.NoArea = False,
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",

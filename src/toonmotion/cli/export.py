@@ -16,24 +16,19 @@ from toonmotion.cli.app import app
 @app.command()
 def export(
     project: options.Project,
-    keys_file: Annotated[Path, typer.Argument(
-        metavar="KEYS.json", help="Key-frames (poses at frame numbers) or a motion (a pose per frame).")],
+    keys_file: options.KeysFile,
     output: Annotated[Path, typer.Option(
         "-o", "--output", help="File to write: .glb, .json (with --format), .apng/.png, .webp, .webm, "
         ".gif, .mp4, or a folder for PNG frames.")],
     format: Annotated[str | None, typer.Option(
         "--format", help="glb, spine, sheet, apng, webp, webm, gif, mp4 or png \\[default: from the "
         "output's name; .json needs spine or sheet].")] = None,
-    fps: Annotated[float | None, typer.Option(
-        "--fps", help="Frames per second \\[default: the file's, else 24].")] = None,
-    ease: Annotated[str | None, typer.Option(
-        "--ease", help="linear, in-out, in or out \\[default: the key file's].")] = None,
-    exaggerate: Annotated[float | None, typer.Option(
-        "--exaggerate", help="Cartoon filter strength A: anticipation and follow-through.")] = None,
+    fps: options.Fps = None,
+    ease: options.Ease = None,
+    exaggerate: options.Exaggerate = None,
     sigma: options.Sigma = 3.0,
     shift: options.Shift = 0.0,
-    solve_inbetweens: Annotated[bool, typer.Option(
-        "--solve-inbetweens", help="Run stage two on every frame, not only the keys.")] = False,
+    solve_inbetweens: options.SolveInbetweens = False,
     size: options.Size = None,
     background: Annotated[str | None, typer.Option(
         "--background", help="Pictures: white, black or #rrggbb \\[default: transparent; GIF and MP4 "

@@ -37,6 +37,16 @@ Strength = Annotated[
     float, typer.Option("--strength", help="Filter strength A (0 leaves the motion as it is).")
 ]
 Sigma = Annotated[float, typer.Option("--sigma", help="Filter width in frames.")]
+KeysFile = Annotated[Path, typer.Argument(
+    metavar="KEYS.json", help="Key-frames (poses at frame numbers) or a motion (a pose per frame).")]
+Fps = Annotated[float | None, typer.Option(
+    "--fps", help="Frames per second \\[default: the file's, else 24].")]
+Ease = Annotated[str | None, typer.Option(
+    "--ease", help="linear, in-out, in or out \\[default: the key file's].")]
+Exaggerate = Annotated[float | None, typer.Option(
+    "--exaggerate", help="Cartoon filter strength A: anticipation and follow-through.")]
+SolveInbetweens = Annotated[bool, typer.Option(
+    "--solve-inbetweens", help="Run stage two on every frame, not only the keys.")]
 Shift = Annotated[float, typer.Option("--shift", help="Filter time shift in frames (> 0 delays it).")]
 AnimationOutput = Annotated[
     Path,
