@@ -51,13 +51,15 @@ Shift = Annotated[float, typer.Option("--shift", help="Filter time shift in fram
 AnimationOutput = Annotated[
     Path,
     typer.Option(
-        "-o", "--output", help="OUT.gif, OUT.mp4, or a folder (or frame_%04d.png pattern) for PNGs."
+        "-o", "--output", help="OUT.gif, OUT.mp4, a folder (or frame_%04d.png pattern) for PNGs, or a "
+        "transparent OUT.apng (or .png), OUT.webp or OUT.webm."
     ),
 ]
 AnimationBackground = Annotated[
     str | None,
     typer.Option(
-        "--background", help="transparent, white, black or #rrggbb \\[default: white; transparent for PNGs]."
+        "--background", help="transparent, white, black or #rrggbb \\[default: white; transparent for PNGs, "
+        "APNG, WebP and WebM]."
     ),
 ]
 
