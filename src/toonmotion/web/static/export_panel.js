@@ -11,16 +11,16 @@ export function mount(ctx) {
     <p>The animation of the key-frames (Timeline panel), into the project's <code>exports/</code>.</p>
     <p><label>Name <input id="export-name" value="animation" pattern="[A-Za-z0-9][A-Za-z0-9_-]*"
        maxlength="64"></label></p>
-    <p><label>Format <select id="export-format">
+    <p><label>Format <select id="export-format" style="max-width: 100%">
       <optgroup label="pictures">
         <option value="gif">GIF</option><option value="mp4">MP4</option><option value="png">PNG frames</option>
         <option value="apng">APNG (transparent)</option><option value="webp">WebP (transparent)</option>
         <option value="webm">WebM VP9 (transparent)</option>
-        <option value="sheet">sprite sheet (PNG + JSON atlas: Phaser, PixiJS, Godot)</option>
+        <option value="sheet" title="one PNG and a JSON atlas: Phaser, PixiJS, Godot">sprite sheet</option>
       </optgroup>
       <optgroup label="rigs (the drawing, skinned)">
-        <option value="glb">glTF .glb (Blender, game engines, three.js)</option>
-        <option value="spine">Spine 4.2 JSON + atlas</option>
+        <option value="glb" title="Blender, game engines, three.js">glTF (.glb)</option>
+        <option value="spine" title="skeleton JSON, atlas and page image">Spine 4.2</option>
       </optgroup>
     </select></label></p>
     <p id="export-rig-note" hidden>A rig replays the animation on the drawing in the other tool: size,
