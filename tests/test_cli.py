@@ -473,6 +473,7 @@ def test_export_keeps_transparency_in_webm_and_plays_a_motion(posable, tmp_path,
     [
         (["-o", "hero.json"], "give --format spine or --format sheet"),
         (["-o", "hero.glb", "--format", "fbx"], "unknown export format 'fbx'"),
+        (["-o", "hero.fbx"], "cannot export to hero.fbx: give .glb, .json with --format spine or sheet"),
         (["-o", "hero.glb", "--format", "spine"], "a spine export is a .json file"),
         (["-o", "hero.json", "--format", "sheet", "--max-size", "64"], "more than max_size 64"),
     ],

@@ -110,7 +110,11 @@ def export_format(path: str | os.PathLike[str], format: str | None = None) -> st
         if suffix != ".glb" or format not in (None, "glb"):
             raise ExportError(f"a {format or 'glb'} export is {FORMATS[format or 'glb']}, not {path.name}")
         return "glb"
-    kind = animation_format(path)
+    try:
+        kind = animation_format(path)
+    except ExportError:
+        raise ExportError(f"cannot export to {path.name}: give .glb, .json with --format spine or sheet, "
+                          ".apng (or .png), .webp, .webm, .gif, .mp4, or a folder for PNG frames") from None
     if format is not None and format != kind:
         raise ExportError(f"a {format} export is {FORMATS[format]}, not {path.name}")
     return kind
