@@ -15,6 +15,8 @@ Keys, one line per drawing, source, skinning and format:
   export_s        writing the export (rigs: building the skin and the offsets; pictures:
                   rendering the frames too)
   bytes           every file written, together
+  error           instead of the figures, when the export is refused (a sprite sheet that does
+                  not fit the default 4096-pixel maximum)
   max_error_px    rigs only: the file played back by toonmotion.testing.export_playback (glTF's
                   node, skin and morph evaluation; Spine's bone and weighted-vertex math), read
                   from the file alone, against toonmotion's own vertices, over every frame and
@@ -45,6 +47,7 @@ from toonmotion.capture.mocap import (  # noqa: E402
     standard_skeleton_parents,
 )
 from toonmotion.deform.deformer import Deformer, DeformSettings  # noqa: E402
+from toonmotion.errors import ExportError  # noqa: E402
 from toonmotion.io.bvh import load_bvh  # noqa: E402
 from toonmotion.io.drawing_folder import rig_drawing_folder  # noqa: E402
 from toonmotion.io.exchange.drawing_rig import drawing_rig, to_pixels  # noqa: E402
@@ -79,7 +82,11 @@ def measure(character, name, source, animation, settings, skinning, folder):
     for kind in ("glb", "spine", "sheet"):
         path = folder / f"{name}_{source}_{skinning}_{kind}.{'glb' if kind == 'glb' else 'json'}"
         start = time.perf_counter()
-        done = api.export_animation(path, character, animation, format=kind, settings=settings)
+        try:
+            done = api.export_animation(path, character, animation, format=kind, settings=settings)
+        except ExportError as error:  # a sheet too big for the default maximum size, say
+            print(json.dumps(dict(common, format=kind, error=str(error))), flush=True)
+            continue
         seconds = time.perf_counter() - start
         line = dict(common, format=kind, export_s=round(seconds, 3),
                     bytes=sum(p.stat().st_size for p in done.files))
