@@ -90,6 +90,35 @@ def test_stretched_bones_stay_within_the_morph_floor(rigs, tmp_path):
     assert worst <= MORPH_FLOOR_PX, f"{worst:.3g} px"
 
 
+def test_a_bone_squashed_to_a_fortieth_stays_within_the_morph_floor(rigs, tmp_path):
+    """Squashed to 1/40 of its length, a forearm is 40 times thicker across: the float32 rounding of
+    its large rest-frame offsets, magnified 40 times, is carried by a second target."""
+    from toonmotion.animate.motion import Motion
+    from toonmotion.io.exchange.drawing_gltf import MORPH_FLOOR_PX
+
+    hero = rigs.character(SAMPLE)
+    skeleton = hero.skeleton
+    start, end = skeleton.bones[np.argmax(skeleton.bone_lengths)]  # the longest bone
+    below = [j for j in range(len(skeleton)) if _hangs_below(skeleton.parents, j, end)]
+    P = np.tile(skeleton.positions, (10, 1, 1))
+    for t, share in enumerate(np.geomspace(1.0, 1 / 40, 10)):
+        move = (share - 1) * (skeleton.positions[end] - skeleton.positions[start])
+        P[t, below] += move
+    animation = animate_character(hero, Motion(skeleton, P, fps=12.0))
+    scene = export(hero, animation, DeformSettings(), tmp_path / "squashed.glb")
+    worst = max(np.abs(in_pixels(glb_mesh(scene, t), hero) - U).max() for t, U in animation.meshes)
+    assert worst <= MORPH_FLOOR_PX, f"{worst:.3g} px"
+
+
+def _hangs_below(parents, joint, top):
+    """True when ``joint`` is ``top`` or below it."""
+    while joint >= 0:
+        if joint == top:
+            return True
+        joint = int(parents[joint])
+    return False
+
+
 def test_a_shared_drawing_too(rigs, drawing_dir, tmp_path):
     character = rigs.character(drawing_dir.name)
     animation = animate_character(character, sample_keyframes(character.skeleton))

@@ -20,6 +20,10 @@ drawing stands on the XY plane's x axis, y up, facing +Z, 100 pixels to the metr
   builds from the stored float32 numbers, so a reader that evaluates the file in double
   precision lands on toonmotion's vertices to within :data:`MORPH_FLOOR_PX` (offsets smaller
   than that are left out); rotations, scales and translations are not resampled or approximated.
+  Where a bone is squashed to a small fraction of its length, the skin thickens it across by
+  the reciprocal, which magnifies the float32 rounding of a large offset (to 0.03 px when a
+  bone is at 1/40 of its length): a second target on that frame, ``frame <n> (fine)``, carries
+  what the first one's rounding lost.
 
 Every frame is a key, rather than only the key-frames: the thesis's in-betweens turn bones at a
 steady rate but stretch them so that their thickness goes as ``1 / sigma``, and interpolate
@@ -190,18 +194,33 @@ def _mesh(doc: GlbDocument, rig: DrawingRig, joints: list[int], bones: list[int]
     w = weight.astype(float)[:, :rig.bone.shape[1]]
     targets: list[gl.Attributes] = []
     names: list[str] = []
-    hit = np.full(rig.frame_count, -1)
+    on: list[tuple[int, int]] = []  # (frame, target) pairs weighted 1
+
+    def target(rows: NDArray[np.int64], values: NDArray[np.float64], t: int, name: str) -> None:
+        on.append((t, len(targets)))
+        padded = np.column_stack([values, np.zeros(len(rows))])
+        targets.append(gl.Attributes(POSITION=doc.sparse(len(V32), rows, padded)))
+        names.append(name)
+
     for t in range(rig.frame_count):
         matrices = skin[t][:, :2]
         offset = bind_offsets(V32, rig.bone, w, matrices, rig.U[t])
         # What the skin alone misses, in the frame's own pixels (a stretched bone enlarges an offset).
         missed = rig.U[t] - skinned(V32, rig.bone, w, matrices)
         moved = np.flatnonzero(np.hypot(missed[:, 0], missed[:, 1]) * rig.unit > MORPH_FLOOR_PX)
-        if len(moved):
-            hit[t] = len(targets)
-            values = np.column_stack([offset[moved], np.zeros(len(moved))])
-            targets.append(gl.Attributes(POSITION=doc.sparse(len(V32), moved, values)))
-            names.append(f"frame {t}")
+        if not len(moved):
+            continue
+        stored = offset[moved].astype(np.float32).astype(float)
+        target(moved, stored, t, f"frame {t}")
+        # Under a bone squashed to a small fraction of its length the skin thins it across by the
+        # same factor's reciprocal, which magnifies the float32 rounding of a large offset; a
+        # second target carries what the first's rounding lost there.
+        kept = offset.copy()
+        kept[moved] = stored
+        lost = rig.U[t] - skinned(V32 + kept, rig.bone, w, matrices)
+        fine = np.flatnonzero(np.hypot(lost[:, 0], lost[:, 1]) * rig.unit > MORPH_FLOOR_PX)
+        if len(fine):
+            target(fine, (offset - kept)[fine], t, f"frame {t} (fine)")
     material = _material(doc, rig)
     primitive = doc.primitive(attributes, rig.F, targets=targets, material=material)
     mesh = doc.mesh("drawing", primitive, weights=np.zeros(len(targets)) if targets else None)
@@ -210,7 +229,7 @@ def _mesh(doc: GlbDocument, rig: DrawingRig, joints: list[int], bones: list[int]
     node = doc.node("drawing", mesh=mesh, skin=len(doc.gltf.skins) - 1)
     if targets:
         weights = np.zeros((rig.frame_count, len(targets)))
-        weights[np.flatnonzero(hit >= 0), hit[hit >= 0]] = 1.0
+        weights[tuple(np.array(on).T)] = 1.0
         doc.track(node, "weights", weights)
     return node
 
