@@ -493,6 +493,7 @@ def test_an_export_takes_the_size_background_and_overlays_the_cli_takes(editable
         ({"format": "gif", "name": 7}, "'name' must be"),
         ({"format": "exe", "name": "ok"}, "'format' must be gif, mp4, png"),
         ({"format": "gif", "name": "ok", "keys": False}, "no key-frames yet"),
+        ({"format": "glb", "name": "ok", "overlays": ["mesh"]}, "overlays are drawn on GIF, MP4 and PNG"),
     ],
 )
 def test_a_bad_export_writes_nothing(editable, message, said):
