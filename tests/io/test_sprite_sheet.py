@@ -9,24 +9,15 @@ import pytest
 from PIL import Image
 
 import toonmotion
-from toonmotion.api import animate_character
 from toonmotion.errors import ExportError, ToonmotionError
 from toonmotion.io.exchange.sprite_sheet import SheetLayout, save_sprite_sheet
-from toonmotion.render.sequence import render_animation
-from toonmotion.sample_animation import sample_keyframes
-from toonmotion.samples import sample_rig
 
 FPS = 12.0
 
 
 @pytest.fixture(scope="module")
-def rendered():
-    """Rendered frames of the sample character: soft, partly transparent edges on a clear field."""
-    hero = sample_rig()
-    animation = animate_character(hero, sample_keyframes(hero.skeleton, fps=8.0))
-    frames = list(render_animation(hero, animation, size=(96, 120)))[:12]
-    assert len({f.tobytes() for f in frames}) == len(frames)
-    return frames
+def rendered(sample_frames):
+    return sample_frames
 
 
 @pytest.fixture(scope="module")
