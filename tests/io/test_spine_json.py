@@ -14,7 +14,7 @@ import pytest
 from PIL import Image
 
 from tests.conftest import DRAWINGS_DIR, _require
-from toonmotion.animate.skin_tracks import bind_offsets, bone_matrices
+from toonmotion.animate.skin_tracks import bone_matrices
 from toonmotion.api import animate_character
 from toonmotion.deform.deformer import DeformSettings
 from toonmotion.errors import ExportError
@@ -112,9 +112,11 @@ def test_a_real_drawing_whose_joint_is_called_root(tmp_path):
     assert error < TOLERANCE
 
 
-def test_offsets_are_the_rest_frame_offsets_turned_into_each_bone(animated):
-    """off_k = R(-rest angle of bone k) delta, with delta from the rig's own skin
-    (``bind_offsets``), and then sum_k w_k L_k off_k = M_v delta."""
+def test_offsets_are_the_smallest_that_carry_each_vertex_where_the_skin_misses_it(animated):
+    """Per vertex, its entries' offsets are the least-norm solution of sum_k w_k L_k off_k = missed,
+    with L_k bone k's posed linear part (in Spine's world, the rig's own skin) and missed what the
+    skin leaves between it and toonmotion's vertex: so never larger than they need be, even where a
+    blend of bones nearly cancels (see the next test)."""
     _, rig = animated(DeformSettings(skinning="weights"))
     spine = spine_skeleton(rig)
     mesh = spine.file.skins[0].attachments["drawing"]["drawing"]
@@ -123,25 +125,40 @@ def test_offsets_are_the_rest_frame_offsets_turned_into_each_bone(animated):
     vertex, slot = np.nonzero(rig.weight[order] > 0)
     b = rig.bone[order][vertex, slot]
     w = rig.weight[order][vertex, slot]
-    theta = rig.tracks.rest_bone_angle[b]
-    c, s = np.cos(-theta), np.sin(-theta)
-    turn = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
     assert len(mesh.vertices) == len(order) + 4 * len(b)
     for t in (5, 12, 27):
         matrices = bone_matrices(rig.tracks, t)
-        delta = bind_offsets(rig.V, rig.bone, rig.weight, matrices, rig.U[t])[order]
-        expected = np.einsum("eij,ej->ei", turn, delta[vertex])
-        written = np.zeros(2 * len(b))
-        written[keys[t].offset:keys[t].offset + len(keys[t].vertices)] = keys[t].vertices
-        assert np.abs(written.reshape(-1, 2) - expected).max() <= 0.5e-6 + 1e-9  # written to 1e-6 px
-        # The identity behind it: the bones' linear parts carry each bone's turned offset back to M_v delta.
+        M = np.einsum("nk,nkij->nij", rig.weight[order], matrices[rig.bone[order]])
+        missed = rig.U[t][order] - (np.einsum("nij,nj->ni", M[:, :, :2], rig.V[order]) + M[:, :, 2])
         angle, scale = rig.tracks.bone_angle[t][b], rig.tracks.bone_scale[t][b]
         c, s = np.cos(angle), np.sin(angle)
         L = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2) * scale[:, None, :]
-        carried = np.zeros((len(order), 2))
-        np.add.at(carried, vertex, w[:, None] * np.einsum("eij,ej->ei", L, expected))
-        M = np.einsum("nk,nkij->nij", rig.weight[order], matrices[rig.bone[order]])[:, :, :2]
-        assert np.abs(carried - np.einsum("nij,nj->ni", M, delta)).max() < 1e-9
+        # Each vertex's entries side by side, (2, 2 K), padded with zero columns to K = 4.
+        stacked = np.zeros((len(order), 2, 8))
+        column = slot  # entries keep their slot, so padding sits where weights are 0
+        for k in range(4):
+            at = column == k
+            stacked[vertex[at], :, 2 * k:2 * k + 2] = w[at, None, None] * L[at]
+        least = np.einsum("nij,nj->ni", np.linalg.pinv(stacked), missed).reshape(len(order), 4, 2)
+        expected = least[vertex, slot]
+        written = np.zeros(2 * len(b))
+        written[keys[t].offset:keys[t].offset + len(keys[t].vertices)] = keys[t].vertices
+        assert np.abs(written.reshape(-1, 2) - expected).max() <= 0.5e-6 + 1e-9  # written to 1e-6 px
+
+
+def test_a_blend_that_nearly_cancels_keeps_its_offsets_small():
+    """Two bones blended half and half, both squashed to 1/40 (40 times thicker across), one turned
+    half round from the other: their blend nearly cancels, and one offset shared by both (what a
+    glTF morph target must be) would be hundreds of times the entries' own."""
+    from toonmotion.io.exchange.spine_json import _entry_offsets
+
+    A = 0.5 * np.stack([np.diag([0.025, 40.0]), np.diag([-0.0249, -39.999])])
+    missed = np.array([[0.3, -0.2]])
+    offsets = _entry_offsets(missed, np.array([0, 0]), A)
+    assert np.allclose(np.einsum("eij,ej->i", A, offsets), missed[0])
+    shared = np.linalg.solve(A.sum(axis=0), missed[0])
+    assert np.allclose(A.sum(axis=0) @ shared, missed[0])
+    assert np.abs(shared).max() > 400 * np.abs(offsets).max()
 
 
 # -- the files ----------------------------------------------------------------------------------

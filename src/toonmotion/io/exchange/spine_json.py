@@ -16,7 +16,9 @@ built with ``unit=1`` (Spine measures pixels). The rig is
 One slot ``drawing`` on the root shows one weighted mesh attachment ``drawing`` of skin
 ``default``: each vertex weighted to the ``bone:`` bones it follows (zero weights left out), its
 triangles back to front, the outline first (below). Stage two and fine-tuning edits are a deform
-timeline: per frame, each weighted entry's offset in its bone's frame. One key per frame at
+timeline: per frame, each weighted entry's offset in its bone's frame, the smallest offsets that
+move the vertex where the skin misses it (not one shared offset, which the blend of a squashed
+bone and one turned from it can make enormous). One key per frame at
 ``frame / fps`` seconds, linear; a timeline whose values never leave the setup pose is left out,
 as is a deform key's ``vertices`` when it offsets nothing.
 
@@ -72,7 +74,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import ValidationError
 
-from toonmotion.animate.skin_tracks import bind_offsets
+from toonmotion.animate.skin_tracks import skinned
 from toonmotion.errors import ExportError
 from toonmotion.io.atomic import atomic_path
 from toonmotion.io.exchange.drawing_rig import DrawingRig
@@ -401,9 +403,10 @@ def _mesh(rig: DrawingRig, layout: _BoneLayout, world: tuple[NDArray[np.float64]
     for t in range(rig.frame_count):
         L = linear[t + 1] @ Q
         M = np.concatenate([L, (origin[t + 1] - np.einsum("bij,bj->bi", L, t0))[:, :, None]], axis=2)
-        delta = bind_offsets(V, bone, weight, M, U[t])
-        delta[np.hypot(delta[:, 0], delta[:, 1]) < negligible] = 0.0
-        offsets = np.einsum("eij,ej->ei", Q[b], delta[vertex]).reshape(-1)
+        missed = U[t] - skinned(V, bone, weight, M)
+        missed[np.hypot(missed[:, 0], missed[:, 1]) < negligible] = 0.0
+        posed = weight[vertex, slot][:, None, None] * linear[t + 1][b]
+        offsets = _entry_offsets(missed, vertex, posed).reshape(-1)
         # Written to a millionth of a pixel: a third of the file's size, errors far below float32's.
         offsets = np.round(offsets, OFFSET_DECIMALS) + 0.0
         key: dict[str, Any] = {"time": t / rig.fps}
@@ -413,6 +416,25 @@ def _mesh(rig: DrawingRig, layout: _BoneLayout, world: tuple[NDArray[np.float64]
             key["vertices"] = offsets[nonzero[0]:nonzero[-1] + 1].tolist()
         keys.append(key)
     return mesh, keys if any("vertices" in key for key in keys) else []
+
+
+def _entry_offsets(missed: NDArray[np.float64], vertex: NDArray[np.int64], A: NDArray[np.float64]
+                   ) -> NDArray[np.float64]:
+    """Each weighted entry's offset in its bone's frame, ``(e, 2)``: the smallest offsets (least
+    squares over each vertex's entries) whose weighted, posed sum moves each vertex by ``missed``
+    ``(n, 2)``. ``A`` ``(e, 2, 2)`` is each entry's weight times its bone's posed linear part.
+
+    Solving ``sum_e A_e off_e = missed`` through ``G = sum_e A_e A_e^T`` rather than through the
+    blended ``sum_e A_e`` matters where bones turned apart and squashed nearly cancel in the blend:
+    there one offset for all the vertex's bones would run to millions of pixels, which Spine's
+    float32 runtime cannot add back exactly, while these stay of the size of the move.
+    """
+    G = np.zeros((len(missed), 2, 2))
+    np.add.at(G, vertex, A @ np.swapaxes(A, 1, 2))
+    moved = np.flatnonzero(np.hypot(missed[:, 0], missed[:, 1]) > 0)
+    y = np.zeros_like(missed)
+    y[moved] = np.linalg.solve(G[moved], missed[moved][:, :, None])[:, :, 0]
+    return np.einsum("eji,ej->ei", A, y[vertex])  # A_e^T y
 
 
 def _header(rig: DrawingRig) -> dict[str, Any]:
