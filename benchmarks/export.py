@@ -2,13 +2,14 @@
 JSON lines.
 
     python benchmarks/export.py [--drawings DIR ...] [--clips CLIP.bvh ...] [--frames N]
-                                [--skinning one-bone|weights ...]
+                                [--skinning one-bone|weights ...] [--formats glb spine sheet]
 
 Each drawing folder (texture.png, mask.png, char_cfg.yaml; default: the bundled sample and every
 drawing in ../shared/data/drawings) is rigged, and each motion-capture clip (default: every clip
 in ../shared/data/mocap) is projected from the front, fitted to the drawing's skeleton by
 ``retarget`` and animated (its first ``--frames`` frames at 12 fps). The bundled sample also plays
-its built-in key-frames. Every animation is exported as glb, spine and a sprite sheet.
+its built-in key-frames. Every animation is exported as glb, spine and a sprite sheet (or the
+``--formats`` given).
 
 Keys, one line per drawing, source, skinning and format:
   drawing, source, skinning, format, frames, vertices
@@ -75,11 +76,11 @@ def clip_motion(path, frames):
     return Motion(skeleton=skeleton, positions=points[:, order], fps=clip.fps / step)
 
 
-def measure(character, name, source, animation, settings, skinning, folder):
+def measure(character, name, source, animation, settings, skinning, folder, formats):
     """One JSON line per format for ``animation``."""
     common = dict(drawing=name, source=source, skinning=skinning, frames=len(animation.meshes),
                   vertices=len(character.mesh.V))
-    for kind in ("glb", "spine", "sheet"):
+    for kind in formats:
         path = folder / f"{name}_{source}_{skinning}_{kind}.{'glb' if kind == 'glb' else 'json'}"
         start = time.perf_counter()
         try:
@@ -116,6 +117,8 @@ def main():
     parser.add_argument("--clips", nargs="*", type=Path, default=None)
     parser.add_argument("--frames", type=int, default=48)
     parser.add_argument("--skinning", nargs="+", default=["one-bone", "weights"])
+    parser.add_argument("--formats", nargs="+", default=["glb", "spine", "sheet"],
+                        choices=["glb", "spine", "sheet"])
     args = parser.parse_args()
     drawings = args.drawings
     if drawings is None:
@@ -135,7 +138,7 @@ def main():
                             for clip in clips]
                 for source, played in sources:
                     animation = api.animate_character(deformer, played)
-                    measure(character, name, source, animation, settings, skinning, folder)
+                    measure(character, name, source, animation, settings, skinning, folder, args.formats)
                     for old in folder.iterdir():
                         old.unlink()
 
