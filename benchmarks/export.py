@@ -100,15 +100,42 @@ def measure(character, name, source, animation, settings, skinning, folder, form
             rig = drawing_rig(character, animation, settings=settings)
             order = spine_skeleton(rig, name=path.stem).order
             doc = json.loads(path.read_text())
-            worst = 0.0
-            for t, U in animation.meshes:
-                pixels = np.empty_like(U)
-                pixels[order] = to_pixels(spine_mesh(doc, path.stem, t / doc["skeleton"]["fps"]), rig)
-                worst = max(worst, float(np.abs(pixels - U).max()))
-            line["max_error_px"] = worst
+            posed = [spine_mesh(doc, path.stem, t / doc["skeleton"]["fps"]) for t, _ in animation.meshes]
+            line["max_error_px"] = spine_error(posed, rig, order, animation)
         if "max_error_px" in line:
             line["max_error_px"] = float(f"{line['max_error_px']:.3g}")
         print(json.dumps(line), flush=True)
+
+
+def animations(drawings, clips, frames, skinnings):
+    """Yield ``(drawing name, source, skinning, settings, character, animation)`` for every drawing
+    folder (None: the bundled sample, which also plays its key-frames), skinning and clip."""
+    if drawings is None:
+        found = (SHARED / "drawings").iterdir()
+        drawings = [None, *sorted(p for p in found if (p / "texture.png").is_file())]
+    clips = clips if clips is not None else sorted((SHARED / "mocap").glob("*.bvh"))
+    for drawing in drawings:
+        character = sample_rig() if drawing is None else rig_drawing_folder(drawing)
+        name = "sample" if drawing is None else drawing.name
+        for skinning in skinnings:
+            settings = DeformSettings(skinning=skinning)
+            deformer = Deformer(character, settings)
+            sources = [("keys", sample_keyframes(character.skeleton))] if drawing is None else []
+            sources += [(clip.stem, api.retarget(clip_motion(clip, frames), character.skeleton))
+                        for clip in clips]
+            for source, played in sources:
+                yield name, source, skinning, settings, character, api.animate_character(deformer, played)
+
+
+def spine_error(posed, rig, order, animation):
+    """The largest distance, drawing pixels, between Spine mesh vertices ``posed`` (per frame, in
+    the file's vertex ``order``) and the animation's own."""
+    worst = 0.0
+    for t, (_, U) in enumerate(animation.meshes):
+        pixels = np.empty_like(U)
+        pixels[order] = to_pixels(np.reshape(posed[t], (-1, 2)), rig)
+        worst = max(worst, float(np.abs(pixels - U).max()))
+    return worst
 
 
 def main():
@@ -120,28 +147,13 @@ def main():
     parser.add_argument("--formats", nargs="+", default=["glb", "spine", "sheet"],
                         choices=["glb", "spine", "sheet"])
     args = parser.parse_args()
-    drawings = args.drawings
-    if drawings is None:
-        found = (SHARED / "drawings").iterdir()
-        drawings = [None, *sorted(p for p in found if (p / "texture.png").is_file())]
-    clips = args.clips if args.clips is not None else sorted((SHARED / "mocap").glob("*.bvh"))
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(scratch)
-        for drawing in drawings:
-            character = sample_rig() if drawing is None else rig_drawing_folder(drawing)
-            name = "sample" if drawing is None else drawing.name
-            for skinning in args.skinning:
-                settings = DeformSettings(skinning=skinning)
-                deformer = Deformer(character, settings)
-                sources = [("keys", sample_keyframes(character.skeleton))] if drawing is None else []
-                sources += [(clip.stem, api.retarget(clip_motion(clip, args.frames), character.skeleton))
-                            for clip in clips]
-                for source, played in sources:
-                    animation = api.animate_character(deformer, played)
-                    measure(character, name, source, animation, settings, skinning, folder, args.formats)
-                    for old in folder.iterdir():
-                        old.unlink()
-
+        for name, source, skinning, settings, character, animation in animations(
+                args.drawings, args.clips, args.frames, args.skinning):
+            measure(character, name, source, animation, settings, skinning, folder, args.formats)
+            for old in folder.iterdir():
+                old.unlink()
 
 if __name__ == "__main__":
     main()

@@ -20,18 +20,11 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
-from toonmotion import api
-from toonmotion.deform.deformer import Deformer, DeformSettings
-from toonmotion.io.drawing_folder import rig_drawing_folder
-from toonmotion.io.exchange.drawing_rig import drawing_rig, to_pixels
+from toonmotion.io.exchange.drawing_rig import drawing_rig
 from toonmotion.io.exchange.spine_json import save_spine, spine_skeleton
-from toonmotion.sample_animation import sample_keyframes
-from toonmotion.samples import sample_rig
 
 sys.path.insert(0, str(Path(__file__).parent))
-from export import SHARED, clip_motion  # noqa: E402
+from export import animations, spine_error  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 POSE = Path(__file__).with_name("spine_pose.mjs")
@@ -53,29 +46,14 @@ def main():
     parser.add_argument("--frames", type=int, default=48)
     args = parser.parse_args()
     version = runtime_version()
-    drawings = args.drawings
-    if drawings is None:
-        found = (SHARED / "drawings").iterdir()
-        drawings = [None, *sorted(p for p in found if (p / "texture.png").is_file())]
-    clips = args.clips if args.clips is not None else sorted((SHARED / "mocap").glob("*.bvh"))
     with tempfile.TemporaryDirectory() as scratch:
         path = Path(scratch) / "rig.json"
-        for drawing in drawings:
-            character = sample_rig() if drawing is None else rig_drawing_folder(drawing)
-            for skinning in ("one-bone", "weights"):
-                settings = DeformSettings(skinning=skinning)
-                deformer = Deformer(character, settings)
-                sources = [("keys", sample_keyframes(character.skeleton))] if drawing is None else []
-                sources += [(clip.stem, api.retarget(clip_motion(clip, args.frames), character.skeleton))
-                            for clip in clips]
-                for source, played in sources:
-                    animation = api.animate_character(deformer, played)
-                    worst = runtime_error(character, animation, settings, path)
-                    name = "sample" if drawing is None else drawing.name
-                    print(json.dumps({"drawing": name, "source": source, "skinning": skinning,
-                                      "frames": len(animation.meshes),
-                                      "runtime": f"spine-core {version} (float32)",
-                                      "max_error_px": float(f"{worst:.3g}")}), flush=True)
+        for name, source, skinning, settings, character, animation in animations(
+                args.drawings, args.clips, args.frames, ("one-bone", "weights")):
+            worst = runtime_error(character, animation, settings, path)
+            print(json.dumps({"drawing": name, "source": source, "skinning": skinning,
+                              "frames": len(animation.meshes), "runtime": f"spine-core {version} (float32)",
+                              "max_error_px": float(f"{worst:.3g}")}), flush=True)
 
 
 def runtime_error(character, animation, settings, path):
@@ -86,14 +64,5 @@ def runtime_error(character, animation, settings, path):
     order = spine_skeleton(rig, name="anim").order
     argv = ["node", str(POSE), str(path), str(path.with_suffix(".atlas")), "anim", repr(rig.fps),
             str(rig.frame_count)]
-    frames = np.array(json.loads(subprocess.run(argv, capture_output=True, text=True, check=True,
-                                                cwd=ROOT).stdout))
-    worst = 0.0
-    for t, (_, U) in enumerate(animation.meshes):
-        pixels = np.empty_like(U)
-        pixels[order] = to_pixels(frames[t].reshape(-1, 2), rig)
-        worst = max(worst, float(np.abs(pixels - U).max()))
-    return worst
-
-if __name__ == "__main__":
-    main()
+    posed = json.loads(subprocess.run(argv, capture_output=True, text=True, check=True, cwd=ROOT).stdout)
+    return spine_error(posed, rig, order, animation)
