@@ -66,3 +66,7 @@ def runtime_error(character, animation, settings, path):
             str(rig.frame_count)]
     posed = json.loads(subprocess.run(argv, capture_output=True, text=True, check=True, cwd=ROOT).stdout)
     return spine_error(posed, rig, order, animation)
+
+
+if __name__ == "__main__":
+    main()
