@@ -25,7 +25,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from numbers import Real
+from typing import overload
 
+import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
@@ -121,6 +123,84 @@ def foreground_masks(frames: NDArray[np.uint8], *, background: ArrayLike | None 
     for t, frame in enumerate(frames):
         masks[t] = _cleaned(_distance(frame, reference) > threshold)
     return masks
+
+
+class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
+    """The figure in each frame of a cartoon on one flat colour, made as each frame is asked for.
+
+    A pixel is the figure where the sum of its channels' differences from ``colour`` exceeds
+    ``threshold`` (no less than the RGB distance :func:`foreground_masks` measures). On a flat
+    colour nothing but the figure (and a grey level or two of noise) differs from it, so the
+    threshold is the low end of :data:`THRESHOLD_RANGE` by default: Otsu's split, which
+    :func:`foreground_masks` takes, throws away a figure's fills that lie near the paper's colour
+    (skin on cream paper) and keeps only its outlines. Masks are not cleaned (a tracker asks
+    for one a frame, and a speck matters little to it).
+
+    Parameters
+    ----------
+    frames : (T, h, w, 3) uint8, or a sequence of T (h, w, 3) uint8 arrays
+    colour : (r, g, b)
+        The background colour, 0-255.
+    threshold : float
+        Summed channel difference, 0 to 765.
+
+    Examples
+    --------
+    >>> frames = np.full((2, 4, 4, 3), 240, np.uint8); frames[1, 1:3, 1:3] = (250, 200, 160)
+    >>> masks = FlatBackgroundMasks(frames, (240, 240, 240))
+    >>> len(masks), int(masks[0].sum()), int(masks[1].sum())
+    (2, 0, 4)
+    """
+
+    def __init__(self, frames: NDArray[np.uint8] | Sequence[NDArray[np.uint8]], colour: Sequence[int],
+                 threshold: float = THRESHOLD_RANGE[0]) -> None:
+        self._frames = frames
+        self._colour = np.rint(_checked_colour(colour)).astype(np.uint8)
+        self._plate: NDArray[np.uint8] | None = None  # the colour, frame-sized
+        if not _is_number(threshold) or not threshold >= 0:
+            raise TrackingError(f"the foreground threshold must be a number >= 0, got {threshold!r}")
+        self._threshold = float(threshold)
+        self._sum = np.ones((1, 3), np.float32)
+
+    def __len__(self) -> int:
+        return len(self._frames)
+
+    @overload
+    def __getitem__(self, t: int) -> NDArray[np.bool_]: ...
+
+    @overload
+    def __getitem__(self, t: slice) -> list[NDArray[np.bool_]]: ...
+
+    def __getitem__(self, t: int | slice) -> NDArray[np.bool_] | list[NDArray[np.bool_]]:
+        if isinstance(t, slice):
+            return [self[i] for i in range(*t.indices(len(self)))]
+        # The channels' absolute differences summed, in uint8: sums past 255 saturate, far past
+        # any threshold, and uint8 keeps this at about a millisecond a frame.
+        frame = np.asarray(self._frames[t])
+        if self._plate is None or self._plate.shape != frame.shape:
+            self._plate = np.empty_like(frame)
+            self._plate[:] = self._colour
+        diff = cv2.absdiff(frame, self._plate)
+        return cv2.transform(diff, self._sum).reshape(diff.shape[:2]) > self._threshold
+
+
+def flat_figure_masks(frames: NDArray[np.uint8] | Sequence[NDArray[np.uint8]], *,
+                      colour: Sequence[int] | None = None) -> FlatBackgroundMasks | None:
+    """The figure's masks when it is drawn on one flat colour, ``colour`` or else the first
+    frame's border colour (:func:`border_colour`); None when that border is not flat.
+
+    A background estimated from the footage itself (:func:`estimate_background`) is wrong
+    wherever the figure holds still for half the clip (legs standing while an arm waves), and a
+    tracker that holds joints to such a mask loses them, so none is offered there.
+
+    >>> frames = np.full((2, 8, 8, 3), 240, np.uint8); frames[:, 3:5, 3:5] = 0
+    >>> noise = np.random.default_rng(0).integers(0, 255, (1, 8, 8, 3), np.uint8)
+    >>> int(flat_figure_masks(frames)[1].sum()), flat_figure_masks(noise)
+    (4, None)
+    """
+    if colour is None:
+        colour = border_colour(frames[0])
+    return None if colour is None else FlatBackgroundMasks(frames, colour)
 
 
 def guide_skeleton(mask: NDArray[np.bool_], *, prune: float = 0.5) -> CurveSkeleton:

@@ -71,17 +71,33 @@ def suggest_setup(mask: NDArray[np.bool_], *, max_bone: float | None = None,
     """
     mask = np.asarray(mask, dtype=bool)
     skeleton = skeleton_from_curve_skeleton(guide_skeleton(mask, prune=prune), max_bone=max_bone)
+    return skeleton, rectangle_sizes(mask, skeleton.positions)
+
+
+def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The tracking rectangle :func:`suggest_setup` gives a joint at each of ``positions``
+    ``(k, 2)`` on the figure ``mask`` ``(h, w)``: a square twice the figure's local thickness (the
+    largest distance to its outline within :data:`THICKNESS_REACH` px), within
+    :data:`SIZE_RANGE`, shrunk about the joint to lie inside the frame. ``(k, 2)`` widths and
+    heights, pixels.
+
+    >>> mask = np.zeros((40, 120), bool); mask[14:26, 0:110] = True
+    >>> rectangle_sizes(mask, np.array([[54.0, 19.5]])).tolist()
+    [[12.0, 12.0]]
+    """
+    mask = np.asarray(mask, dtype=bool)
+    positions = np.asarray(positions, dtype=float)
     h, w = mask.shape
     # Largest distance to the outline within THICKNESS_REACH px of each pixel.
     reach = 2 * THICKNESS_REACH + 1
     radius = ndi.maximum_filter(ndi.distance_transform_edt(mask), size=reach, mode="constant")
-    cols = np.clip(np.rint(skeleton.positions[:, 0]).astype(int), 0, w - 1)
-    rows = np.clip(np.rint(skeleton.positions[:, 1]).astype(int), 0, h - 1)
+    cols = np.clip(np.rint(positions[:, 0]).astype(int), 0, w - 1)
+    rows = np.clip(np.rint(positions[:, 1]).astype(int), 0, h - 1)
     side = np.clip(2.0 * radius[rows, cols], *SIZE_RANGE)
     sizes = np.stack([side, side], axis=1)
     # Shrink about the joint until the rectangle is inside the frame.
-    room = 2.0 * np.minimum(skeleton.positions + 0.5, np.array([w, h]) - 0.5 - skeleton.positions)
-    return skeleton, np.minimum(sizes, np.maximum(room, 0.0))
+    room = 2.0 * np.minimum(positions + 0.5, np.array([w, h]) - 0.5 - positions)
+    return np.minimum(sizes, np.maximum(room, 0.0))
 
 
 def check_setup(skeleton: Skeleton, sizes: ArrayLike, frame_size: Sequence[int]) -> None:
