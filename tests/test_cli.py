@@ -756,6 +756,24 @@ def test_track_writes_a_motion_csv_and_overlay(footage, tmp_path, capsys):
     assert Image.open(tmp_path / "o.gif").n_frames == 12
 
 
+@pytest.mark.parametrize("options", [[], ["--background", "#f6f0e2"], ["--free"]])
+def test_track_follows_a_cartoon_on_plain_paper(footage, tmp_path, options):
+    """The waving arm drawn flat-coloured on paper (#f6f0e2): joints held to the figure read off
+    the border, or off the given colour, or left free."""
+    from toonmotion.capture.synthetic import limb_figure_frames
+    from toonmotion.io.motion_json import load_motion
+    from toonmotion.io.video import save_animation
+
+    folder, truth = footage
+    frames, _ = limb_figure_frames(truth, np.array([-1, 0, 1]), size=(320, 240), width=14, seed=4, style="flat")
+    assert (frames[:, 0, 0] == (246, 240, 226)).all()
+    opaque = np.concatenate([frames, np.full(frames.shape[:3] + (1,), 255, np.uint8)], axis=3)
+    save_animation(tmp_path / "cartoon", iter(opaque), fps=12)
+    out = tmp_path / "m.json"
+    assert _run("track", tmp_path / "cartoon", "--joints", folder / "joints.json", "-o", out, *options) == 0
+    assert np.hypot(*(load_motion(out).positions - truth).reshape(-1, 2).T).max() < 2.0
+
+
 def test_track_says_how_many_frames_repeat_a_drawing(footage, tmp_path, capsys):
     from toonmotion.io.motion_json import load_motion
 

@@ -6,7 +6,15 @@ import math
 import cv2
 import numpy as np
 
-from toonmotion.capture.template_match import BoneRule, Templates, locate, match, plan_joint, search_round
+from toonmotion.capture.template_match import (
+    SPIN_TURNS,
+    BoneRule,
+    Templates,
+    locate,
+    match,
+    plan_joint,
+    search_round,
+)
 
 SIDE = 21
 
@@ -90,8 +98,8 @@ def test_a_hidden_joint_is_found_round_its_parent_turned_with_its_bone():
 def test_the_coarse_search_finds_a_joint_far_outside_the_fine_window():
     image = _scene()
     templates = Templates.cut(image, np.array([60.0, 50.0]), 0.0, (SIDE, SIDE))
-    xy, confidence = locate(cv2.pyrDown(image), templates, np.array([30.0, 40.0]), 0.0, _plan(), 40.0)
-    assert np.hypot(*(xy - (60, 50))) <= 2.0 and confidence > 0.5
+    xy, confidence, angle = locate(cv2.pyrDown(image), templates, np.array([30.0, 40.0]), 0.0, _plan(), 40.0)
+    assert np.hypot(*(xy - (60, 50))) <= 2.0 and confidence > 0.5 and angle == 0.0
 
 
 def test_a_search_round_a_long_bone_with_many_places_is_made_in_batches():
@@ -103,3 +111,19 @@ def test_a_search_round_a_long_bone_with_many_places_is_made_in_batches():
     bone = BoneRule(parent=np.array([450.0, 450.0]), length=300.0, weight=joint.w_beta, longest=400.0)
     places = search_round(cv2.pyrDown(image), templates, joint, bone, 0.0, math.pi, 0.0)
     assert len(places) == 2 and np.hypot(*(places[0][0] - (750, 450))) < SIDE / 4
+
+
+def test_the_coarse_search_all_round_finds_a_patch_turned_half_round():
+    """A bone seen end-on gives its rectangle no angle: the search at SPIN_TURNS finds the patch
+    turned 160 deg, and its angle, where the usual few turns do not."""
+    patch = _patch(np.random.default_rng(5))
+    image = np.full((100, 140, 3), 128, np.uint8)
+    image[50 - SIDE // 2:50 + SIDE // 2 + 1, 60 - SIDE // 2:60 + SIDE // 2 + 1] = patch.astype(np.uint8)
+    templates = Templates.cut(image, np.array([60.0, 50.0]), 0.0, (SIDE, SIDE))
+    turned = cv2.warpAffine(image, cv2.getRotationMatrix2D((60, 50), -160, 1.0), (140, 100),
+                            borderValue=(128, 128, 128))
+    small, start = cv2.pyrDown(turned), np.array([62.0, 49.0])
+    _, few, _ = locate(small, templates, start, 0.0, _plan(), 18.0)
+    xy, confidence, angle = locate(small, templates, start, 0.0, _plan(), 18.0, turns=SPIN_TURNS)
+    assert few < 0.5 < confidence and np.hypot(*(xy - (60, 50))) <= 2.0
+    assert math.degrees(angle) % 360 == 160.0

@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from tests.conftest import SHARED_DATA, _require
+from toonmotion.capture.foreground import flat_figure_masks
+from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
 from toonmotion.capture.tracker import TrackSetup, track
 from toonmotion.testing.mocap_tracking import render_bvh_clip, track_from_truth, tracking_scores
 
@@ -67,38 +69,52 @@ def test_jumping_jacks_on_twos_are_tracked_as_well_as_on_ones(jumping_jacks):
     assert figures["mean_px"] <= MEAN_BAR_PX and figures["pck5"] >= 0.99
 
 
-@pytest.fixture(scope="module")
-def flat_jacks():
-    clip = _require(SHARED_DATA / "mocap") / "cmu_jumping_jacks.bvh"
+def _tracked_cartoon(name):
+    """A clip rendered flat-coloured and tracked as ``toonmotion track`` tracks it: the joints held
+    to the figure on its plain paper."""
+    clip = _require(SHARED_DATA / "mocap") / f"{name}.bvh"
     cartoon = render_bvh_clip(clip, frames=FRAMES, style="flat")
     setup = TrackSetup(skeleton=cartoon.skeleton, sizes=np.full((len(cartoon.skeleton), 2), cartoon.side))
-    return cartoon, track(cartoon.images, setup)
+    return cartoon, track(cartoon.images, setup, masks=flat_figure_masks(cartoon.images))
 
 
-@pytest.mark.parametrize("name", ["cmu_jumping_jacks", "cmu_07_01_walk"])
-def test_joints_in_a_cartoon_stay_in_the_picture_and_within_their_windows(name, flat_jacks):
-    """Where joints are lost (the flat jumping jacks, see the xfail below) they are still never
-    put outside the frame, and a joint found in two frames running moves between them no farther
+@pytest.fixture(scope="module")
+def flat_jacks():
+    return _tracked_cartoon("cmu_jumping_jacks")
+
+
+@pytest.fixture(scope="module")
+def flat_walk():
+    return _tracked_cartoon("cmu_07_01_walk")
+
+
+@pytest.mark.parametrize("name", ["flat_jacks", "flat_walk"])
+def test_joints_in_a_cartoon_stay_in_the_picture_and_within_their_windows(name, request):
+    """Where joints are lost (the flat walk, see the xfail below) they are still never put
+    outside the frame, and a joint found in two frames running moves between them no farther
     than its window reaches: its half-rectangle radius beyond the fastest true step. (A lost joint
     found again may move farther: its window is then all its bone can reach.)"""
-    if name == "cmu_jumping_jacks":
-        cartoon, tracking = flat_jacks
-    else:
-        clip = _require(SHARED_DATA / "mocap") / f"{name}.bvh"
-        cartoon = render_bvh_clip(clip, frames=FRAMES, style="flat")
-        sizes = np.full((len(cartoon.skeleton), 2), cartoon.side)
-        tracking = track(cartoon.images, TrackSetup(skeleton=cartoon.skeleton, sizes=sizes))
+    cartoon, tracking = request.getfixturevalue(name)
     found, h, w = tracking.positions, *cartoon.images.shape[1:3]
     assert (found >= 0).all() and (found[..., 0] <= w - 1).all() and (found[..., 1] <= h - 1).all()
-    seen = tracking.confidence >= 0.5
+    seen = tracking.confidence >= VISIBLE_CONFIDENCE
     step = np.hypot(*np.diff(found, axis=0).transpose(2, 0, 1))[seen[1:] & seen[:-1]]
     fastest = np.hypot(*np.diff(cartoon.truth, axis=0).transpose(2, 0, 1)).max()
     assert step.max() <= fastest + cartoon.side, f"{step.max():.1f} px in one frame"
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "flat-coloured jumping jacks: the arms sweep over the torso every jump, the shoulder, neck and "
-    "spine rectangles change their looks with the arms' pose, and once lost they are not found again"))
 def test_flat_coloured_jumping_jacks_are_tracked(flat_jacks):
+    """The arms sweep over the torso every jump and the shoulders' and elbows' rectangles change
+    their looks with the arms' pose (16 px on these frames before the latest template learnt
+    them as the arms bend)."""
     cartoon, tracking = flat_jacks
+    assert tracking_scores(tracking.positions, cartoon.truth)["mean_px"] <= MEAN_BAR_PX
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "flat-coloured walk: the elbows and knees change their looks as the limbs swing and cross, "
+    "and look alike along their limbs; once lost they are often not found again (8 px on these "
+    "frames)"))
+def test_a_flat_coloured_walk_is_tracked(flat_walk):
+    cartoon, tracking = flat_walk
     assert tracking_scores(tracking.positions, cartoon.truth)["mean_px"] <= MEAN_BAR_PX

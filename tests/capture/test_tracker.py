@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
+from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
 from toonmotion.capture.tracker import (
     Tracking,
     TrackSettings,
@@ -524,3 +525,63 @@ def test_a_joint_that_leaves_the_picture_stays_at_its_edge():
     assert (x >= 0).all() and (x <= 159).all() and (y >= 0).all() and (y <= 89).all()
     inside = truth[:, 0] + RECT / 2 <= 159
     assert _errors(tracking, truth[:, None])[inside].max() < 0.5
+
+
+def test_a_hidden_joint_is_not_found_again_on_a_look_alike_joint_that_shows():
+    """Twins: two joints with the same looks (a cartoon's left and right hands), drifting right. While
+    one is hidden (behind a part of the scene that looks like the background), its widening search
+    reaches the other; it stays hidden rather than jump onto it, and is found again where it shows
+    again."""
+    rng = np.random.default_rng(11)
+    background, sprite = _texture(rng, 100, 160, blur=1.5), _texture(rng, SPRITE, SPRITE)
+    a, b, step = np.array([50.0, 50.0]), np.array([80.0, 50.0]), np.array([1.0, 0.0])
+    canvases = []
+    for t in range(14):
+        canvas = background.copy()
+        _paint(canvas, sprite, a + t * step)
+        if not 2 <= t < 10:
+            _paint(canvas, sprite, b + t * step)
+        canvases.append(canvas)
+    frames = _film(rng, canvases)
+    setup = _setup([("a", None), ("b", None)], [a, b], size=24)  # windows reach 36 px when lost
+    positions = track(frames, setup, settings=TrackSettings(fill_gaps=False)).positions
+    t = np.arange(14)[:, None]
+    assert np.abs(positions[:, 0] - (a + t * step)).max() < 0.5
+    assert (np.hypot(*(positions[2:10, 1] - (a + t[2:10] * step)).T) > 12).all()
+    assert np.abs(positions[10:, 1] - (b + t[10:] * step)).max() < 0.5
+
+
+def _bending_arm():
+    """A cartoon arm whose forearm swings 110 deg about a still elbow over 30 frames: frames, the
+    elbow, the setup (shoulder, elbow, hand)."""
+    from toonmotion.capture.synthetic import limb_figure_frames
+
+    T = 30
+    shoulder, elbow = np.array([100.0, 40.0]), np.array([100.0, 110.0])
+    swing = np.radians(90 + np.linspace(0, 110, T))
+    hand = elbow + 60 * np.stack([np.cos(swing), np.sin(swing)], axis=1)
+    points = np.stack([np.broadcast_to(shoulder, (T, 2)), np.broadcast_to(elbow, (T, 2)), hand], axis=1)
+    frames, radius = limb_figure_frames(points, np.array([-1, 0, 1]), size=(220, 200), width=16.0,
+                                        style="flat")
+    setup = _setup([("shoulder", None), ("elbow", "shoulder"), ("hand", "elbow")], points[0], size=2 * radius)
+    return frames, elbow, setup
+
+
+def test_an_elbow_is_followed_while_its_forearm_bends_round_it():
+    """The elbow's rectangle, half upper arm and half forearm, changes its looks as the arm bends.
+    Its latest template is re-cut as it goes, so it is found at every frame, within a quarter of
+    its rectangle; re-cutting only where the anchor itself matched plainly lost it after 7
+    frames (29 px off by the end)."""
+    frames, elbow, setup = _bending_arm()
+    tracking = track(frames, setup, settings=TrackSettings(fill_gaps=False))
+    assert (tracking.confidence[:, 1] >= VISIBLE_CONFIDENCE).all()
+    assert np.hypot(*(tracking.positions[:, 1] - elbow).T).max() < setup.sizes[1, 0] / 4
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "a bending elbow drifts along its upper arm (5 px over 110 deg): the anchor, cut with the "
+    "forearm where it was, matches best a little up the arm, and the latest follows it"))
+def test_a_bending_elbow_does_not_drift():
+    frames, elbow, setup = _bending_arm()
+    tracking = track(frames, setup, settings=TrackSettings(fill_gaps=False))
+    assert np.hypot(*(tracking.positions[:, 1] - elbow).T).max() < 1.0

@@ -42,7 +42,8 @@ def track_footage(
     fps : float
         The footage's frame rate, carried into the motion.
     background : (int, int, int), optional
-        A flat background colour, to find the figure by when suggesting joints.
+        A flat background colour, to find the figure by: joints are suggested on it and held to
+        it (``settings.figure``). Default: the first frame's border colour, when that is flat.
     settings : TrackSettings, optional
     earlier : Motion, optional
         A tracking to correct: give the ``corrections`` (joint name to true ``(x, y)``) at frame
@@ -78,8 +79,8 @@ def track_footage(
     skeleton, sizes = joints if joints is not None else suggest_joints(frames, colour=background)
     if earlier is None:
         return capture_motion(frames, skeleton, sizes, fps=fps, start=start, settings=settings,
-                              progress=progress)
+                              background=background, progress=progress)
     if at is None or not corrections:
         raise SettingsError("correcting an earlier tracking needs the corrections and the frame they are at")
     return correct_motion(earlier, frames, skeleton, sizes, at, corrections, fps=fps, start=start,
-                          settings=settings, progress=progress)
+                          settings=settings, background=background, progress=progress)

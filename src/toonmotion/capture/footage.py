@@ -21,7 +21,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.animate.motion import Motion, motion_for
-from toonmotion.capture.foreground import border_colour, estimate_background, foreground_masks
+from toonmotion.capture.foreground import (
+    border_colour,
+    estimate_background,
+    flat_figure_masks,
+    foreground_masks,
+)
 from toonmotion.capture.setup import check_setup, suggest_setup
 from toonmotion.capture.tracker import Tracking, TrackSettings, TrackSetup, retrack, track
 from toonmotion.errors import SettingsError
@@ -93,15 +98,19 @@ def capture_motion(
     fps: float,
     start: int = 0,
     settings: TrackSettings | None = None,
+    background: tuple[int, int, int] | None = None,
     progress: Progress | None = None,
 ) -> Capture:
     """Track ``skeleton``'s joints, placed at frame ``start``, through ``frames``.
 
-    ``sizes`` are each joint's rectangle (width, height) in pixels. Returns the motion of the frames
-    tracked (from ``start`` to the end).
+    ``sizes`` are each joint's rectangle (width, height) in pixels. Where the figure is drawn on
+    one flat colour, ``background`` or else the first frame's border colour, the joints are held
+    to it (``settings.figure``). Returns the motion of the frames tracked (from ``start`` to the
+    end).
     """
     setup = _setup(frames, skeleton, sizes, start)
-    result = track(frames, setup, settings=settings, start=start, progress=progress)
+    result = track(frames, setup, settings=settings, start=start, masks=_masks(frames, settings, background),
+                   progress=progress)
     return _capture(result, skeleton, fps)
 
 
@@ -116,16 +125,19 @@ def correct_motion(
     fps: float,
     start: int = 0,
     settings: TrackSettings | None = None,
+    background: tuple[int, int, int] | None = None,
     progress: Progress | None = None,
 ) -> Capture:
     """Put joints right at ``frame`` and track again from there, keeping the frames before it.
 
     ``earlier`` is a motion tracked with the same joints from frame ``start`` (as read back from
-    its file); ``corrections`` maps joint names to their true ``(x, y)`` at ``frame``.
+    its file); ``corrections`` maps joint names to their true ``(x, y)`` at ``frame``. The figure
+    holds the joints as in :func:`capture_motion`.
     """
     setup = _setup(frames, skeleton, sizes, start)
     tracking = tracking_from_motion(earlier, skeleton, len(frames), start)
-    result = retrack(tracking, frames, setup, frame, dict(corrections), settings=settings, progress=progress)
+    result = retrack(tracking, frames, setup, frame, dict(corrections), settings=settings,
+                     masks=_masks(frames, settings, background), progress=progress)
     return _capture(result, skeleton, fps)
 
 
@@ -152,6 +164,14 @@ def tracking_from_motion(motion: Motion, skeleton: Skeleton, count: int, start: 
         columns = [motion.skeleton.names.index(n) for n in skeleton.names]
         confidence[span] = motion.confidence[:, columns]
     return Tracking(positions=full, angles=np.zeros((count, k)), confidence=confidence, tracked=tracked)
+
+
+def _masks(frames, settings, background):
+    """The figure's masks to hold joints to, if the settings ask for it and the figure is drawn on
+    a flat colour (:func:`~toonmotion.capture.foreground.flat_figure_masks`), else None."""
+    if settings is not None and not settings.figure:
+        return None
+    return flat_figure_masks(frames, colour=background)
 
 
 def _setup(

@@ -21,6 +21,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion.capture.track_figure import figure_cells, on_figure
+
 # Confidence is exp(-d^2 / (2 CONFIDENCE_SCALE^2)), d the RMS difference per channel (grey levels).
 CONFIDENCE_SCALE = 30.0
 
@@ -30,7 +32,7 @@ UPDATE_CONFIDENCE = 0.8
 
 # A joint whose best match is less confident than this is hidden: it is carried by its parent
 # (a root coasts on its velocity) and its templates are left alone.
-VISIBLE_CONFIDENCE = 0.5
+VISIBLE_CONFIDENCE = 0.25
 
 # The anchor's and the latest template's matches agree when they lie within this many pixels.
 DRIFT_TOLERANCE = 2.0
@@ -39,6 +41,10 @@ DRIFT_TOLERANCE = 2.0
 # (radians).
 TURN_CONFIDENCE = 0.6
 TURNS = tuple(math.radians(sign * step) for step in (5, 10, 15) for sign in (1, -1))
+# A rectangle on a bone seen nearly end-on (shorter than the rectangle) has no angle to go by:
+# the bone's direction swings wildly with the least movement. Matching badly, it is looked for
+# coarsely at turns all round (:func:`locate`).
+SPIN_TURNS = tuple(math.radians(step) for step in range(0, 360, 20))
 # A template is distinct when moved DISTINCT_SHIFT px in any direction it changes by at least
 # DISTINCT_RATIO of its change in the direction it changes most, and by a grey level (RMS per
 # channel); one that is not grows, up to MAX_GROWTH times its side (:func:`distinct_size`).
@@ -184,8 +190,8 @@ def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: t
 
 
 def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.float64], angle: float,
-          joint: JointPlan, bone: BoneRule | None = None, *, turn: bool = True
-          ) -> tuple[NDArray[np.float64], float, bool]:
+          joint: JointPlan, bone: BoneRule | None = None, *, turn: bool = True,
+          figure: NDArray[np.uint8] | None = None) -> tuple[NDArray[np.float64], float, bool]:
     """Match a joint's templates round ``predicted``, its rectangle turned by ``angle`` radians.
 
     A rectangle that turns and matches less confidently than :data:`TURN_CONFIDENCE` also tries
@@ -206,6 +212,9 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     turn : bool
         Try the plan's extra turns where the angle matches badly; False where the angle is
         known (a place :func:`search_round` found, turned with its bone).
+    figure : (h, w) uint8, optional
+        Non-zero where the figure is (:mod:`~toonmotion.capture.track_figure`): cells off it
+        are not matched.
 
     Returns
     -------
@@ -214,25 +223,27 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     confidence : float in [0, 1]
     agree : bool
         Whether the latest template may be re-cut at the match: the anchor's match lies within
-        :data:`DRIFT_TOLERANCE` of the latest's and is at least :data:`UPDATE_CONFIDENCE`
-        confident (or there is no latest apart from the anchor).
+        :data:`DRIFT_TOLERANCE` of the latest's and is at least :data:`VISIBLE_CONFIDENCE`
+        confident, or the anchor matches plainly (:data:`UPDATE_CONFIDENCE`), or there is no
+        latest apart from the anchor.
     """
-    found = _match_turned(image, templates, predicted, angle, joint, bone)
+    found = _match_turned(image, templates, predicted, angle, joint, bone, figure)
     for extra in joint.turns if joint.parent >= 0 and turn else ():
         if found[1] >= TURN_CONFIDENCE:
             break
-        other = _match_turned(image, templates, predicted, angle + extra, joint, bone)
+        other = _match_turned(image, templates, predicted, angle + extra, joint, bone, figure)
         if other[1] > found[1]:
             found = other
     return found
 
 
 def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.float64], angle: float,
-           joint: JointPlan, radius: float, bone: BoneRule | None = None
-           ) -> tuple[NDArray[np.float64], float]:
+           joint: JointPlan, radius: float, bone: BoneRule | None = None,
+           figure: NDArray[np.uint8] | None = None, turns: tuple[float, ...] = COARSE_TURNS
+           ) -> tuple[NDArray[np.float64], float, float]:
     """Look for a hidden joint at half resolution, up to ``radius`` pixels (full resolution) from
     ``centre``: the anchor's coarse template is matched in ``small`` (the frame after
-    ``cv2.pyrDown``) at the rectangle's angle and :data:`COARSE_TURNS` more, by eq. 4.6's mixed
+    ``cv2.pyrDown``) at the rectangle's angle turned by each of ``turns``, by eq. 4.6's mixed
     cost with ``joint``'s colour weight, ``w_beta = 1 / radius^2`` and the kinematic term
     (``bone``), among the plain cells if there are any (as :func:`match`). Only where to look
     again: the place is to be refined by :func:`match`.
@@ -243,6 +254,8 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
         The best place, full-resolution (x, y) pixels, to about a pixel.
     confidence : float
         The coarse match's confidence.
+    angle : float
+        The rectangle's angle there, radians.
     """
     template = templates.coarse
     th, tw = template.shape[:2]
@@ -253,14 +266,16 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
     plain_ssd = ssd_at(UPDATE_CONFIDENCE, (tw, th))
     # Pixel centres: full-resolution x is half-resolution 2 x + 0.5.
     middle = (np.asarray(centre, dtype=float) - 0.5) / 2
-    best, best_conf = np.asarray(centre, dtype=float), 0.0
-    for turn in COARSE_TURNS:
+    best, best_conf, best_angle = np.asarray(centre, dtype=float), 0.0, angle
+    for turn in turns:
         a = angle + turn
         window = sample(small, middle, a, (tw + 2 * R, th + 2 * R))
         ssd = cv2.matchTemplate(window, template, cv2.TM_SQDIFF)
         cost = w_alpha * ssd + geometric
         if bone is not None:
             cost += _bone_cost(centre, a, R, bone, step=2.0)
+        if figure is not None:
+            cost[~figure_cells(figure, np.asarray(centre, dtype=float), a, R, step=2.0)] = np.inf
         plain = (ssd <= plain_ssd) & np.isfinite(cost)  # as in the fine search: plain cells first
         if plain.any():
             cost[~plain] = np.inf
@@ -272,19 +287,21 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
             c, s = math.cos(a), math.sin(a)
             dx, dy = 2.0 * (j - R), 2.0 * (i - R)
             best, best_conf = np.asarray(centre, dtype=float) + [c * dx - s * dy, s * dx + c * dy], conf
-    return best, best_conf
+            best_angle = a
+    return best, best_conf, best_angle
 
 
 def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPlan, bone: BoneRule,
-                 start: float, span: float, turn: float, count: int = 2
-                 ) -> list[tuple[NDArray[np.float64], float, float]]:
+                 start: float, span: float, turn: float, count: int = 2,
+                 figure: NDArray[np.uint8] | None = None) -> list[tuple[NDArray[np.float64], float, float]]:
     """Look for a hidden joint round its parent, found this frame: at every place within the
     bone's reach (``bone.longest``, at least half the rectangle from the parent) whose direction
     from the parent lies within ``span`` radians of ``start``, a quarter rectangle apart, with the
     rectangle turned as its bone would be there (``turn`` plus the direction's change from
     ``start``). The anchor's coarse template is compared with each place in ``small`` (the frame
     after ``cv2.pyrDown``) by eq. 4.6's mixed cost with the kinematic term; only where to look
-    again, to be refined by :func:`match`.
+    again, to be refined by :func:`match`. With ``figure`` (full resolution), places off the
+    figure are left out.
 
     Returns
     -------
@@ -308,6 +325,11 @@ def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPla
     if not places:
         return []
     xy, phi = np.concatenate(places), np.concatenate(directions)
+    if figure is not None:
+        keep = on_figure(figure, xy)
+        xy, phi = xy[keep], phi[keep]
+        if not len(xy):
+            return []
     angles = turn + (phi - start)
     patches = _patches(small, (xy - 0.5) / 2, angles, (tw, th))
     d = patches - template[None]
@@ -347,7 +369,7 @@ def _patches(image, centres, angles, size):
     return out
 
 
-def _match_turned(image, templates, predicted, angle, joint, bone):
+def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     """:func:`match` at one angle: the anchor's match where it is trusted, else the latest's.
 
     An anchor matching plainly (:data:`UPDATE_CONFIDENCE`) is taken without matching the latest:
@@ -356,6 +378,8 @@ def _match_turned(image, templates, predicted, angle, joint, bone):
     R, (tw, th) = joint.radius, joint.size
     window = sample(image, predicted, angle, (tw + 2 * R, th + 2 * R))
     prior = joint.geometric if bone is None else joint.geometric + _bone_cost(predicted, angle, R, bone)
+    if figure is not None:
+        prior = np.where(figure_cells(figure, predicted, angle, R), prior, np.inf)
     anchor = _best(window, templates.anchor, joint, prior)
     (offset, confidence), agree = anchor, True
     if anchor[1] < UPDATE_CONFIDENCE and templates.anchor is not templates.latest:
@@ -364,11 +388,12 @@ def _match_turned(image, templates, predicted, angle, joint, bone):
         agree = bool(np.hypot(*(anchor[0] - latest[0])) <= DRIFT_TOLERANCE)
         if agree and anchor[1] >= VISIBLE_CONFIDENCE:
             # Both find the joint here: the anchor's place (it does not drift), and the latest's
-            # confidence when higher (the anchor is older, the joint's looks may have changed).
-            # The latest is re-cut only where the anchor itself is plainly there, or it would
-            # learn an occluder sliding over the joint.
+            # confidence when higher (the anchor is older, the joint's looks may have changed:
+            # a limb bends at it). The latest may then be re-cut: an occluder sliding over the
+            # joint would have to hold the anchor, which never learns, at the same place too.
+            # (Re-cutting only where the anchor matched plainly lost every joint whose looks
+            # change as its limb bends, on the flat cartoons above all.)
             offset, confidence = anchor[0], max(anchor[1], latest[1])
-            agree = anchor[1] >= UPDATE_CONFIDENCE
         elif anchor[1] >= latest[1]:
             offset, confidence = anchor
     # The offset, in the window's frame, turned into the image's (a per-joint hot path: by hand).

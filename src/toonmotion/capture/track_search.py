@@ -33,6 +33,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.capture.template_match import (
+    SPIN_TURNS,
+    TURN_CONFIDENCE,
     UPDATE_CONFIDENCE,
     VISIBLE_CONFIDENCE,
     BoneRule,
@@ -44,6 +46,7 @@ from toonmotion.capture.template_match import (
     sample,
     search_round,
 )
+from toonmotion.capture.track_figure import FigureMasks, onto_figure
 from toonmotion.capture.track_prediction import hidden_at, turns
 
 # A hidden joint's window widens by WIDEN_STEP of its search radius for every drawing it stays
@@ -64,8 +67,15 @@ PLACES = 64
 # parent than REACH_SLACK times the longest its bone has been seen. The anchor may have been cut
 # with a neighbour overlapping the joint; 0.6 still tells a joint from a different texture (0.1
 # at most) and from plain background.
-REACQUIRE_CONFIDENCE = 0.6
+REACQUIRE_CONFIDENCE = 0.35
 REACH_SLACK = 1.2
+# A joint matched less confidently than WEAK_CONFIDENCE (but at least VISIBLE_CONFIDENCE, or
+# REACQUIRE_CONFIDENCE when hidden) is taken as found only within WEAK_REACH of its rectangle's
+# larger side from where it was expected (predicted; carried, when hidden): a weak match may
+# refine where a joint is (its looks partly covered, or changed as its limb bends), but not
+# carry it off along a flat limb that looks alike all the way.
+WEAK_CONFIDENCE = 0.5
+WEAK_REACH = 0.25
 # The kinematic term's weight per squared pixel of bone-length change, relative to w_beta.
 BONE_WEIGHT = 1.0
 
@@ -138,15 +148,25 @@ class FrameSearch:
         Drawings each joint has been hidden for (0: found last drawing); updated.
     longest : (k,) float
         The longest each joint's bone has been seen, pixels (0 for roots); updated.
+    figure : FigureMasks, optional
+        Where the figure is in each frame: joints marked in ``on_figure`` are matched only on it,
+        and put back on it when not found (:mod:`~toonmotion.capture.track_figure`).
+    on_figure : (k,) bool, optional
+        The joints held to the figure (those on it where tracking started); default all.
     """
 
     def __init__(self, plans: Plans, templates: list[Templates], P: NDArray[np.float64],
                  C: NDArray[np.float64], angles: NDArray[np.float64], lost: NDArray[np.int_],
-                 longest: NDArray[np.float64]) -> None:
+                 longest: NDArray[np.float64], figure: FigureMasks | None = None,
+                 on_figure: NDArray[np.bool_] | None = None) -> None:
         self.plans, self.templates = plans, templates
         self.P, self.C, self.angles = P, C, angles
         self.lost: NDArray[np.int_] = np.array(lost, dtype=int)
         self.longest: NDArray[np.float64] = np.array(longest, dtype=float)
+        self.figure = figure
+        self.held_to_figure = np.ones(len(plans), bool) if on_figure is None else np.asarray(on_figure, bool)
+        self._near: NDArray[np.uint8] | None = None
+        self._half: NDArray[np.uint8] | None = None
 
     def frame(self, image: NDArray[np.uint8], t: int, predicted: NDArray[np.float64],
               coast: NDArray[np.float64], *, pace: float = 1.0) -> None:
@@ -155,19 +175,20 @@ class FrameSearch:
         as wide (the frames since the last drawing). Writes ``P[t]``, ``C[t]``, ``angles[t]``."""
         P, plans = self.P, self.plans
         k = len(plans)
+        self._near = None if self.figure is None else self.figure.near(t)
+        self._half = None
         angle = self.angles[t - 1] + turns(P[t - 1], predicted, plans.parents, True)
         seen, agree = np.zeros(k, dtype=bool), np.zeros(k, dtype=bool)
         self.C[t] = 0.0
-        small = None  # the frame at half resolution, made when a hidden joint needs it
         for m in range(k):  # down
             if not self.lost[m]:
                 self._try(image, t, m, plans(m, pace), predicted[m], angle[m], VISIBLE_CONFIDENCE, seen,
                           agree)
                 continue
-            small = cv2.pyrDown(image) if small is None else small
-            for centre, turned in self._places_to_look(small, t, m, coast[m], angle[m], seen):
+            carried = hidden_at(P, t, m, coast[m], plans.hangs_from)
+            for centre, turned in self._places_to_look(self._small(image), t, m, coast[m], angle[m], seen):
                 if self._try(image, t, m, plans(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen, agree,
-                             bounded=True, turn=False):
+                             bounded=True, turn=False, expected=carried):
                     break
         moves = moves_below(P, t, seen, plans.hangs_from)
         for m in range(k - 1, -1, -1):  # up
@@ -180,6 +201,9 @@ class FrameSearch:
         _place_hidden(P, t, coast, seen, plans.hangs_from, reach)
         # A joint leaving the picture stays at its edge.
         np.clip(P[t], 0.0, [image.shape[1] - 1, image.shape[0] - 1], out=P[t])
+        if self._near is not None:  # a hidden joint is behind the figure, so on it
+            for j in np.flatnonzero(~seen & self.held_to_figure):
+                P[t, j] = onto_figure(self._near, P[t, j], reach[j])
         self.lost = np.where(seen, 0, self.lost + 1)
         self.angles[t] = self.angles[t - 1] + turns(P[t - 1], P[t], plans.parents, True)
         for j in np.flatnonzero(seen & agree & (self.C[t] >= UPDATE_CONFIDENCE)):
@@ -198,24 +222,66 @@ class FrameSearch:
             start = math.atan2(*(P[t - 1, m] - P[t - 1, g])[::-1])
             span = min(math.pi, SPAN_STEP * self.lost[m])
             turned = float(self.angles[t - 1, m])
-            found = search_round(small, self.templates[m], joint, bone, start, span, turned, count=PLACES)
+            found = search_round(small, self.templates[m], joint, bone, start, span, turned, count=PLACES,
+                                 figure=self._figure(m))
             return [(xy, turned) for xy, coarse, turned in found if coarse >= COARSE_CONFIDENCE]
         carried = hidden_at(P, t, m, coast, plans.hangs_from)
         radius = joint.radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
-        xy, coarse = locate(small, self.templates[m], carried, angle, joint, radius, bone)
-        return [(xy, angle)] if coarse >= COARSE_CONFIDENCE else []
+        xy, coarse, turned = locate(small, self.templates[m], carried, angle, joint, radius, bone,
+                                    self._figure(m))
+        return [(xy, turned)] if coarse >= COARSE_CONFIDENCE else []
 
-    def _try(self, image, t, m, joint, centre, angle, needed, seen, agree, *, bounded=False, turn=True):
-        """Match joint ``m`` round ``centre``; if at least ``needed`` confident, write it into
-        ``P[t]``, ``C[t]``, ``seen`` and ``agree`` (its latest template may be re-cut there) and
-        return True, else keep its best confidence so far (below VISIBLE_CONFIDENCE)."""
+    def _try(self, image, t, m, joint, centre, angle, needed, seen, agree, *, bounded=False, turn=True,
+             expected=None):
+        """Match joint ``m`` round ``centre``; if at least ``needed`` confident (and, when weak, near
+        where it is ``expected``: default ``centre``), write it into ``P[t]``, ``C[t]``, ``seen``
+        and ``agree`` (its latest template may be re-cut there) and return True, else keep its best
+        confidence so far (below VISIBLE_CONFIDENCE)."""
         bone = self._bone_rule(t, m, seen, bounded=bounded)
-        xy, confidence, agreed = match(image, self.templates[m], centre, angle, joint, bone, turn=turn)
-        if confidence < needed:
+        figure = self._figure(m)
+        xy, confidence, agreed = match(image, self.templates[m], centre, angle, joint, bone, turn=turn,
+                                       figure=figure)
+        if confidence < TURN_CONFIDENCE and turn and self._end_on(t, m):
+            # A bone seen end-on gives no angle: the rectangle is looked for at turns all round.
+            place, coarse, turned = locate(self._small(image), self.templates[m], centre, angle, joint,
+                                           joint.radius, bone, figure, turns=SPIN_TURNS)
+            if coarse >= COARSE_CONFIDENCE:
+                other = match(image, self.templates[m], place, turned, joint, bone, turn=False, figure=figure)
+                if other[1] > confidence:
+                    xy, confidence, agreed = other
+        expected = centre if expected is None else expected
+        weak_and_far = (confidence < WEAK_CONFIDENCE
+                        and math.hypot(*(xy - expected)) > WEAK_REACH * max(joint.size))
+        if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen)):
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
             return False
         self.P[t, m], self.C[t, m], seen[m], agree[m] = xy, confidence, True, agreed
         return True
+
+    def _taken(self, t, m, xy, seen):
+        """Whether another joint showing at ``xy`` (found at ``t``, or not yet looked for at ``t`` and
+        found at ``t - 1``) lies within half of ``m``'s rectangle: a hidden joint is not found again
+        on a joint that shows (on a cartoon the left leg looks like the right one)."""
+        others = np.where(seen[:, None], self.P[t], self.P[t - 1])
+        showing = seen | (self.lost == 0)
+        showing[m] = False
+        near = np.hypot(*(others[showing] - xy).T) < max(self.plans(m).size) / 2
+        return bool(near.any())
+
+    def _small(self, image):
+        """This frame at half resolution (``cv2.pyrDown``), made once a frame when first asked for."""
+        if self._half is None:
+            self._half = cv2.pyrDown(image)
+        return self._half
+
+    def _end_on(self, t, m):
+        """Whether joint ``m``'s bone was shorter than its rectangle at ``t - 1`` (seen end-on)."""
+        g = self.plans.hangs_from[m]
+        return g >= 0 and float(np.hypot(*(self.P[t - 1, m] - self.P[t - 1, g]))) < max(self.plans(m).size)
+
+    def _figure(self, m):
+        """This frame's figure (``near`` mask) if joint ``m`` is held to it, else None."""
+        return self._near if self.held_to_figure[m] else None
 
     def _bone_rule(self, t, m, seen, *, bounded):
         """The kinematic term for joint ``m`` at ``t`` if its parent was found there, else None:

@@ -22,11 +22,11 @@ departs from the thesis.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.capture.template_match import UPDATE_CONFIDENCE, Templates, distinct_size
 from toonmotion.capture.track_checks import (
@@ -39,9 +39,10 @@ from toonmotion.capture.track_checks import (
     check_number,
     read_frame,
 )
+from toonmotion.capture.track_figure import FigureMasks, put_on_figure
 from toonmotion.capture.track_gaps import fill_hidden_spans
 from toonmotion.capture.track_prediction import COAST_STEPS, is_held, predict, turns
-from toonmotion.capture.track_search import FrameSearch, Plans, hidden_for, longest_bones
+from toonmotion.capture.track_search import MAX_WIDEN, FrameSearch, Plans, hidden_for, longest_bones
 from toonmotion.errors import TrackingError
 from toonmotion.progress import Progress
 from toonmotion.rig.skeleton import Skeleton
@@ -54,6 +55,9 @@ MIN_SEARCH = 8.0
 MAX_HOLD = 3
 
 # progress(stage, index, count), as everywhere in the library; the stage is "tracking".
+
+# Where the figure is in each frame: (T, h, w) bool, or a sequence of (h, w) bool.
+Masks = NDArray[np.bool_] | Sequence[NDArray[np.bool_]]
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,6 +120,12 @@ class TrackSettings:
     fill_gaps : bool
         After tracking, re-place each joint where it was hidden between two frames where it was
         found, from both ends (:mod:`~toonmotion.capture.track_gaps`).
+    figure : bool
+        Where the footage is a figure on one flat colour, hold the joints to the figure: they are
+        matched only on it and a joint not found is put on it
+        (:mod:`~toonmotion.capture.track_figure`). Read by
+        :func:`~toonmotion.capture.footage.capture_motion`, which finds the figure's masks and
+        gives them to :func:`track`.
     """
 
     search: float | None = None
@@ -123,6 +133,7 @@ class TrackSettings:
     w_beta: float | None = None
     rotate: bool = True
     fill_gaps: bool = True
+    figure: bool = True
 
     def __post_init__(self) -> None:
         if self.search is not None:
@@ -131,7 +142,7 @@ class TrackSettings:
         object.__setattr__(self, "w_alpha", check_number(self.w_alpha, "w_alpha", 0.0, "> 0", strict=True))
         if self.w_beta is not None:
             object.__setattr__(self, "w_beta", check_number(self.w_beta, "w_beta", 0.0, ">= 0"))
-        for name in ("rotate", "fill_gaps"):
+        for name in ("rotate", "fill_gaps", "figure"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
@@ -189,7 +200,7 @@ class Tracking:
 
 
 def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None = None, start: int = 0,
-          stop: int | None = None, initial: ArrayLike | None = None,
+          stop: int | None = None, initial: ArrayLike | None = None, masks: Masks | None = None,
           progress: Progress | None = None) -> Tracking:
     """Track joints through frames (thesis 4.4).
 
@@ -207,6 +218,11 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     initial : (k, 2) float, optional
         Rectangle centres at ``start``; default ``setup.skeleton.positions``. Every rectangle
         must lie inside the frame.
+    masks : (T, h, w) bool, or a sequence of T (h, w) bool arrays, optional
+        Where the figure is in each frame
+        (:func:`~toonmotion.capture.foreground.foreground_masks`). Joints are then matched only
+        on the figure, and a joint not found is put on it
+        (:mod:`~toonmotion.capture.track_figure`); joints off the mask at ``start`` are left free.
     progress : callable, optional
         Called as ``progress("tracking", index, stop)`` once each frame ``index`` from ``start``
         is done.
@@ -241,15 +257,18 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     out.tracked[start] = True
     plan = _plans(setup, settings, first, initial)
     templates = [Templates.cut(first, initial[m], 0.0, plan(m).size) for m in range(k)]
+    figure = None if masks is None else FigureMasks(masks, count, first.shape)
+    on_figure = None if figure is None else figure.holds(start, initial)
     if progress:
         progress("tracking", start, stop)
-    _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress)
-    return _filled(out, plan, settings).freeze()
+    _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress,
+         figure, on_figure)
+    return _filled(out, plan, settings, figure, on_figure).freeze()
 
 
 def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
             corrections: Mapping[str, ArrayLike], *, settings: TrackSettings | None = None,
-            progress: Progress | None = None) -> Tracking:
+            masks: Masks | None = None, progress: Progress | None = None) -> Tracking:
     """Correct joints at one frame and track again from there (thesis 4.4.3, 6.3e).
 
     Tracking in segments (the thesis' cure for accumulated error) is calling this at each
@@ -268,6 +287,9 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
         tracked positions there.
     settings : TrackSettings, optional
         Should be the ones ``tracking`` was made with.
+    masks : (T, h, w) bool, or a sequence of T (h, w) bool arrays, optional
+        Where the figure is in each frame, as for :func:`track`; joints off the mask at
+        ``frame`` are left free.
     progress : callable, optional
         Called as ``progress("tracking", index, count)`` once each frame ``index`` from ``frame``
         is done, ``count`` one past the last frame to track.
@@ -314,10 +336,12 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
         image = current if cut == frame else read_frame(frames, cut, current.shape)
         templates.append(Templates.cut(image, out.positions[cut, m], out.angles[cut, m], plan(m).size))
     history = np.where(np.isin(np.arange(k), list(fixed)), frame, begin)
+    figure = None if masks is None else FigureMasks(masks, count, current.shape)
+    on_figure = None if figure is None else figure.holds(frame, out.positions[frame])
     if progress:
         progress("tracking", frame, stop)
-    _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress)
-    return _filled(out, plan, settings).freeze()
+    _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure)
+    return _filled(out, plan, settings, figure, on_figure).freeze()
 
 
 # --- the tracking loop -----------------------------------------------------------------------------
@@ -357,12 +381,12 @@ class _Arrays:
 
 
 def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, history, begin, stop,
-         progress):
+         progress, figure=None, on_figure=None):
     """Track frames ``begin`` to ``stop - 1``; frame ``begin - 1`` is tracked; write into ``out``."""
     P, C = out.positions, out.confidence
     drawings = _drawings(out, begin)
     search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
-                         longest_bones(P, C, drawings, plans.hangs_from))
+                         longest_bones(P, C, drawings, plans.hangs_from), figure, on_figure)
     previous = read_frame(frames, begin - 1, shape)
     for t in range(begin, stop):
         image = read_frame(frames, t, shape)
@@ -391,12 +415,23 @@ def _plans(setup, settings, image, centres):
                  rotate=settings.rotate, frame_shape=image.shape)
 
 
-def _filled(out, plans, settings):
-    """``out`` after the whole-sequence pass, if ``settings`` ask for it."""
+def _filled(out, plans, settings, figure, on_figure):
+    """``out`` after the whole-sequence pass, if ``settings`` ask for it; joints it re-placed
+    off the figure are put back on it (as the frame-by-frame search puts them)."""
     if settings.fill_gaps:
         out.positions = fill_hidden_spans(out.positions, out.confidence, plans.hangs_from, out.tracked,
                                           out.held)
+        if figure is not None:
+            limit = np.array([plans(m).radius * MAX_WIDEN for m in range(len(plans))])
+            put_on_figure(out.positions, out.confidence, out.tracked & ~out.held, figure, on_figure, limit)
+            for t in np.flatnonzero(out.held):  # held frames repeat the frame before
+                out.positions[t] = out.positions[t - 1]
     return out
+
+
+def _held_to_figure(figure, t, centres):
+    """The joints held to the figure: those on its mask at frame ``t`` (None without masks)."""
+    return None if figure is None else figure.holds(t, centres)
 
 
 def _drawings(out, begin):

@@ -36,8 +36,11 @@ def track(
     search: Annotated[float | None, typer.Option(
         "--search", help="Search radius in pixels \\[default: from each rectangle].")] = None,
     background: Annotated[str | None, typer.Option(
-        "--background", help="Flat background colour #rrggbb for suggesting joints \\[default: the "
-        "border's colour if flat, else estimated from the sequence].")] = None,
+        "--background", help="Flat background colour #rrggbb: joints are suggested on the figure that "
+        "differs from it, and held to it \\[default: the border's colour if flat, else estimated from "
+        "the sequence, and joints are free].")] = None,
+    free: Annotated[bool, typer.Option(
+        "--free", help="Do not hold joints to the figure on a flat background.")] = False,
     fps: Annotated[float | None, typer.Option(
         "--fps", help="Frame rate \\[default: the video's, else 24].")] = None,
     resume: Annotated[Path | None, typer.Option(
@@ -75,7 +78,8 @@ def track(
             joints=(skeleton, sizes),
             start=start,
             fps=rate,
-            settings=api.TrackSettings(search=search),
+            settings=api.TrackSettings(search=search, figure=not free),
+            background=flat,
             earlier=None if resume is None else load_motion(resume),
             corrections=dict(options.named_point(c, "--set") for c in corrections or ()),
             at=at,

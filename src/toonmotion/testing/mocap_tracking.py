@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.bvh_kinematics import BvhClip, forward_kinematics
+from toonmotion.capture.foreground import flat_figure_masks
 from toonmotion.capture.mocap import (
     STANDARD_JOINTS,
     fit_to_frame,
@@ -147,9 +148,13 @@ def render_mocap(clip: BvhClip, *, frames: int | None = None, fps: float = FPS,
                         fps=clip.fps / step, style=style, twos=twos)
 
 
-def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None = None
+def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None = None, figure: bool = True
                      ) -> tuple[NDArray[np.float64], float]:
     """Track every joint of a rendered clip with toonmotion's tracker from the true frame-0 rectangles.
+
+    With ``figure`` the tracker holds joints to the figure's masks where the figure is drawn on
+    a flat colour, as ``toonmotion track`` does
+    (:func:`~toonmotion.capture.foreground.flat_figure_masks`); the time includes making them.
 
     Returns
     -------
@@ -161,7 +166,8 @@ def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None =
     sizes = np.full((len(rendered.skeleton), 2), rendered.side)
     setup = TrackSetup(skeleton=rendered.skeleton, sizes=sizes)
     start = time.perf_counter()
-    result = track(rendered.images, setup, settings=settings)
+    masks = flat_figure_masks(rendered.images) if figure else None
+    result = track(rendered.images, setup, settings=settings, masks=masks)
     return result.positions, time.perf_counter() - start
 
 

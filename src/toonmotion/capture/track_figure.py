@@ -1,0 +1,139 @@
+"""The figure's mask in the joint tracker: every joint lies on the figure.
+
+A joint that shows lies on the figure, and one that is hidden lies behind a nearer part of it:
+either way its centre is on the figure's foreground (:mod:`~toonmotion.capture.foreground`). On
+a flat-coloured cartoon that is the one thing that tells a place on a limb from the plain paper
+round it as well as from a look-alike patch. The tracker uses it twice:
+
+* a match whose centre lies off the figure is no match (the matching cost there is infinite);
+* a joint that was not found, placed where its parent or the joints below it carry it, goes to
+  the nearest point of the figure when that place is off it (a hand carried by its elbow while
+  the arm bends out of sight does not float in the air beside it).
+
+A mask counts a point as on the figure when it lies within :data:`FIGURE_SLACK` pixels of a
+foreground pixel (anti-aliased outlines and thresholds shift a mask's edge by a pixel or so).
+Joints that lie off their frame's mask where tracking starts (a mask that misses part of the
+figure) are not held to it at all.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion.errors import TrackingError
+
+# A point within this many pixels of a foreground pixel is on the figure.
+FIGURE_SLACK = 2.0
+
+
+class FigureMasks:
+    """Each frame's figure, as the tracker asks for it (module docstring).
+
+    Parameters
+    ----------
+    masks : (T, h, w) bool, or a sequence of T (h, w) bool arrays
+        Where the figure is in each frame, as :func:`~toonmotion.capture.foreground.foreground_masks`
+        gives it; the frames' size.
+    shape : tuple
+        ``(h, w, ...)`` of the frames.
+    """
+
+    def __init__(self, masks: NDArray[np.bool_] | Sequence[NDArray[np.bool_]], count: int,
+                 shape: tuple[int, ...]) -> None:
+        if len(masks) != count:
+            raise TrackingError(f"there are {len(masks)} figure masks for {count} frames; give one a frame")
+        self._masks, self._shape = masks, tuple(shape[:2])
+        self._cache: tuple[int, NDArray[np.uint8]] | None = None
+        radius = int(np.ceil(FIGURE_SLACK))
+        self._kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+
+    def near(self, t: int) -> NDArray[np.uint8]:
+        """``(h, w)`` uint8, 255 where frame ``t``'s figure is within :data:`FIGURE_SLACK` px, else 0."""
+        if self._cache is None or self._cache[0] != t:
+            mask = np.asarray(self._masks[t])
+            if mask.shape != self._shape:
+                raise TrackingError(
+                    f"the figure mask of frame {t} has shape {mask.shape} but the frames are "
+                    f"{self._shape[1]}x{self._shape[0]}; give (h, w) masks of the frames' size"
+                )
+            near = np.asarray(cv2.dilate(mask.astype(np.uint8) * 255, self._kernel), dtype=np.uint8)
+            self._cache = (t, near)
+        return self._cache[1]
+
+    def holds(self, t: int, points: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """Whether each of ``points`` ``(k, 2)`` lies on frame ``t``'s figure."""
+        return on_figure(self.near(t), points)
+
+
+def on_figure(near: NDArray[np.uint8], points: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Whether each of ``points`` ``(n, 2)`` (x, y) falls on a non-zero pixel of ``near``; points
+    off the frame are off the figure.
+
+    >>> near = np.zeros((4, 6), np.uint8); near[1:3, 2:4] = 255
+    >>> on_figure(near, np.array([[2.4, 1.6], [0.0, 0.0], [9.0, 1.0]])).tolist()
+    [True, False, False]
+    """
+    h, w = near.shape
+    ij = np.rint(np.asarray(points, dtype=float)[:, ::-1]).astype(int)
+    inside = (ij[:, 0] >= 0) & (ij[:, 0] < h) & (ij[:, 1] >= 0) & (ij[:, 1] < w)
+    out = np.zeros(len(ij), dtype=bool)
+    out[inside] = near[ij[inside, 0], ij[inside, 1]] > 0
+    return out
+
+
+def onto_figure(near: NDArray[np.uint8], point: NDArray[np.float64], limit: float) -> NDArray[np.float64]:
+    """``point`` (x, y) if it lies on the figure (``near`` non-zero), else the nearest pixel of the
+    figure no farther than ``limit`` pixels, else ``point`` itself.
+
+    >>> near = np.zeros((10, 10), np.uint8); near[:, 6:] = 255
+    >>> point = np.array([2.0, 4.0])
+    >>> onto_figure(near, point, 5.0).tolist(), onto_figure(near, point, 3.0).tolist()
+    ([6.0, 4.0], [2.0, 4.0])
+    """
+    h, w = near.shape
+    x, y = (int(round(v)) for v in point)
+    if 0 <= x < w and 0 <= y < h and near[y, x]:
+        return point
+    r = int(np.ceil(limit))
+    x0, y0 = max(0, x - r), max(0, y - r)
+    rows, cols = np.nonzero(near[y0:min(h, y + r + 1), x0:min(w, x + r + 1)])
+    if not rows.size:
+        return point
+    d2 = (cols + x0 - point[0]) ** 2 + (rows + y0 - point[1]) ** 2
+    best = int(np.argmin(d2))
+    if d2[best] > limit**2:
+        return point
+    return np.array([cols[best] + x0, rows[best] + y0], dtype=float)
+
+
+def put_on_figure(P: NDArray[np.float64], C: NDArray[np.float64], frames: NDArray[np.bool_],
+                  figure: FigureMasks, held: NDArray[np.bool_], limit: NDArray[np.float64]) -> None:
+    """Move every hidden joint (``C`` below ``VISIBLE_CONFIDENCE``) of the ``held`` ones that
+    lies off the figure in one of ``frames`` ``(T,)`` to the figure's nearest pixel within its
+    ``limit`` (pixels, ``(k,)``), in place. ``P`` is ``(T, k, 2)``, ``C`` ``(T, k)``."""
+    from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+
+    for t in np.flatnonzero(frames):
+        hidden = np.flatnonzero(held & (C[t] < VISIBLE_CONFIDENCE))
+        if hidden.size:
+            near = figure.near(int(t))
+            for m in hidden:
+                P[t, m] = onto_figure(near, P[t, m], float(limit[m]))
+
+
+def figure_cells(near: NDArray[np.uint8], centre: NDArray[np.float64], angle: float, R: int,
+                 step: float = 1.0) -> NDArray[np.bool_]:
+    """Which cells of a ``(2R+1, 2R+1)`` search window round ``centre``, turned by ``angle`` and
+    ``step`` pixels apart, lie on the figure: cell ``(i, j)`` is the point
+    ``centre + step * rotation(angle) (j - R, i - R)`` (as the tracker's windows lay cells out)."""
+    c, s = np.cos(angle), np.sin(angle)
+    n = 2 * R + 1
+    M = np.array([[step * c, -step * s, centre[0] - step * R * (c - s)],
+                  [step * s, step * c, centre[1] - step * R * (s + c)]])
+    cells = cv2.warpAffine(near, M, (n, n), flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP,
+                           borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    return cells > 0
