@@ -78,6 +78,8 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/deform.py
 	$(BIN)/python benchmarks/edit.py
 	$(BIN)/python benchmarks/track.py
+	$(BIN)/python benchmarks/track.py --style flat
+	$(BIN)/python benchmarks/track_footage.py
 	$(BIN)/python benchmarks/editor.py
 	$(BIN)/python benchmarks/proxy3d.py
 	$(BIN)/python benchmarks/scene3d.py

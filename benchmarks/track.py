@@ -1,7 +1,7 @@
 """Joint tracking on rendered motion capture, against OpenCV's trackers; JSON lines.
 
     python benchmarks/track.py [CLIP.bvh ...] [--frames N] [--trackers toonmotion,MIL,CSRT,KCF]
-                               [--style textured|flat ...] [--twos]
+                               [--style textured|flat ...] [--twos] [--seed N]
 
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
 usual naming conventions (CMU, FAIR, Mixamo, Rokoko), projected orthographically from the front,
@@ -10,12 +10,13 @@ from is dropped), and rendered as a limb figure drawn far to near so limbs cross
 other (``toonmotion.testing.mocap_tracking``, which also scores): ``--style textured`` (the
 default) a textured figure over a textured background, ``--style flat`` a cel cartoon, flat
 colours from a small palette with dark outlines over a plain background. ``--twos`` holds each
-drawing two frames (animation on twos, with a grey level or two of noise). Every tracker starts
+drawing two frames (animation on twos, with a grey level or two of noise); ``--seed`` draws the
+figure with other textures or colours. Every tracker starts
 from the true frame-1 rectangles (a square of the joint disc's diameter, ~30 px) and runs on
 one core.
 
 Keys, one line per clip, style and tracker:
-  clip, style, twos, tracker, joints, frames
+  clip, style, twos, seed, tracker, joints, frames
   mean_px, median_px   error of the tracked joint centres against the true ones, over every
                        joint and frame after the first
   pck5                 fraction of joint-frames within 5 px
@@ -66,8 +67,8 @@ def run_opencv(kind, images, start_points, side):
     return out, time.perf_counter() - start
 
 
-def bench(path, trackers, frames=None, style="textured", twos=False):
-    clip = render_bvh_clip(path, frames=frames, style=style, twos=twos)
+def bench(path, trackers, frames=None, style="textured", twos=False, seed=0):
+    clip = render_bvh_clip(path, frames=frames, style=style, twos=twos, seed=seed)
     images = clip.images
     lines, ours = [], None
     for name in trackers:
@@ -75,7 +76,7 @@ def bench(path, trackers, frames=None, style="textured", twos=False):
             found, seconds = track_from_truth(clip)
         else:
             found, seconds = run_opencv(name, images, clip.truth[0], clip.side)
-        line = {"clip": Path(path).stem, "style": style, "twos": twos, "tracker": name,
+        line = {"clip": Path(path).stem, "style": style, "twos": twos, "seed": seed, "tracker": name,
                 "joints": len(clip.skeleton), "frames": len(images),
                 **tracking_scores(found, clip.truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
         if name == "toonmotion":
@@ -94,11 +95,14 @@ def main():
     parser.add_argument("--style", nargs="+", choices=("textured", "flat"), default=["textured"],
                         help="how the figure is drawn, a set of lines each (default: textured)")
     parser.add_argument("--twos", action="store_true", help="hold each drawing two frames")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the figure's textures or colours and the background (default 0)")
     args = parser.parse_args()
     clips = args.clips or sorted(DEFAULT_DIR.glob("*.bvh"))
     for clip in clips:
         for style in args.style:
-            lines = bench(clip, args.trackers.split(","), frames=args.frames, style=style, twos=args.twos)
+            lines = bench(clip, args.trackers.split(","), frames=args.frames, style=style, twos=args.twos,
+                          seed=args.seed)
             for line in lines:
                 print(json.dumps(line), flush=True)
 

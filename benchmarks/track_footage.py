@@ -1,0 +1,105 @@
+"""Joint tracking on footage whose true joints are known: a video and its frame motion; JSON lines.
+
+    python benchmarks/track_footage.py [VIDEO MOTION.json ...] [--free]
+
+Each VIDEO is read as ``toonmotion track`` reads it, and MOTION.json holds its true joints in the
+video's pixels, frame by frame (what ``toonmotion animate ... --save-frame-motion`` writes beside
+the frames it renders). The joints start at their true frame-0 places with rectangles sized as
+``track`` suggests them (twice the figure's local thickness), the figure found as ``track`` finds
+it; the tracker runs on one core. Without arguments the bundled character's demo is made in a
+temporary folder as ``make demo`` makes ``demo/demo.mp4`` and ``demo/motion.json`` (sample, rig,
+animate), and measured. ``--free`` does not hold joints to the figure.
+
+Keys, one line per video:
+  video, joints, frames
+  mean_px, median_px, pck5, lost   as in benchmarks/track.py, frame 0 left out
+  worst_joint, worst_mean_px       the joint with the largest mean error
+  fps                              frames tracked per second (reading the video not counted)
+Goal: mean error at most 3 px on the demo.
+"""
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+
+from toonmotion.animate.motion import motion_for  # noqa: E402
+from toonmotion.capture.footage import capture_motion  # noqa: E402
+from toonmotion.capture.foreground import border_colour, estimate_background, foreground_masks  # noqa: E402
+from toonmotion.capture.setup import rectangle_sizes  # noqa: E402
+from toonmotion.capture.tracker import TrackSettings  # noqa: E402
+from toonmotion.io.frames import load_frames  # noqa: E402
+from toonmotion.io.motion_json import load_motion  # noqa: E402
+from toonmotion.rig.skeleton import Skeleton  # noqa: E402
+from toonmotion.testing.mocap_tracking import tracking_errors, tracking_scores  # noqa: E402
+
+cv2.setNumThreads(1)
+
+
+def make_demo(folder):
+    """``demo.mp4`` and ``motion.json`` made as ``make demo`` makes them, in ``folder``."""
+    cli = Path(sys.executable).with_name("toonmotion")
+    steps = [
+        ["sample", "-o", "hero.png", "--skeleton", "hero.json", "--keys", "keys.json"],
+        ["rig", "hero.png", "--skeleton", "hero.json", "-o", "hero"],
+        ["depth", "hero", "right_elbow=1", "right_hand=1"],
+        ["animate", "hero", "keys.json", "-o", "demo.mp4", "--save-frame-motion", "motion.json"],
+    ]
+    for step in steps:
+        subprocess.run([str(cli), *step], cwd=folder, check=True, capture_output=True)
+    return folder / "demo.mp4", folder / "motion.json"
+
+
+def bench(video, truth_file, figure=True):
+    frames, fps = load_frames(video)
+    truth = load_motion(truth_file)
+    skeleton = truth.skeleton
+    positions = motion_for(skeleton, truth, where="the true motion")
+    count = min(len(frames), len(positions))
+    frames, positions = frames[:count], positions[:count]
+    colour = border_colour(frames[0])
+    background = None if colour is not None else estimate_background(frames)
+    mask = foreground_masks(frames[:1], background=background, colour=colour)[0]
+    sizes = rectangle_sizes(mask, positions[0])
+    start = time.perf_counter()
+    placed = Skeleton.from_joints([(n, p, tuple(xy)) for (n, p, _), xy in zip(skeleton.joints(), positions[0],
+                                                                              strict=True)])
+    captured = capture_motion(frames, placed, sizes, fps=fps or 24.0, settings=TrackSettings(figure=figure))
+    seconds = time.perf_counter() - start
+    found = captured.motion.positions
+    per_joint = tracking_errors(found, positions).reshape(count - 1, -1).mean(axis=0)
+    worst = int(np.argmax(per_joint))
+    scores = tracking_scores(found, positions)
+    return {"video": str(video), "joints": len(skeleton), "frames": count, **scores,
+            "worst_joint": skeleton.names[worst], "worst_mean_px": round(float(per_joint[worst]), 3),
+            "fps": round((count - 1) / max(seconds, 1e-9), 1), "figure": figure}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("pairs", nargs="*", type=Path, help="VIDEO MOTION.json, repeated")
+    parser.add_argument("--free", action="store_true", help="do not hold joints to the figure")
+    args = parser.parse_args()
+    if len(args.pairs) % 2:
+        parser.error("give each video with its true motion: VIDEO MOTION.json [VIDEO MOTION.json ...]")
+    pairs = list(zip(args.pairs[::2], args.pairs[1::2], strict=True))
+    with tempfile.TemporaryDirectory() as folder:
+        if not pairs:
+            pairs = [make_demo(Path(folder))]
+        for video, truth in pairs:
+            print(json.dumps(bench(video, truth, figure=not args.free)), flush=True)
+
+
+if __name__ == "__main__":
+    main()
