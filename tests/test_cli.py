@@ -765,7 +765,8 @@ def test_track_follows_a_cartoon_on_plain_paper(footage, tmp_path, options):
     from toonmotion.io.video import save_animation
 
     folder, truth = footage
-    frames, _ = limb_figure_frames(truth, np.array([-1, 0, 1]), size=(320, 240), width=14, seed=4, style="flat")
+    frames, _ = limb_figure_frames(truth, np.array([-1, 0, 1]), size=(320, 240), width=14, seed=4,
+                                   style="flat")
     assert (frames[:, 0, 0] == (246, 240, 226)).all()
     opaque = np.concatenate([frames, np.full(frames.shape[:3] + (1,), 255, np.uint8)], axis=3)
     save_animation(tmp_path / "cartoon", iter(opaque), fps=12)

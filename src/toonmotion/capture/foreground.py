@@ -134,7 +134,8 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
     threshold is the low end of :data:`THRESHOLD_RANGE` by default: Otsu's split, which
     :func:`foreground_masks` takes, throws away a figure's fills that lie near the paper's colour
     (skin on cream paper) and keeps only its outlines. Masks are not cleaned (a tracker asks
-    for one a frame, and a speck matters little to it).
+    for one a frame, and a speck matters little to it). Each mask asked for reads its frame from
+    ``frames`` again: a lazy sequence of frames is read a second time.
 
     Parameters
     ----------
