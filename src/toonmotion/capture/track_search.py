@@ -71,9 +71,10 @@ REACQUIRE_CONFIDENCE = 0.35
 REACH_SLACK = 1.2
 # A joint matched less confidently than WEAK_CONFIDENCE (but at least VISIBLE_CONFIDENCE, or
 # REACQUIRE_CONFIDENCE when hidden) is taken as found only within WEAK_REACH of its rectangle's
-# larger side from where it was expected (predicted; carried, when hidden): a weak match may
-# refine where a joint is (its looks partly covered, or changed as its limb bends), but not
-# carry it off along a flat limb that looks alike all the way.
+# larger side from where it was expected (predicted; carried, when hidden), times the pace (as
+# the windows widen after a held drawing): a weak match may refine where a joint is (its looks
+# partly covered, or changed as its limb bends), but not carry it off along a flat limb that
+# looks alike all the way.
 WEAK_CONFIDENCE = 0.5
 WEAK_REACH = 0.25
 # The kinematic term's weight per squared pixel of bone-length change, relative to w_beta.
@@ -167,6 +168,7 @@ class FrameSearch:
         self.held_to_figure = np.ones(len(plans), bool) if on_figure is None else np.asarray(on_figure, bool)
         self._near: NDArray[np.uint8] | None = None
         self._half: NDArray[np.uint8] | None = None
+        self._pace = 1.0
 
     def frame(self, image: NDArray[np.uint8], t: int, predicted: NDArray[np.float64],
               coast: NDArray[np.float64], *, pace: float = 1.0) -> None:
@@ -177,6 +179,7 @@ class FrameSearch:
         k = len(plans)
         self._near = None if self.figure is None else self.figure.near(t)
         self._half = None
+        self._pace = pace
         angle = self.angles[t - 1] + turns(P[t - 1], predicted, plans.parents, True)
         seen, agree = np.zeros(k, dtype=bool), np.zeros(k, dtype=bool)
         self.C[t] = 0.0
@@ -251,7 +254,7 @@ class FrameSearch:
                     xy, confidence, agreed = other
         expected = centre if expected is None else expected
         weak_and_far = (confidence < WEAK_CONFIDENCE
-                        and math.hypot(*(xy - expected)) > WEAK_REACH * max(joint.size))
+                        and math.hypot(*(xy - expected)) > WEAK_REACH * self._pace * max(joint.size))
         if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen)):
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
             return False
