@@ -114,3 +114,19 @@ def test_capture_holds_joints_to_a_flat_figure_unless_told_not_to(flat_walk):
     assert _masks(flat_walk.images, TrackSettings(figure=False), None) is None
     with pytest.raises(TrackingError, match="figure must be True or False"):
         TrackSettings(figure="yes")  # type: ignore[arg-type]
+
+
+def test_a_corrected_tracking_keeps_its_joints_on_the_figure(flat_walk):
+    """``retrack`` with the masks: the frames before the correction kept, the corrected joint where
+    it was put, and every joint of every frame after it on the figure."""
+    from toonmotion.capture.tracker import retrack
+
+    masks = flat_figure_masks(flat_walk.images)
+    setup = TrackSetup(flat_walk.skeleton, np.full((len(flat_walk.skeleton), 2), flat_walk.side))
+    figure = FigureMasks(masks, FRAMES, flat_walk.images.shape[1:])
+    first = track(flat_walk.images, setup, masks=masks)
+    name = flat_walk.skeleton.names[5]
+    fixed = retrack(first, flat_walk.images, setup, 20, {name: flat_walk.truth[20, 5]}, masks=masks)
+    np.testing.assert_array_equal(fixed.positions[:20], first.positions[:20])
+    np.testing.assert_allclose(fixed.positions[20, 5], flat_walk.truth[20, 5])
+    assert all(figure.holds(t, fixed.positions[t]).all() for t in range(20, FRAMES))

@@ -341,7 +341,11 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     if progress:
         progress("tracking", frame, stop)
     _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure)
-    return _filled(out, plan, settings, figure, on_figure).freeze()
+    filled = _filled(out, plan, settings, figure, on_figure)
+    # The whole-sequence pass may bend a span that ends after the correction back into the frames
+    # before it; those are kept as they were.
+    filled.positions[:frame] = tracking.positions[:frame]
+    return filled.freeze()
 
 
 # --- the tracking loop -----------------------------------------------------------------------------
