@@ -585,3 +585,25 @@ def test_a_bending_elbow_does_not_drift():
     frames, elbow, setup = _bending_arm()
     tracking = track(frames, setup, settings=TrackSettings(fill_gaps=False))
     assert np.hypot(*(tracking.positions[:, 1] - elbow).T).max() < 1.0
+
+
+def test_a_hidden_joint_goes_by_its_parent_and_its_children_found_and_a_root_by_any_joint_below():
+    """A chain neck-shoulder-elbow-hand with the neck found still and the hand found moved 10 px:
+    the elbow goes half way with the hand (its parent carries it nowhere), and the shoulder, whose
+    child is hidden too, stays with the neck (a grandchild's move is mostly the arm's turn about
+    it; going by it put the shoulder 5 px off). With the neck hidden too, the neck, a root with
+    nothing to carry it, goes with the hand, and the arm with it."""
+    from toonmotion.capture.track_search import _place_hidden, moves_below
+
+    parents = np.array([-1, 0, 1, 2])
+    before = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 20.0], [10.0, 40.0]])
+    hand = before[3] + [10.0, 0.0]
+    for seen, expected in (([True, False, False, True], [[0.0, 0.0], [10.0, 0.0], [15.0, 20.0]]),
+                           ([False, False, False, True], [[10.0, 0.0], [20.0, 0.0], [20.0, 20.0]])):
+        P = np.stack([before, before])
+        P[1, 3] = hand
+        seen = np.array(seen)
+        assert np.isnan(moves_below(P, 1, seen, parents, direct=True)[:2]).all()
+        np.testing.assert_allclose(moves_below(P, 1, seen, parents)[:3], [[10.0, 0.0]] * 3)
+        _place_hidden(P, 1, before, seen, parents, np.full(4, 50.0))
+        np.testing.assert_allclose(P[1, :3], expected)

@@ -16,8 +16,8 @@ A frame is searched in three passes over the skeleton:
    has been seen.
 2. **Up** (children before parents). A joint still not found is looked for where the joints
    hanging from it that were found put it (each moved as its child moved).
-3. **Place the rest** (parents first): at the mean of where its parent carries it and where the
-   joints below it put it; a root with neither coasts.
+3. **Place the rest** (parents first): at the mean of where its parent carries it and where its
+   children found put it (a root: the joints found below it); a root with neither coasts.
 
 Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` confidence,
 ``angles`` ``(T, k)`` the rectangles' turns; skeletons list parents before children.
@@ -301,35 +301,40 @@ class FrameSearch:
 
 def _place_hidden(P, t, coast, seen, hangs_from, reach):
     """Put every joint not found, parents first: at the mean of where its parent carries it and
-    where the joints hanging from it put it (:func:`moves_below`); a root with neither coasts.
+    where its children found put it (for a root, the joints found anywhere below it,
+    :func:`moves_below`); a root with neither coasts.
     None moves farther than its ``reach`` (pixels, ``(k,)``) beyond its parent's own move (its
     own move, for a root): a bone seen end-on that turns half round in one frame would otherwise
     fling it across the figure."""
-    moves = moves_below(P, t, seen, hangs_from)
+    moves, direct = moves_below(P, t, seen, hangs_from), moves_below(P, t, seen, hangs_from, direct=True)
     for m in range(len(seen)):
         if seen[m]:
             continue
-        guesses = [] if hangs_from[m] < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
-        if np.isfinite(moves[m]).all():
-            guesses.append(P[t - 1, m] + moves[m])
         g = hangs_from[m]
+        guesses = [] if g < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
+        # Only children found count, but for a root: a grandchild's move is mostly its parent's
+        # turn about the joint (a hand sweeping round a shoulder).
+        below = direct[m] if g >= 0 else moves[m]
+        if np.isfinite(below).all():
+            guesses.append(P[t - 1, m] + below)
         carried = P[t - 1, m] + (P[t, g] - P[t - 1, g] if g >= 0 else 0.0)
         step = (np.mean(guesses, axis=0) if guesses else coast[m]) - carried
         length = float(np.hypot(*step))
         P[t, m] = carried + (step if length <= reach[m] else step * (reach[m] / length))
 
 
-def moves_below(P: NDArray[np.float64], t: int, seen: NDArray[np.bool_], hangs_from: NDArray[np.int_]
-                ) -> NDArray[np.float64]:
+def moves_below(P: NDArray[np.float64], t: int, seen: NDArray[np.bool_], hangs_from: NDArray[np.int_],
+                *, direct: bool = False) -> NDArray[np.float64]:
     """How far each joint moved from ``t - 1`` to ``t`` by the joints hanging from it, ``(k, 2)``:
     the mean move of its children, a child found at ``t`` (``seen``) by its own move, one not
-    found by its children's, recursively; NaN where no joint below it was found."""
+    found by its children's, recursively (with ``direct``, not at all); NaN where no joint below
+    it (no child, with ``direct``) was found."""
     k = len(seen)
     moves = np.full((k, 2), np.nan)
     own = np.where(seen[:, None], P[t] - P[t - 1], np.nan)
     for m in range(k - 1, -1, -1):  # children come after their parents
         kids = np.flatnonzero(hangs_from == m)
-        below = np.where(seen[kids, None], own[kids], moves[kids])
+        below = np.where(seen[kids, None], own[kids], np.nan if direct else moves[kids])
         below = below[np.isfinite(below).all(axis=1)]
         if len(below):
             moves[m] = below.mean(axis=0)
