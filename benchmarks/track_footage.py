@@ -35,8 +35,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from toonmotion.animate.motion import motion_for  # noqa: E402
-from toonmotion.capture.footage import capture_motion  # noqa: E402
-from toonmotion.capture.foreground import border_colour, estimate_background, foreground_masks  # noqa: E402
+from toonmotion.capture.footage import capture_motion, first_figure  # noqa: E402
 from toonmotion.capture.setup import rectangle_sizes  # noqa: E402
 from toonmotion.capture.tracker import TrackSettings  # noqa: E402
 from toonmotion.io.frames import load_frames  # noqa: E402
@@ -68,10 +67,7 @@ def bench(video, truth_file, figure=True):
     positions = motion_for(skeleton, truth, where="the true motion")
     count = min(len(frames), len(positions))
     frames, positions = frames[:count], positions[:count]
-    colour = border_colour(frames[0])
-    background = None if colour is not None else estimate_background(frames)
-    mask = foreground_masks(frames[:1], background=background, colour=colour)[0]
-    sizes = rectangle_sizes(mask, positions[0])
+    sizes = rectangle_sizes(first_figure(frames), positions[0])
     start = time.perf_counter()
     placed = Skeleton.from_joints([(n, p, tuple(xy)) for (n, p, _), xy in zip(skeleton.joints(), positions[0],
                                                                               strict=True)])

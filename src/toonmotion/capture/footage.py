@@ -83,11 +83,18 @@ def suggest_joints(
     >>> len(skeleton) == len(sizes) > 1
     True
     """
+    return suggest_setup(first_figure(frames, colour=colour))
+
+
+def first_figure(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None
+                 ) -> NDArray[np.bool_]:
+    """Frame 0's figure, ``(H, W)`` bool, found as :func:`suggest_joints` finds it: what differs
+    from ``colour``, else from the first frame's border colour when that is flat, else from a
+    background estimated from the whole sequence."""
     if colour is None:
         colour = border_colour(frames[0])
     background = None if colour is not None else estimate_background(frames)
-    mask = foreground_masks(frames[:1], background=background, colour=colour)[0]
-    return suggest_setup(mask)
+    return foreground_masks(frames[:1], background=background, colour=colour)[0]
 
 
 def capture_motion(

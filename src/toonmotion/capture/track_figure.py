@@ -110,19 +110,15 @@ def onto_figure(near: NDArray[np.uint8], point: NDArray[np.float64], limit: floa
     return np.array([cols[best] + x0, rows[best] + y0], dtype=float)
 
 
-def put_on_figure(P: NDArray[np.float64], C: NDArray[np.float64], frames: NDArray[np.bool_],
-                  figure: FigureMasks, held: NDArray[np.bool_], limit: NDArray[np.float64]) -> None:
-    """Move every hidden joint (``C`` below ``VISIBLE_CONFIDENCE``) of the ``held`` ones that
-    lies off the figure in one of ``frames`` ``(T,)`` to the figure's nearest pixel within its
-    ``limit`` (pixels, ``(k,)``), in place. ``P`` is ``(T, k, 2)``, ``C`` ``(T, k)``."""
-    from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
-
-    for t in np.flatnonzero(frames):
-        hidden = np.flatnonzero(held & (C[t] < VISIBLE_CONFIDENCE))
-        if hidden.size:
-            near = figure.near(int(t))
-            for m in hidden:
-                P[t, m] = onto_figure(near, P[t, m], float(limit[m]))
+def put_on_figure(P: NDArray[np.float64], hidden: NDArray[np.bool_], figure: FigureMasks,
+                  limit: NDArray[np.float64]) -> None:
+    """Move every joint-frame marked ``hidden`` ``(T, k)`` that lies off the figure to the figure's
+    nearest pixel within its joint's ``limit`` (pixels, ``(k,)``), in place; ``P`` is
+    ``(T, k, 2)``."""
+    for t in np.flatnonzero(hidden.any(axis=1)):
+        near = figure.near(int(t))
+        for m in np.flatnonzero(hidden[t]):
+            P[t, m] = onto_figure(near, P[t, m], float(limit[m]))
 
 
 def figure_cells(near: NDArray[np.uint8], centre: NDArray[np.float64], angle: float, R: int,

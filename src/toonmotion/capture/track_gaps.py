@@ -33,7 +33,8 @@ TRUSTED = 0.1
 
 
 def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: NDArray[np.int_],
-                      tracked: NDArray[np.bool_], held: NDArray[np.bool_]) -> NDArray[np.float64]:
+                      tracked: NDArray[np.bool_], held: NDArray[np.bool_], since: int = 0
+                      ) -> NDArray[np.float64]:
     """``P`` with every hidden span that has a found frame on both sides re-placed (module
     docstring); joints are taken parents first, so a child's bone is read off its parent's
     re-placed positions.
@@ -48,6 +49,9 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
         Frames tracked; spans do not cross frames that were not.
     held : (T,) bool
         Frames that repeat the one before: they are given the positions of the frame they repeat.
+    since : int
+        Frames before this one are kept as they are in ``P`` (those before a correction): a span
+        that ends after it is re-placed from it on only.
 
     Returns
     -------
@@ -102,7 +106,8 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
                 turn = (1 - t) * start_turn + t * end_turn
                 bone = guess * scale * np.exp(1j * turn)
                 out[inside, m] = out[inside, g] + as_points(bone)
-    held_frames = np.flatnonzero(held)
+    out[:since] = P[:since]
+    held_frames = np.flatnonzero(held[since:]) + since
     for t in held_frames:  # in order, so a drawing held three frames passes its place on
         out[t] = out[t - 1]
     return out

@@ -189,7 +189,7 @@ class FrameSearch:
                           agree)
                 continue
             carried = hidden_at(P, t, m, coast[m], plans.hangs_from)
-            for centre, turned in self._places_to_look(self._small(image), t, m, coast[m], angle[m], seen):
+            for centre, turned in self._places_to_look(self._small(image), t, m, carried, angle[m], seen):
                 if self._try(image, t, m, plans(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen, agree,
                              bounded=True, turn=False, expected=carried):
                     break
@@ -213,10 +213,10 @@ class FrameSearch:
             self.templates[j].latest = sample(image, P[t, j], self.angles[t, j], plans(int(j)).size)
         lengthen(self.longest, P[t], self.C[t], plans.hangs_from)
 
-    def _places_to_look(self, small, t, m, coast, angle, seen):
+    def _places_to_look(self, small, t, m, carried, angle, seen):
         """Where to look for hidden joint ``m`` at full resolution, with its rectangle's angle
-        there: round its parent if that was found, else near where its parent carries it or it
-        coasts (module docstring). Places whose coarse match is hopeless are left out."""
+        there: round its parent if that was found, else near ``carried``, where its parent carries
+        it or it coasts (module docstring). Places whose coarse match is hopeless are left out."""
         P, plans = self.P, self.plans
         joint = plans(m)
         bone = self._bone_rule(t, m, seen, bounded=True)
@@ -228,7 +228,6 @@ class FrameSearch:
             found = search_round(small, self.templates[m], joint, bone, start, span, turned, count=PLACES,
                                  figure=self._figure(m))
             return [(xy, turned) for xy, coarse, turned in found if coarse >= COARSE_CONFIDENCE]
-        carried = hidden_at(P, t, m, coast, plans.hangs_from)
         radius = joint.radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
         xy, coarse, turned = locate(small, self.templates[m], carried, angle, joint, radius, bone,
                                     self._figure(m))

@@ -28,7 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from toonmotion.capture.template_match import UPDATE_CONFIDENCE, Templates, distinct_size
+from toonmotion.capture.template_match import (
+    UPDATE_CONFIDENCE,
+    VISIBLE_CONFIDENCE,
+    Templates,
+    distinct_size,
+)
 from toonmotion.capture.track_checks import (
     Frames,
     check_corrections,
@@ -341,11 +346,7 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     if progress:
         progress("tracking", frame, stop)
     _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure)
-    filled = _filled(out, plan, settings, figure, on_figure)
-    # The whole-sequence pass may bend a span that ends after the correction back into the frames
-    # before it; those are kept as they were.
-    filled.positions[:frame] = tracking.positions[:frame]
-    return filled.freeze()
+    return _filled(out, plan, settings, figure, on_figure, since=frame).freeze()
 
 
 # --- the tracking loop -----------------------------------------------------------------------------
@@ -419,23 +420,21 @@ def _plans(setup, settings, image, centres):
                  rotate=settings.rotate, frame_shape=image.shape)
 
 
-def _filled(out, plans, settings, figure, on_figure):
-    """``out`` after the whole-sequence pass, if ``settings`` ask for it; joints it re-placed
-    off the figure are put back on it (as the frame-by-frame search puts them)."""
+def _filled(out, plans, settings, figure, on_figure, since=0):
+    """``out`` after the whole-sequence pass, if ``settings`` ask for it, from frame ``since`` on
+    (the frames before a correction are kept); joints it re-placed off the figure are put back on
+    it (as the frame-by-frame search puts them)."""
     if settings.fill_gaps:
         out.positions = fill_hidden_spans(out.positions, out.confidence, plans.hangs_from, out.tracked,
-                                          out.held)
+                                          out.held, since)
         if figure is not None:
             limit = np.array([plans(m).radius * MAX_WIDEN for m in range(len(plans))])
-            put_on_figure(out.positions, out.confidence, out.tracked & ~out.held, figure, on_figure, limit)
-            for t in np.flatnonzero(out.held):  # held frames repeat the frame before
+            hidden = (out.confidence < VISIBLE_CONFIDENCE) & on_figure & (out.tracked & ~out.held)[:, None]
+            hidden[:since] = False
+            put_on_figure(out.positions, hidden, figure, limit)
+            for t in np.flatnonzero(out.held[since:]) + since:  # held frames repeat the frame before
                 out.positions[t] = out.positions[t - 1]
     return out
-
-
-def _held_to_figure(figure, t, centres):
-    """The joints held to the figure: those on its mask at frame ``t`` (None without masks)."""
-    return None if figure is None else figure.holds(t, centres)
 
 
 def _drawings(out, begin):
