@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from toonmotion.animate.motion import Motion, motion_for
 from toonmotion.capture.foreground import (
-    border_colour,
+    cleaned_mask,
     estimate_background,
     flat_figure_masks,
     foreground_masks,
@@ -88,13 +88,19 @@ def suggest_joints(
 
 def first_figure(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None
                  ) -> NDArray[np.bool_]:
-    """Frame 0's figure, ``(H, W)`` bool, found as :func:`suggest_joints` finds it: what differs
-    from ``colour``, else from the first frame's border colour when that is flat, else from a
-    background estimated from the whole sequence."""
-    if colour is None:
-        colour = border_colour(frames[0])
-    background = None if colour is not None else estimate_background(frames)
-    return foreground_masks(frames[:1], background=background, colour=colour)[0]
+    """Frame 0's figure, ``(H, W)`` bool, found as :func:`suggest_joints` finds it.
+
+    On a flat colour (``colour``, else the first frame's border colour when that is flat) it is
+    what the tracker holds joints to
+    (:class:`~toonmotion.capture.foreground.FlatBackgroundMasks`), cleaned of specks and small
+    holes: every pixel off that colour, so fills close to the paper's colour (skin on white)
+    count. Otherwise it is what differs from a background estimated from the whole sequence
+    (:func:`~toonmotion.capture.foreground.foreground_masks`).
+    """
+    flat = flat_figure_masks(frames[:1], colour=colour)
+    if flat is not None:
+        return cleaned_mask(flat[0])
+    return foreground_masks(frames[:1], background=estimate_background(frames))[0]
 
 
 def capture_motion(

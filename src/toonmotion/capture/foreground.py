@@ -121,7 +121,7 @@ def foreground_masks(frames: NDArray[np.uint8], *, background: ArrayLike | None 
         raise TrackingError(f"the foreground threshold must be a number >= 0, got {threshold!r}")
     masks = np.empty(frames.shape[:3], dtype=bool)
     for t, frame in enumerate(frames):
-        masks[t] = _cleaned(_distance(frame, reference) > threshold)
+        masks[t] = cleaned_mask(_distance(frame, reference) > threshold)
     return masks
 
 
@@ -199,9 +199,27 @@ def flat_figure_masks(frames: NDArray[np.uint8] | Sequence[NDArray[np.uint8]], *
     >>> int(flat_figure_masks(frames)[1].sum()), flat_figure_masks(noise)
     (4, None)
     """
+    first = np.asarray(frames[0])
     if colour is None:
-        colour = border_colour(frames[0])
-    return None if colour is None else FlatBackgroundMasks(frames, colour)
+        colour = border_colour(first)
+    return None if colour is None else FlatBackgroundMasks(frames, colour, flat_threshold(first, colour))
+
+
+def flat_threshold(frame: ArrayLike, colour: Sequence[int]) -> float:
+    """The summed channel difference from ``colour`` above which a pixel of ``frame`` ``(h, w, 3)``
+    is the figure (:class:`FlatBackgroundMasks`): the 99th percentile of the frame's border pixels'
+    differences, within :data:`THRESHOLD_RANGE`. Digital art on white gets the low end; paper
+    photographed under uneven light, whose own colour drifts by tens of levels, gets above its
+    drift.
+
+    >>> frame = np.full((10, 10, 3), 250, np.uint8); frame[:, :5] = 235  # light falling off
+    >>> flat_threshold(frame, (250, 250, 250)), flat_threshold(np.full((4, 4, 3), 9, np.uint8), (9, 9, 9))
+    (45.0, 20.0)
+    """
+    frame = np.asarray(frame)
+    border = np.concatenate([frame[0], frame[-1], frame[:, 0], frame[:, -1]]).astype(np.float32)
+    spread = float(np.percentile(np.abs(border - _checked_colour(colour)).sum(axis=1), 99))
+    return float(np.clip(spread, *THRESHOLD_RANGE))
 
 
 def guide_skeleton(mask: NDArray[np.bool_], *, prune: float = 0.5) -> CurveSkeleton:
@@ -272,7 +290,15 @@ def _auto_threshold(distance):
     return float(np.clip(threshold_otsu(distance), low, high))
 
 
-def _cleaned(mask):
+def cleaned_mask(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """``mask`` ``(h, w)`` bool cleaned as :func:`foreground_masks` cleans its masks: specks
+    (8-connected parts smaller than :data:`CLEAN_FRACTION` of the largest part) dropped, and holes
+    (background parts off the frame's border) smaller than that share of the foreground filled.
+
+    >>> mask = np.zeros((20, 20), bool); mask[2:18, 2:18] = True; mask[9, 9] = False
+    >>> bool(cleaned_mask(mask)[9, 9])
+    True
+    """
     if not mask.any():
         return mask
     mask = clean_mask(mask, min_fraction=CLEAN_FRACTION)
