@@ -73,6 +73,10 @@ $(BENCH_STAMP): $(STAMP)
 	$(BIN)/python -m pip install --quiet -e '.[dev,bench]'
 	touch $(BENCH_STAMP)
 
+# The shared Animated Drawings folders, animated and tracked by benchmarks/track_footage.py.
+DRAWINGS := $(wildcard ../shared/data/drawings/*/char_cfg.yaml)
+DRAWINGS := $(DRAWINGS:/char_cfg.yaml=)
+
 bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/rig.py
 	$(BIN)/python benchmarks/deform.py
@@ -80,6 +84,7 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/track.py
 	$(BIN)/python benchmarks/track.py --style flat
 	$(BIN)/python benchmarks/track_footage.py
+	$(if $(DRAWINGS),$(BIN)/python benchmarks/track_footage.py --drawings $(DRAWINGS))
 	$(BIN)/python benchmarks/editor.py
 	$(BIN)/python benchmarks/proxy3d.py
 	$(BIN)/python benchmarks/scene3d.py

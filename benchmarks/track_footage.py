@@ -1,6 +1,7 @@
 """Joint tracking on footage whose true joints are known: a video and its frame motion; JSON lines.
 
-    python benchmarks/track_footage.py [VIDEO MOTION.json ...] [--free]
+    python benchmarks/track_footage.py [VIDEO MOTION.json ...] [--drawings FOLDER ...] [--seeds N ...]
+                                       [--free]
 
 Each VIDEO is read as ``toonmotion track`` reads it, and MOTION.json holds its true joints in the
 video's pixels, frame by frame (what ``toonmotion animate ... --save-frame-motion`` writes beside
@@ -8,10 +9,14 @@ the frames it renders). The joints start at their true frame-0 places with recta
 ``track`` suggests them (twice the figure's local thickness), the figure found as ``track`` finds
 it; the tracker runs on one core. Without arguments the bundled character's demo is made in a
 temporary folder as ``make demo`` makes ``demo/demo.mp4`` and ``demo/motion.json`` (sample, rig,
-animate), and measured. ``--free`` does not hold joints to the figure.
+animate), and measured. ``--drawings`` takes Animated Drawings character folders (``texture.png``,
+``mask.png``, ``char_cfg.yaml``; e.g. ``../shared/data/drawings/char*``): each is rigged and
+animated into footage by key-frames that swing its bones, one clip per ``--seeds`` seed
+(``toonmotion.testing.swinging_keys``; 49 frames at 12 fps, bones turning up to 8-30 degrees
+about their parents). ``--free`` does not hold joints to the figure.
 
 Keys, one line per video:
-  video, joints, frames
+  video, joints, frames            (drawings: video is FOLDER:seed)
   mean_px, median_px, pck5, lost   as in benchmarks/track.py, frame 0 left out
   worst_joint, worst_mean_px       the joint with the largest mean error
   fps                              frames tracked per second (reading the video not counted)
@@ -40,8 +45,11 @@ from toonmotion.capture.setup import rectangle_sizes  # noqa: E402
 from toonmotion.capture.tracker import TrackSettings  # noqa: E402
 from toonmotion.io.frames import load_frames  # noqa: E402
 from toonmotion.io.motion_json import load_motion  # noqa: E402
+from toonmotion.io.pose_json import save_keyframes  # noqa: E402
+from toonmotion.io.skeleton_json import load_skeleton_file  # noqa: E402
 from toonmotion.rig.skeleton import Skeleton  # noqa: E402
 from toonmotion.testing.mocap_tracking import tracking_errors, tracking_scores  # noqa: E402
+from toonmotion.testing.swinging_keys import swinging_keys  # noqa: E402
 
 cv2.setNumThreads(1)
 
@@ -58,6 +66,26 @@ def make_demo(folder):
     for step in steps:
         subprocess.run([str(cli), *step], cwd=folder, check=True, capture_output=True)
     return folder / "demo.mp4", folder / "motion.json"
+
+
+def make_swinging(drawing, seeds, folder):
+    """An Animated Drawings folder rigged and animated by swinging key-frames, one clip per seed:
+    ``[(video, motion.json, seed), ...]`` in ``folder``."""
+    cli = Path(sys.executable).with_name("toonmotion")
+    project = folder / f"{drawing.name}_project"
+    subprocess.run([str(cli), "rig", str(drawing / "texture.png"), "--mask", str(drawing / "mask.png"),
+                    "--skeleton", str(drawing / "char_cfg.yaml"), "-o", str(project)], check=True,
+                   capture_output=True)
+    skeleton = load_skeleton_file(drawing / "char_cfg.yaml")
+    clips = []
+    for seed in seeds:
+        keys, video, truth = (folder / f"{drawing.name}_{seed}{suffix}" for suffix in (".keys.json", ".mp4",
+                                                                                       ".motion.json"))
+        save_keyframes(keys, skeleton, swinging_keys(skeleton, seed=seed))
+        subprocess.run([str(cli), "animate", str(project), str(keys), "-o", str(video), "--save-frame-motion",
+                        str(truth)], check=True, capture_output=True)
+        clips.append((video, truth, seed))
+    return clips
 
 
 def bench(video, truth_file, figure=True):
@@ -85,16 +113,23 @@ def bench(video, truth_file, figure=True):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("pairs", nargs="*", type=Path, help="VIDEO MOTION.json, repeated")
+    parser.add_argument("--drawings", nargs="+", type=Path, default=[],
+                        help="Animated Drawings folders to animate by swinging key-frames and track")
+    parser.add_argument("--seeds", nargs="+", type=int, default=[1, 2], help="swinging key-frames' seeds")
     parser.add_argument("--free", action="store_true", help="do not hold joints to the figure")
     args = parser.parse_args()
     if len(args.pairs) % 2:
         parser.error("give each video with its true motion: VIDEO MOTION.json [VIDEO MOTION.json ...]")
     pairs = list(zip(args.pairs[::2], args.pairs[1::2], strict=True))
     with tempfile.TemporaryDirectory() as folder:
-        if not pairs:
+        if not pairs and not args.drawings:
             pairs = [make_demo(Path(folder))]
         for video, truth in pairs:
             print(json.dumps(bench(video, truth, figure=not args.free)), flush=True)
+        for drawing in args.drawings:
+            for video, truth, seed in make_swinging(drawing, args.seeds, Path(folder)):
+                line = bench(video, truth, figure=not args.free)
+                print(json.dumps({**line, "video": f"{drawing}:{seed}"}), flush=True)
 
 
 if __name__ == "__main__":
