@@ -56,7 +56,7 @@ def test_nothing_is_taken_beyond_the_bones_reach():
     templates = Templates.cut(image, np.array([90.0, 50.0]), 0.0, (SIDE, SIDE))
     joint = _plan()
     short = BoneRule(parent=np.array([20.0, 50.0]), length=70.0, weight=joint.w_beta, longest=45.0)
-    xy, confidence, _ = match(image, templates, np.array([75.0, 50.0]), 0.0, joint, short)
+    xy, confidence, _, _ = match(image, templates, np.array([75.0, 50.0]), 0.0, joint, short)
     assert np.hypot(*(xy - (20, 50))) <= 45.0 + 1.0  # the copy within reach, not the template's own place
     assert np.allclose(xy, (60, 50), atol=0.05) and confidence > 0.9
 
@@ -88,7 +88,7 @@ def test_a_hidden_joint_is_found_round_its_parent_turned_with_its_bone():
     assert len(places) == 2  # the best two, a rectangle apart
     (xy, coarse, angle), *_ = places
     assert np.hypot(*(xy - truth)) < SIDE / 4 and abs(angle - math.radians(130)) < math.radians(15)
-    found, confidence, _ = match(later, templates, xy, angle, joint, bone)
+    found, confidence, _, _ = match(later, templates, xy, angle, joint, bone)
     assert np.hypot(*(found - truth)) < 0.5 and confidence > 0.8
     # Only where the bone reaches: a span of 60 degrees from where it was does not get there.
     assert all(np.hypot(*(p - truth)) > SIDE for p, _, _ in
@@ -127,3 +127,20 @@ def test_the_coarse_search_all_round_finds_a_patch_turned_half_round():
     xy, confidence, angle = locate(small, templates, start, 0.0, _plan(), 18.0, turns=SPIN_TURNS)
     assert few < 0.5 < confidence and np.hypot(*(xy - (60, 50))) <= 2.0
     assert math.degrees(angle) % 360 == 160.0
+
+
+def test_the_places_alike_to_a_match_span_a_flat_fill_and_not_a_texture():
+    """Along a flat band every place matches as well as any other: the alike places run the
+    search's length along it, and stay within a pixel of the band's middle across it. On a
+    texture they are the match's own cell or its neighbours."""
+    image = np.full((100, 140, 3), 235, np.uint8)
+    image[40:61] = (200, 120, 60)  # a band 21 px high, across the picture
+    image[38:40] = image[61:63] = 40  # its outline
+    joint = _plan(radius=12.0)
+    centre = np.array([70.0, 50.0])
+    band = match(image, Templates.cut(image, centre, 0.0, (SIDE, SIDE)), centre + (3, 2), 0.0, joint)[3]
+    assert np.ptp(band[:, 0]) == 2 * joint.radius and np.abs(band[:, 1] - 50).max() <= 1
+    textured = _scene()
+    spot = match(textured, Templates.cut(textured, np.array([60.0, 50.0]), 0.0, (SIDE, SIDE)),
+                 np.array([62.0, 51.0]), 0.0, joint)[3]
+    assert np.hypot(*(spot - (60, 50)).T).max() <= 1.5

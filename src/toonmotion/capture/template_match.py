@@ -53,6 +53,11 @@ DISTINCT_RATIO = 0.1
 DISTINCT_LEVEL = 1.0
 MAX_GROWTH = 3.0
 
+# Cells whose sum of squared differences exceeds the match's by less than ALIKE_LEVEL grey levels
+# (RMS per channel) squared match as well as it. Joined to it, they are where the texture cannot
+# tell the joint's place apart: a cell or two on a textured joint, a stretch of a flat fill.
+ALIKE_LEVEL = 3.0
+
 # The coarse search for a hidden joint (:func:`locate`) also tries these turns (radians).
 COARSE_TURNS = (0.0, math.radians(25), math.radians(-25))
 
@@ -88,6 +93,9 @@ class JointPlan:
         The SSD of a match with confidence :data:`UPDATE_CONFIDENCE`.
     tie : float
         SSDs closer than this are equal: half a grey level per pixel and channel.
+    alike : float
+        Cells within this SSD of the match's match as well as it: :data:`ALIKE_LEVEL` per pixel
+        and channel.
     """
 
     size: tuple[int, int]
@@ -100,6 +108,7 @@ class JointPlan:
     geometric: NDArray[np.float64]
     plain: float
     tie: float
+    alike: float
 
 
 def plan_joint(size: tuple[int, int], r: float, w_alpha: float, w_beta: float, parent: int,
@@ -111,7 +120,8 @@ def plan_joint(size: tuple[int, int], r: float, w_alpha: float, w_beta: float, p
     return JointPlan(size=size, radius=R, w_alpha=w_alpha / (size[0] * size[1]), w_beta=w_beta,
                      parent=parent, hangs_from=hangs_from, turns=tuple(pace * turn for turn in TURNS),
                      geometric=w_beta * (offsets[:, None] + offsets[None, :]),
-                     plain=ssd_at(UPDATE_CONFIDENCE, size), tie=0.25 * 3 * size[0] * size[1])
+                     plain=ssd_at(UPDATE_CONFIDENCE, size), tie=0.25 * 3 * size[0] * size[1],
+                     alike=ALIKE_LEVEL**2 * 3 * size[0] * size[1])
 
 
 @dataclass
@@ -226,6 +236,9 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
         :data:`DRIFT_TOLERANCE` of the latest's and is at least :data:`VISIBLE_CONFIDENCE`
         confident, or the anchor matches plainly (:data:`UPDATE_CONFIDENCE`), or there is no
         latest apart from the anchor.
+    alike : (n, 2) float
+        The whole-pixel places of the search, joined to the match's, that match as well as it
+        (:data:`ALIKE_LEVEL`), (x, y) pixels: where the texture cannot tell the joint apart.
     """
     found = _match_turned(image, templates, predicted, angle, joint, bone, figure)
     for extra in joint.turns if joint.parent >= 0 and turn else ():
@@ -381,10 +394,10 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     if figure is not None:
         prior = np.where(figure_cells(figure, predicted, angle, R), prior, np.inf)
     anchor = _best(window, templates.anchor, joint, prior)
-    (offset, confidence), agree = anchor, True
+    (offset, confidence, alike), agree = anchor, True
     if anchor[1] < UPDATE_CONFIDENCE and templates.anchor is not templates.latest:
         latest = _best(window, templates.latest, joint, prior)
-        (offset, confidence) = latest
+        (offset, confidence, alike) = latest
         agree = bool(np.hypot(*(anchor[0] - latest[0])) <= DRIFT_TOLERANCE)
         if agree and anchor[1] >= VISIBLE_CONFIDENCE:
             # Both find the joint here: the anchor's place (it does not drift), and the latest's
@@ -393,12 +406,14 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
             # joint would have to hold the anchor, which never learns, at the same place too.
             # (Re-cutting only where the anchor matched plainly lost every joint whose looks
             # change as its limb bends, on the flat cartoons above all.)
-            offset, confidence = anchor[0], max(anchor[1], latest[1])
+            offset, confidence, alike = anchor[0], max(anchor[1], latest[1]), anchor[2]
         elif anchor[1] >= latest[1]:
-            offset, confidence = anchor
+            offset, confidence, alike = anchor
     # The offset, in the window's frame, turned into the image's (a per-joint hot path: by hand).
     c, s = math.cos(angle), math.sin(angle)
-    return predicted + [c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]], confidence, agree
+    turn = np.array([[c, s], [-s, c]])
+    return (predicted + [c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]], confidence, agree,
+            predicted + alike @ turn)
 
 
 def _bone_cost(predicted, angle, R, bone, step=1.0):
@@ -430,7 +445,7 @@ def _best(window, template, joint, prior):
     if plain.any():
         cost[~plain] = np.inf
     if not np.isfinite(prior).any():  # the bone cannot reach the window: nothing is found here
-        return np.zeros(2), 0.0
+        return np.zeros(2), 0.0, np.zeros((1, 2))
     i, j = np.unravel_index(int(np.argmin(cost)), ssd.shape)
     i, j = _descend(ssd, i, j, joint.tie)
     # The map is float32 and its sums of squares round; the chosen cell's is recomputed exactly.
@@ -438,7 +453,13 @@ def _best(window, template, joint, prior):
     exact = float(d @ d)
     dx = _vertex(ssd[i, j - 1] if j > 0 else None, exact, ssd[i, j + 1] if j < 2 * R else None, joint.tie)
     dy = _vertex(ssd[i - 1, j] if i > 0 else None, exact, ssd[i + 1, j] if i < 2 * R else None, joint.tie)
-    return np.array([j - R + dx, i - R + dy]), confidence(exact, joint.size)
+    # The cells joined to the chosen one that match as well as it (module docstring).
+    alike = (ssd <= ssd[i, j] + joint.alike) & np.isfinite(prior)
+    alike[i, j] = True
+    _, parts = cv2.connectedComponents(alike.view(np.uint8), connectivity=8)
+    rows, cols = np.nonzero(parts == parts[i, j])
+    alike_offsets = np.column_stack([cols - R, rows - R]).astype(float)
+    return np.array([j - R + dx, i - R + dy]), confidence(exact, joint.size), alike_offsets
 
 
 def _descend(cost, i, j, tie):

@@ -1,7 +1,7 @@
 """One frame of the joint tracker: where each joint is looked for, and where it is put when it is
 not found (thesis 4.4, with re-acquisition).
 
-A frame is searched in three passes over the skeleton:
+A frame is searched in four passes over the skeleton:
 
 1. **Down** (parents before children). A joint seen last drawing is matched round its
    prediction (eq. 4.4-4.6). A joint with a parent found this frame is held near its bone's last
@@ -16,7 +16,10 @@ A frame is searched in three passes over the skeleton:
    has been seen.
 2. **Up** (children before parents). A joint still not found is looked for where the joints
    hanging from it that were found put it (each moved as its child moved).
-3. **Place the rest** (parents first): at the mean of where its parent carries it and where its
+3. **Settle** (parents first). A joint found on a flat fill, where places along the fill match as
+   well as its match (:data:`AMBIGUOUS_SPREAD`), is put among them where its parent and its
+   children found plainly carry it.
+4. **Place the rest** (parents first): at the mean of where its parent carries it and where its
    children found put it (a root: the joints found below it); a root with neither coasts.
 
 Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` confidence,
@@ -77,6 +80,12 @@ REACH_SLACK = 1.2
 # looks alike all the way.
 WEAK_CONFIDENCE = 0.5
 WEAK_REACH = 0.25
+# A joint found is ambiguous when the places joined to its match that match as well as it
+# (template_match.ALIKE_LEVEL) reach farther than this fraction of its rectangle's larger side from
+# it: a flat fill, where the texture cannot say where along it the joint is. Its predicted motion
+# does not know either, and a knee of the demo's flat-blue trousers slid 80 px up the leg going by
+# it; the joint is put among those places where its neighbours carry it (FrameSearch._settle).
+AMBIGUOUS_SPREAD = 0.125
 # The kinematic term's weight per squared pixel of bone-length change, relative to w_beta.
 BONE_WEIGHT = 1.0
 
@@ -182,6 +191,7 @@ class FrameSearch:
         self._pace = pace
         angle = self.angles[t - 1] + turns(P[t - 1], predicted, plans.parents, True)
         seen, agree = np.zeros(k, dtype=bool), np.zeros(k, dtype=bool)
+        self._alike: list[NDArray[np.float64]] = [np.zeros((0, 2))] * k
         self.C[t] = 0.0
         for m in range(k):  # down
             if not self.lost[m]:
@@ -198,6 +208,7 @@ class FrameSearch:
             if not seen[m] and np.isfinite(moves[m]).all():
                 self._try(image, t, m, plans(m), P[t - 1, m] + moves[m], angle[m], REACQUIRE_CONFIDENCE, seen,
                           agree, bounded=True)
+        self._settle(t, coast, seen)
         # A joint not found goes no farther in one frame than its search could have reached.
         reach = np.array([plans(m, pace).radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
                           for m in range(k)])
@@ -212,6 +223,31 @@ class FrameSearch:
         for j in np.flatnonzero(seen & agree & (self.C[t] >= UPDATE_CONFIDENCE)):
             self.templates[j].latest = sample(image, P[t, j], self.angles[t, j], plans(int(j)).size)
         lengthen(self.longest, P[t], self.C[t], plans.hangs_from)
+
+    def _settle(self, t, coast, seen):
+        """Put each ambiguous joint found at ``t`` (its alike places reach farther than
+        :data:`AMBIGUOUS_SPREAD` of its rectangle from its match), parents first, among those places
+        where its parent and its children found unambiguously carry it, as a hidden joint is placed
+        (:func:`_place_hidden`): at that place itself if it lies within a pixel of one, else at the
+        nearest. A root with no such child keeps its match."""
+        P, hangs_from = self.P, self.plans.hangs_from
+        ambiguous = np.zeros(len(seen), bool)
+        for m in np.flatnonzero(seen):
+            spread = np.hypot(*(self._alike[m] - P[t, m]).T).max()
+            ambiguous[m] = spread > AMBIGUOUS_SPREAD * max(self.plans(m).size)
+        firm = seen & ~ambiguous
+        for m in np.flatnonzero(ambiguous):
+            g = hangs_from[m]
+            guesses = [] if g < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
+            kids = np.flatnonzero((hangs_from == m) & firm)
+            if len(kids):
+                guesses.append(P[t - 1, m] + (P[t, kids] - P[t - 1, kids]).mean(axis=0))
+            if not guesses:
+                continue
+            guess = np.mean(guesses, axis=0)
+            distance = np.hypot(*(self._alike[m] - guess).T)
+            nearest = int(np.argmin(distance))
+            P[t, m] = guess if distance[nearest] <= 1.0 else self._alike[m][nearest]
 
     def _places_to_look(self, small, t, m, carried, angle, seen):
         """Where to look for hidden joint ``m`` at full resolution, with its rectangle's angle
@@ -241,8 +277,8 @@ class FrameSearch:
         confidence so far (below VISIBLE_CONFIDENCE)."""
         bone = self._bone_rule(t, m, seen, bounded=bounded)
         figure = self._figure(m)
-        xy, confidence, agreed = match(image, self.templates[m], centre, angle, joint, bone, turn=turn,
-                                       figure=figure)
+        xy, confidence, agreed, alike = match(image, self.templates[m], centre, angle, joint, bone,
+                                                turn=turn, figure=figure)
         if confidence < TURN_CONFIDENCE and turn and self._end_on(t, m):
             # A bone seen end-on gives no angle: the rectangle is looked for at turns all round.
             place, coarse, turned = locate(self._small(image), self.templates[m], centre, angle, joint,
@@ -250,7 +286,7 @@ class FrameSearch:
             if coarse >= COARSE_CONFIDENCE:
                 other = match(image, self.templates[m], place, turned, joint, bone, turn=False, figure=figure)
                 if other[1] > confidence:
-                    xy, confidence, agreed = other
+                    xy, confidence, agreed, alike = other
         expected = centre if expected is None else expected
         weak_and_far = (confidence < WEAK_CONFIDENCE
                         and math.hypot(*(xy - expected)) > WEAK_REACH * self._pace * max(joint.size))
@@ -258,6 +294,7 @@ class FrameSearch:
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
             return False
         self.P[t, m], self.C[t, m], seen[m], agree[m] = xy, confidence, True, agreed
+        self._alike[m] = alike
         return True
 
     def _taken(self, t, m, xy, seen):
