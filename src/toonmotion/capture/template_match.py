@@ -201,11 +201,14 @@ def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: t
 
 def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.float64], angle: float,
           joint: JointPlan, bone: BoneRule | None = None, *, turn: bool = True,
-          figure: NDArray[np.uint8] | None = None) -> tuple[NDArray[np.float64], float, bool]:
+          figure: NDArray[np.uint8] | None = None, small: NDArray[np.uint8] | None = None
+          ) -> tuple[NDArray[np.float64], float, bool, NDArray[np.float64]]:
     """Match a joint's templates round ``predicted``, its rectangle turned by ``angle`` radians.
 
-    A rectangle that turns and matches less confidently than :data:`TURN_CONFIDENCE` also tries
-    the plan's turns more (:data:`TURNS`, scaled by its pace); the most confident match is kept.
+    A rectangle that turns and matches less confidently than :data:`TURN_CONFIDENCE` is also
+    looked for turned by the plan's turns more (:data:`TURNS`, scaled by its pace): coarsely, at
+    half resolution (:func:`locate`), and then finely at the turn that matched best there; the
+    more confident match is kept.
 
     Parameters
     ----------
@@ -225,6 +228,8 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     figure : (h, w) uint8, optional
         Non-zero where the figure is (:mod:`~toonmotion.capture.track_figure`): cells off it
         are not matched.
+    small : (h/2, w/2, 3) uint8, optional
+        ``image`` after ``cv2.pyrDown``, for the coarse turns; made here when not given.
 
     Returns
     -------
@@ -241,10 +246,14 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
         (:data:`ALIKE_LEVEL`), (x, y) pixels: where the texture cannot tell the joint apart.
     """
     found = _match_turned(image, templates, predicted, angle, joint, bone, figure)
-    for extra in joint.turns if joint.parent >= 0 and turn else ():
-        if found[1] >= TURN_CONFIDENCE:
-            break
-        other = _match_turned(image, templates, predicted, angle + extra, joint, bone, figure)
+    if joint.parent < 0 or not turn or found[1] >= TURN_CONFIDENCE:
+        return found
+    # The turns are compared at half resolution, and only the best is matched finely.
+    half: NDArray[np.uint8] = np.asarray(cv2.pyrDown(image) if small is None else small, np.uint8)
+    _, _, turned = locate(half, templates, predicted, angle, joint, max(joint.radius, 1), bone, figure,
+                          turns=joint.turns)
+    if turned != angle:
+        other = _match_turned(image, templates, predicted, turned, joint, bone, figure)
         if other[1] > found[1]:
             found = other
     return found

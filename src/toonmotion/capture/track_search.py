@@ -278,7 +278,7 @@ class FrameSearch:
         bone = self._bone_rule(t, m, seen, bounded=bounded)
         figure = self._figure(m)
         xy, confidence, agreed, alike = match(image, self.templates[m], centre, angle, joint, bone,
-                                                turn=turn, figure=figure)
+                                                turn=turn, figure=figure, small=self._small(image))
         if confidence < TURN_CONFIDENCE and turn and self._end_on(t, m):
             # A bone seen end-on gives no angle: the rectangle is looked for at turns all round.
             place, coarse, turned = locate(self._small(image), self.templates[m], centre, angle, joint,
