@@ -62,6 +62,11 @@ def track(
     if overlay is not None:
         animation_format(overlay)
     flat = None if background is None else options.colour(background)  # checked even when unused
+    if background is not None and flat is None:
+        raise SettingsError(
+            f"track's --background is the colour the footage is drawn on (white, black or #rrggbb), "
+            f"got {background!r}"
+        )
     frames, video_fps = load_frames(source)
     rate = fps if fps is not None else video_fps or 24.0  # a given fps is checked by the motion
     start = 0
