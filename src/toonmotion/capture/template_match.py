@@ -462,7 +462,7 @@ def _best(window, template, joint, prior):
     exact = float(d @ d)
     dx = _vertex(ssd[i, j - 1] if j > 0 else None, exact, ssd[i, j + 1] if j < 2 * R else None, joint.tie)
     dy = _vertex(ssd[i - 1, j] if i > 0 else None, exact, ssd[i + 1, j] if i < 2 * R else None, joint.tie)
-    # The cells joined to the chosen one that match as well as it (module docstring).
+    # The cells joined to the chosen one that match as well as it (ALIKE_LEVEL).
     alike = (ssd <= ssd[i, j] + joint.alike) & np.isfinite(prior)
     alike[i, j] = True
     _, parts = cv2.connectedComponents(alike.view(np.uint8), connectivity=8)

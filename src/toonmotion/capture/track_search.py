@@ -178,6 +178,8 @@ class FrameSearch:
         self._near: NDArray[np.uint8] | None = None
         self._half: NDArray[np.uint8] | None = None
         self._pace = 1.0
+        # Per joint, this frame: the places alike to its match (template_match.match).
+        self._alike: list[NDArray[np.float64]] = []
 
     def frame(self, image: NDArray[np.uint8], t: int, predicted: NDArray[np.float64],
               coast: NDArray[np.float64], *, pace: float = 1.0) -> None:
@@ -191,7 +193,7 @@ class FrameSearch:
         self._pace = pace
         angle = self.angles[t - 1] + turns(P[t - 1], predicted, plans.parents, True)
         seen, agree = np.zeros(k, dtype=bool), np.zeros(k, dtype=bool)
-        self._alike: list[NDArray[np.float64]] = [np.zeros((0, 2))] * k
+        self._alike = [np.zeros((0, 2))] * k
         self.C[t] = 0.0
         for m in range(k):  # down
             if not self.lost[m]:
