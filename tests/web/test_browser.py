@@ -480,11 +480,18 @@ def test_rig_move_a_joint_and_rig_again(page, editor):
     assert page.locator("#error").is_hidden()
 
 
-def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor, tmp_path):
+def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor, tmp_path, monkeypatch):
     from toonmotion.io.motion_json import load_motion
     from toonmotion.samples import sample_character_on
 
     folder = editor[1]
+    held, original = [], api.track_footage  # whether each tracking holds joints to the figure
+
+    def tracking(*args, **kwargs):
+        held.append(kwargs["settings"].figure)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(api, "track_footage", tracking)
     picture = sample_character_on("white", scale=0.5)[0]  # the character itself, walking right
     frames = [Image.fromarray(np.roll(picture, 2 * t, axis=1)) for t in range(4)]
     frames[0].save(tmp_path / "walk.gif", save_all=True, append_images=frames[1:], duration=80)
@@ -514,8 +521,10 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     page.mouse.down()
     page.mouse.move(x + 30, y, steps=4)
     page.mouse.up()
+    page.check("#capture-free")  # and this time, joints free of the figure
     page.click("#capture-retrack")  # track again from frame 2 with the head moved
     page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
+    assert held == [True, False]
     corrected = load_motion(folder / "motions" / "captured.json")
     head = corrected.skeleton.index("head")
     np.testing.assert_allclose(corrected.positions[:2], motion.positions[:2])  # kept before frame 2
