@@ -45,6 +45,9 @@ TURNS = tuple(math.radians(sign * step) for step in (5, 10, 15) for sign in (1, 
 # the bone's direction swings wildly with the least movement. Matching badly, it is looked for
 # coarsely at turns all round (:func:`locate`).
 SPIN_TURNS = tuple(math.radians(step) for step in range(0, 360, 20))
+# The extra turns are ranked at half resolution; at most this many, best first, are then matched
+# finely, until one matches at TURN_CONFIDENCE.
+FINE_TURNS = 2
 # A template is distinct when moved DISTINCT_SHIFT px in any direction it changes by at least
 # DISTINCT_RATIO of its change in the direction it changes most, and by a grey level (RMS per
 # channel); one that is not grows, up to MAX_GROWTH times its side (:func:`distinct_size`).
@@ -206,9 +209,9 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     """Match a joint's templates round ``predicted``, its rectangle turned by ``angle`` radians.
 
     A rectangle that turns and matches less confidently than :data:`TURN_CONFIDENCE` is also
-    looked for turned by the plan's turns more (:data:`TURNS`, scaled by its pace): coarsely, at
-    half resolution (:func:`locate`), and then finely at the turn that matched best there; the
-    more confident match is kept.
+    looked for turned by the plan's turns more (:data:`TURNS`, scaled by its pace): they are
+    ranked at half resolution (:func:`locate`), and the :data:`FINE_TURNS` best are matched finely,
+    best first, until one matches at :data:`TURN_CONFIDENCE`; the most confident match is kept.
 
     Parameters
     ----------
@@ -248,12 +251,15 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     found = _match_turned(image, templates, predicted, angle, joint, bone, figure)
     if joint.parent < 0 or not turn or found[1] >= TURN_CONFIDENCE:
         return found
-    # The turns are compared at half resolution, and only the best is matched finely.
+    # The turns are ranked at half resolution, and matched finely best first.
     half: NDArray[np.uint8] = np.asarray(cv2.pyrDown(image) if small is None else small, np.uint8)
-    _, _, turned = locate(half, templates, predicted, angle, joint, max(joint.radius, 1), bone, figure,
-                          turns=joint.turns)
-    if turned != angle:
-        other = _match_turned(image, templates, predicted, turned, joint, bone, figure)
+    radius = max(joint.radius, 1)
+    coarse = [locate(half, templates, predicted, angle, joint, radius, bone, figure, turns=(extra,))[1]
+              for extra in joint.turns]
+    for k in np.argsort(coarse)[::-1][:FINE_TURNS]:
+        if found[1] >= TURN_CONFIDENCE:
+            break
+        other = _match_turned(image, templates, predicted, angle + joint.turns[k], joint, bone, figure)
         if other[1] > found[1]:
             found = other
     return found
