@@ -113,7 +113,7 @@ def test_flat_coloured_jumping_jacks_are_tracked(flat_jacks):
 
 @pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
     "flat-coloured walk: the elbows and knees change their looks as the limbs swing and cross, "
-    "and look alike along their limbs; once lost they are often not found again (5.7 px on these "
+    "and look alike along their limbs; once lost they are often not found again (5.5 px on these "
     "frames)"))
 def test_a_flat_coloured_walk_is_tracked(flat_walk):
     cartoon, tracking = flat_walk
