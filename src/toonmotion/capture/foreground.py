@@ -216,8 +216,7 @@ def flat_threshold(frame: ArrayLike, colour: Sequence[int]) -> float:
     >>> flat_threshold(frame, (250, 250, 250)), flat_threshold(np.full((4, 4, 3), 9, np.uint8), (9, 9, 9))
     (45.0, 20.0)
     """
-    frame = np.asarray(frame)
-    border = np.concatenate([frame[0], frame[-1], frame[:, 0], frame[:, -1]]).astype(np.float32)
+    border = _border_pixels(frame).astype(np.float32)
     spread = float(np.percentile(np.abs(border - _checked_colour(colour)).sum(axis=1), 99))
     return float(np.clip(spread, *THRESHOLD_RANGE))
 
@@ -321,9 +320,14 @@ def border_colour(frame: ArrayLike, *, spread: float = 12.0) -> tuple[int, int, 
     spread (standard deviation) of the border pixels is under ``spread``, their median is taken as
     the background colour. Footage with a textured or varied border returns None.
     """
-    frame = np.asarray(frame)
-    border = np.concatenate([frame[0], frame[-1], frame[:, 0], frame[:, -1]]).astype(float)
+    border = _border_pixels(frame).astype(float)
     if border.std(axis=0).max() >= spread:
         return None
     r, g, b = (int(v) for v in np.median(border, axis=0))  # an (h, w, 3) RGB frame
     return r, g, b
+
+
+def _border_pixels(frame):
+    """The pixels round a frame's edge, ``(n, channels)``: its first and last rows and columns."""
+    frame = np.asarray(frame)
+    return np.concatenate([frame[0], frame[-1], frame[:, 0], frame[:, -1]])

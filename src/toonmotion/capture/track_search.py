@@ -237,16 +237,11 @@ class FrameSearch:
         for m in np.flatnonzero(seen):
             spread = np.hypot(*(self._alike[m] - P[t, m]).T).max()
             ambiguous[m] = spread > AMBIGUOUS_SPREAD * max(self.plans(m).size)
-        firm = seen & ~ambiguous
+        firm_moves = moves_below(P, t, seen & ~ambiguous, hangs_from, direct=True)
         for m in np.flatnonzero(ambiguous):
-            g = hangs_from[m]
-            guesses = [] if g < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
-            kids = np.flatnonzero((hangs_from == m) & firm)
-            if len(kids):
-                guesses.append(P[t - 1, m] + (P[t, kids] - P[t - 1, kids]).mean(axis=0))
-            if not guesses:
+            guess = _carried(P, t, m, coast, hangs_from, firm_moves[m])
+            if guess is None:
                 continue
-            guess = np.mean(guesses, axis=0)
             distance = np.hypot(*(self._alike[m] - guess).T)
             nearest = int(np.argmin(distance))
             P[t, m] = guess if distance[nearest] <= 1.0 else self._alike[m][nearest]
@@ -349,16 +344,23 @@ def _place_hidden(P, t, coast, seen, hangs_from, reach):
         if seen[m]:
             continue
         g = hangs_from[m]
-        guesses = [] if g < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
         # Only children found count, but for a root: a grandchild's move is mostly its parent's
         # turn about the joint (a hand sweeping round a shoulder).
-        below = direct[m] if g >= 0 else moves[m]
-        if np.isfinite(below).all():
-            guesses.append(P[t - 1, m] + below)
+        guess = _carried(P, t, m, coast, hangs_from, direct[m] if g >= 0 else moves[m])
         carried = P[t - 1, m] + (P[t, g] - P[t - 1, g] if g >= 0 else 0.0)
-        step = (np.mean(guesses, axis=0) if guesses else coast[m]) - carried
+        step = (coast[m] if guess is None else guess) - carried
         length = float(np.hypot(*step))
         P[t, m] = carried + (step if length <= reach[m] else step * (reach[m] / length))
+
+
+def _carried(P, t, m, coast, hangs_from, below):
+    """Where joint ``m``'s neighbours carry it at ``t``: the mean of where its parent carries it
+    (:func:`~toonmotion.capture.track_prediction.hidden_at`; a root has none) and where ``below``,
+    its move by the joints below it (NaN: none), puts it; None with neither."""
+    guesses = [] if hangs_from[m] < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
+    if np.isfinite(below).all():
+        guesses.append(P[t - 1, m] + below)
+    return np.mean(guesses, axis=0) if guesses else None
 
 
 def moves_below(P: NDArray[np.float64], t: int, seen: NDArray[np.bool_], hangs_from: NDArray[np.int_],
