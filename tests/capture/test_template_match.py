@@ -47,8 +47,8 @@ def test_a_look_alike_at_the_wrong_bone_length_loses_to_the_joint():
     joint = _plan()
     near = BoneRule(parent=np.array([20.0, 50.0]), length=40.0, weight=joint.w_beta)
     far = BoneRule(parent=np.array([20.0, 50.0]), length=70.0, weight=joint.w_beta)
-    assert np.allclose(match(image, templates, predicted, 0.0, joint, near)[0], (60, 50), atol=0.05)
-    assert np.allclose(match(image, templates, predicted, 0.0, joint, far)[0], (90, 50), atol=0.05)
+    assert np.allclose(match(image, templates, predicted, 0.0, joint, near).xy, (60, 50), atol=0.05)
+    assert np.allclose(match(image, templates, predicted, 0.0, joint, far).xy, (90, 50), atol=0.05)
 
 
 def test_nothing_is_taken_beyond_the_bones_reach():
@@ -56,7 +56,8 @@ def test_nothing_is_taken_beyond_the_bones_reach():
     templates = Templates.cut(image, np.array([90.0, 50.0]), 0.0, (SIDE, SIDE))
     joint = _plan()
     short = BoneRule(parent=np.array([20.0, 50.0]), length=70.0, weight=joint.w_beta, longest=45.0)
-    xy, confidence, _, _ = match(image, templates, np.array([75.0, 50.0]), 0.0, joint, short)
+    found = match(image, templates, np.array([75.0, 50.0]), 0.0, joint, short)
+    xy, confidence = found.xy, found.confidence
     assert np.hypot(*(xy - (20, 50))) <= 45.0 + 1.0  # the copy within reach, not the template's own place
     assert np.allclose(xy, (60, 50), atol=0.05) and confidence > 0.9
 
@@ -88,8 +89,8 @@ def test_a_hidden_joint_is_found_round_its_parent_turned_with_its_bone():
     assert len(places) == 2  # the best two, a rectangle apart
     (xy, coarse, angle), *_ = places
     assert np.hypot(*(xy - truth)) < SIDE / 4 and abs(angle - math.radians(130)) < math.radians(15)
-    found, confidence, _, _ = match(later, templates, xy, angle, joint, bone)
-    assert np.hypot(*(found - truth)) < 0.5 and confidence > 0.8
+    found = match(later, templates, xy, angle, joint, bone)
+    assert np.hypot(*(found.xy - truth)) < 0.5 and found.confidence > 0.8
     # Only where the bone reaches: a span of 60 degrees from where it was does not get there.
     assert all(np.hypot(*(p - truth)) > SIDE for p, _, _ in
                search_round(cv2.pyrDown(later), templates, joint, bone, 0.0, math.radians(60), 0.0))
@@ -138,9 +139,9 @@ def test_the_places_alike_to_a_match_span_a_flat_fill_and_not_a_texture():
     image[38:40] = image[61:63] = 40  # its outline
     joint = _plan(radius=12.0)
     centre = np.array([70.0, 50.0])
-    band = match(image, Templates.cut(image, centre, 0.0, (SIDE, SIDE)), centre + (3, 2), 0.0, joint)[3]
+    band = match(image, Templates.cut(image, centre, 0.0, (SIDE, SIDE)), centre + (3, 2), 0.0, joint).alike
     assert np.ptp(band[:, 0]) == 2 * joint.radius and np.abs(band[:, 1] - 50).max() <= 1
     textured = _scene()
     spot = match(textured, Templates.cut(textured, np.array([60.0, 50.0]), 0.0, (SIDE, SIDE)),
-                 np.array([62.0, 51.0]), 0.0, joint)[3]
+                 np.array([62.0, 51.0]), 0.0, joint).alike
     assert np.hypot(*(spot - (60, 50)).T).max() <= 1.5

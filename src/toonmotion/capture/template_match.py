@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -61,6 +62,12 @@ MAX_GROWTH = 3.0
 # tell the joint's place apart: a cell or two on a textured joint, a stretch of a flat fill.
 ALIKE_LEVEL = 3.0
 
+# Besides its match, a joint's search keeps up to OTHERS other places where the texture is found
+# (local minima of the colour cost, OTHER_SPACING px apart and at least VISIBLE_CONFIDENCE
+# confident), for the whole-sequence pass to choose among (:mod:`~toonmotion.capture.track_path`).
+OTHERS = 4
+OTHER_SPACING = 2
+
 # The coarse search for a hidden joint (:func:`locate`) also tries these turns (radians).
 COARSE_TURNS = (0.0, math.radians(25), math.radians(-25))
 
@@ -99,6 +106,8 @@ class JointPlan:
     alike : float
         Cells within this SSD of the match's match as well as it: :data:`ALIKE_LEVEL` per pixel
         and channel.
+    visible : float
+        The SSD of a match with confidence :data:`VISIBLE_CONFIDENCE`.
     """
 
     size: tuple[int, int]
@@ -112,6 +121,7 @@ class JointPlan:
     plain: float
     tie: float
     alike: float
+    visible: float
 
 
 def plan_joint(size: tuple[int, int], r: float, w_alpha: float, w_beta: float, parent: int,
@@ -124,7 +134,7 @@ def plan_joint(size: tuple[int, int], r: float, w_alpha: float, w_beta: float, p
                      parent=parent, hangs_from=hangs_from, turns=tuple(pace * turn for turn in TURNS),
                      geometric=w_beta * (offsets[:, None] + offsets[None, :]),
                      plain=ssd_at(UPDATE_CONFIDENCE, size), tie=0.25 * 3 * size[0] * size[1],
-                     alike=ALIKE_LEVEL**2 * 3 * size[0] * size[1])
+                     alike=ALIKE_LEVEL**2 * 3 * size[0] * size[1], visible=ssd_at(VISIBLE_CONFIDENCE, size))
 
 
 @dataclass
@@ -202,10 +212,105 @@ def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: t
     return grown
 
 
+@dataclass(frozen=True)
+class _Cells:
+    """A search's whole-pixel cells: the colour cost ``ssd`` (``(2R+1, 2R+1)``, in the window's
+    frame), those the search could take (``allowed``: finite prior) and the match's ``cell``
+    ``(i, j)``; None in a :class:`Match` where nothing could be taken."""
+
+    ssd: NDArray[np.float32]
+    allowed: NDArray[np.bool_]
+    cell: tuple[int, int]
+    joint: JointPlan
+
+    @cached_property
+    def parts(self) -> NDArray[np.int32]:
+        """The cells matching as well as the match's (:data:`ALIKE_LEVEL`), labelled by connected
+        part (8-connected)."""
+        i, j = self.cell
+        alike = (self.ssd <= self.ssd[i, j] + self.joint.alike) & self.allowed
+        alike[i, j] = True
+        return cv2.connectedComponents(alike.view(np.uint8), connectivity=8)[1]
+
+    def alike(self) -> NDArray[np.float64]:
+        """Offsets ``(n, 2)`` from the window's centre of the alike cells joined to the match's."""
+        rows, cols = np.nonzero(self.parts == self.parts[self.cell])
+        R = self.joint.radius
+        return np.column_stack([cols - R, rows - R]).astype(float)
+
+    def others(self) -> NDArray[np.float64]:
+        """Up to :data:`OTHERS` local minima of the colour cost, :data:`OTHER_SPACING` cells apart,
+        among the allowed cells not joined to the match's alike ones, at least
+        :data:`VISIBLE_CONFIDENCE` confident, most confident first: ``(m, 3)`` offsets from the
+        window's centre and confidence."""
+        ssd, joint = self.ssd, self.joint
+        R = joint.radius
+        apart = (ssd <= joint.visible) & self.allowed
+        apart &= self.parts != self.parts[self.cell]
+        if not apart.any():
+            return np.zeros((0, 3))
+        side = 2 * OTHER_SPACING + 1
+        rows, cols = np.nonzero(apart & (ssd <= cv2.erode(ssd, np.ones((side, side), np.uint8))))
+        order = np.argsort(ssd[rows, cols], kind="stable")[:OTHERS]
+        rows, cols = rows[order], cols[order]
+        # confidence(), for every place at once
+        mean = ssd[rows, cols].astype(float) / (3 * joint.size[0] * joint.size[1])
+        return np.column_stack([cols - R, rows - R, np.exp(-mean / (2 * CONFIDENCE_SCALE**2))]).astype(float)
+
+
+@dataclass(frozen=True, eq=False)
+class Match:
+    """What :func:`match` found.
+
+    Attributes
+    ----------
+    xy : (2,) float
+        The centre found, (x, y) pixels, sub-pixel.
+    confidence : float in [0, 1]
+    agree : bool
+        Whether the latest template may be re-cut at the match: the anchor's match lies within
+        :data:`DRIFT_TOLERANCE` of the latest's and is at least :data:`VISIBLE_CONFIDENCE`
+        confident, or the anchor matches plainly (:data:`UPDATE_CONFIDENCE`), or there is no
+        latest apart from the anchor.
+    alike : (n, 2) float
+        The whole-pixel places of the search, joined to the match's, that match as well as it
+        (:data:`ALIKE_LEVEL`), (x, y) pixels: where the texture cannot tell the joint apart.
+    others : (m, 3) float
+        Up to :data:`OTHERS` other places of the search where the template is found, apart from
+        the alike ones: local minima of the colour cost at least :data:`VISIBLE_CONFIDENCE`
+        confident, whole-pixel ``(x, y)`` and the confidence there, most confident first.
+
+    ``alike`` and ``others`` are worked out when first asked for: most matches made are dropped
+    for a better one.
+    """
+
+    xy: NDArray[np.float64]
+    confidence: float
+    agree: bool
+    cells: _Cells | None
+    centre: NDArray[np.float64]
+    angle: float
+
+    @cached_property
+    def alike(self) -> NDArray[np.float64]:
+        return self.centre[None] if self.cells is None else self._placed(self.cells.alike())
+
+    @cached_property
+    def others(self) -> NDArray[np.float64]:
+        if self.cells is None:
+            return np.zeros((0, 3))
+        found = self.cells.others()
+        return np.column_stack([self._placed(found[:, :2]), found[:, 2]])
+
+    def _placed(self, offsets):
+        """Offsets from the search window's centre, in its frame, as (x, y) places in the image."""
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        return self.centre + offsets @ np.array([[c, s], [-s, c]])
+
+
 def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.float64], angle: float,
           joint: JointPlan, bone: BoneRule | None = None, *, turn: bool = True,
-          figure: NDArray[np.uint8] | None = None, small: NDArray[np.uint8] | None = None
-          ) -> tuple[NDArray[np.float64], float, bool, NDArray[np.float64]]:
+          figure: NDArray[np.uint8] | None = None, small: NDArray[np.uint8] | None = None) -> Match:
     """Match a joint's templates round ``predicted``, its rectangle turned by ``angle`` radians.
 
     A rectangle that turns and matches less confidently than :data:`TURN_CONFIDENCE` is also
@@ -236,20 +341,10 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
 
     Returns
     -------
-    xy : (2,) float
-        The centre found, (x, y) pixels, sub-pixel.
-    confidence : float in [0, 1]
-    agree : bool
-        Whether the latest template may be re-cut at the match: the anchor's match lies within
-        :data:`DRIFT_TOLERANCE` of the latest's and is at least :data:`VISIBLE_CONFIDENCE`
-        confident, or the anchor matches plainly (:data:`UPDATE_CONFIDENCE`), or there is no
-        latest apart from the anchor.
-    alike : (n, 2) float
-        The whole-pixel places of the search, joined to the match's, that match as well as it
-        (:data:`ALIKE_LEVEL`), (x, y) pixels: where the texture cannot tell the joint apart.
+    Match
     """
     found = _match_turned(image, templates, predicted, angle, joint, bone, figure)
-    if joint.parent < 0 or not turn or found[1] >= TURN_CONFIDENCE:
+    if joint.parent < 0 or not turn or found.confidence >= TURN_CONFIDENCE:
         return found
     # The turns are ranked at half resolution, and matched finely best first.
     half: NDArray[np.uint8] = np.asarray(cv2.pyrDown(image) if small is None else small, np.uint8)
@@ -257,10 +352,10 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     coarse = [locate(half, templates, predicted, angle, joint, radius, bone, figure, turns=(extra,))[1]
               for extra in joint.turns]
     for k in np.argsort(coarse)[::-1][:FINE_TURNS]:
-        if found[1] >= TURN_CONFIDENCE:
+        if found.confidence >= TURN_CONFIDENCE:
             break
         other = _match_turned(image, templates, predicted, angle + joint.turns[k], joint, bone, figure)
-        if other[1] > found[1]:
+        if other.confidence > found.confidence:
             found = other
     return found
 
@@ -409,10 +504,10 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     if figure is not None:
         prior = np.where(figure_cells(figure, predicted, angle, R), prior, np.inf)
     anchor = _best(window, templates.anchor, joint, prior)
-    (offset, confidence, alike), agree = anchor, True
+    (offset, confidence, cells), agree = anchor, True
     if anchor[1] < UPDATE_CONFIDENCE and templates.anchor is not templates.latest:
         latest = _best(window, templates.latest, joint, prior)
-        (offset, confidence, alike) = latest
+        (offset, confidence, cells) = latest
         agree = bool(np.hypot(*(anchor[0] - latest[0])) <= DRIFT_TOLERANCE)
         if agree and anchor[1] >= VISIBLE_CONFIDENCE:
             # Both find the joint here: the anchor's place (it does not drift), and the latest's
@@ -421,14 +516,13 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
             # joint would have to hold the anchor, which never learns, at the same place too.
             # (Re-cutting only where the anchor matched plainly lost every joint whose looks
             # change as its limb bends, on the flat cartoons above all.)
-            offset, confidence, alike = anchor[0], max(anchor[1], latest[1]), anchor[2]
+            offset, confidence, cells = anchor[0], max(anchor[1], latest[1]), anchor[2]
         elif anchor[1] >= latest[1]:
-            offset, confidence, alike = anchor
+            offset, confidence, cells = anchor
     # The offset, in the window's frame, turned into the image's (a per-joint hot path: by hand).
     c, s = math.cos(angle), math.sin(angle)
-    turn = np.array([[c, s], [-s, c]])
-    return (predicted + [c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]], confidence, agree,
-            predicted + alike @ turn)
+    xy = predicted + [c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]]
+    return Match(xy, confidence, agree, cells, predicted, angle)
 
 
 def _bone_cost(predicted, angle, R, bone, step=1.0):
@@ -460,7 +554,7 @@ def _best(window, template, joint, prior):
     if plain.any():
         cost[~plain] = np.inf
     if not np.isfinite(prior).any():  # the bone cannot reach the window: nothing is found here
-        return np.zeros(2), 0.0, np.zeros((1, 2))
+        return np.zeros(2), 0.0, None
     i, j = np.unravel_index(int(np.argmin(cost)), ssd.shape)
     i, j = _descend(ssd, i, j, joint.tie)
     # The map is float32 and its sums of squares round; the chosen cell's is recomputed exactly.
@@ -468,13 +562,8 @@ def _best(window, template, joint, prior):
     exact = float(d @ d)
     dx = _vertex(ssd[i, j - 1] if j > 0 else None, exact, ssd[i, j + 1] if j < 2 * R else None, joint.tie)
     dy = _vertex(ssd[i - 1, j] if i > 0 else None, exact, ssd[i + 1, j] if i < 2 * R else None, joint.tie)
-    # The cells joined to the chosen one that match as well as it (ALIKE_LEVEL).
-    alike = (ssd <= ssd[i, j] + joint.alike) & np.isfinite(prior)
-    alike[i, j] = True
-    _, parts = cv2.connectedComponents(alike.view(np.uint8), connectivity=8)
-    rows, cols = np.nonzero(parts == parts[i, j])
-    alike_offsets = np.column_stack([cols - R, rows - R]).astype(float)
-    return np.array([j - R + dx, i - R + dy]), confidence(exact, joint.size), alike_offsets
+    return np.array([j - R + dx, i - R + dy]), confidence(exact, joint.size), _Cells(ssd, np.isfinite(prior),
+                                                                                      (i, j), joint)
 
 
 def _descend(cost, i, j, tie):

@@ -42,6 +42,7 @@ from toonmotion.capture.template_match import (
     VISIBLE_CONFIDENCE,
     BoneRule,
     JointPlan,
+    Match,
     Templates,
     locate,
     match,
@@ -178,8 +179,10 @@ class FrameSearch:
         self._near: NDArray[np.uint8] | None = None
         self._half: NDArray[np.uint8] | None = None
         self._pace = 1.0
-        # Per joint, this frame: the places alike to its match (template_match.match).
+        # Per joint, this frame: the places alike to its match (template_match.Match), and the match
+        # taken (None: not found), whose other places the whole-sequence pass may ask for.
         self._alike: list[NDArray[np.float64]] = []
+        self.taken: list[Match | None] = []
 
     def frame(self, image: NDArray[np.uint8], t: int, predicted: NDArray[np.float64],
               coast: NDArray[np.float64], *, pace: float = 1.0) -> None:
@@ -194,6 +197,7 @@ class FrameSearch:
         angle = self.angles[t - 1] + turns(P[t - 1], predicted, plans.parents, True)
         seen, agree = np.zeros(k, dtype=bool), np.zeros(k, dtype=bool)
         self._alike = [np.zeros((0, 2))] * k
+        self.taken = [None] * k
         self.C[t] = 0.0
         for m in range(k):  # down
             if not self.lost[m]:
@@ -274,24 +278,26 @@ class FrameSearch:
         confidence so far (below VISIBLE_CONFIDENCE)."""
         bone = self._bone_rule(t, m, seen, bounded=bounded)
         figure = self._figure(m)
-        xy, confidence, agreed, alike = match(image, self.templates[m], centre, angle, joint, bone,
-                                                turn=turn, figure=figure, small=self._small(image))
-        if confidence < TURN_CONFIDENCE and turn and self._end_on(t, m):
+        found = match(image, self.templates[m], centre, angle, joint, bone, turn=turn, figure=figure,
+                      small=self._small(image))
+        if found.confidence < TURN_CONFIDENCE and turn and self._end_on(t, m):
             # A bone seen end-on gives no angle: the rectangle is looked for at turns all round.
             place, coarse, turned = locate(self._small(image), self.templates[m], centre, angle, joint,
                                            joint.radius, bone, figure, turns=SPIN_TURNS)
             if coarse >= COARSE_CONFIDENCE:
                 other = match(image, self.templates[m], place, turned, joint, bone, turn=False, figure=figure)
-                if other[1] > confidence:
-                    xy, confidence, agreed, alike = other
+                if other.confidence > found.confidence:
+                    found = other
+        xy, confidence = found.xy, found.confidence
         expected = centre if expected is None else expected
         weak_and_far = (confidence < WEAK_CONFIDENCE
                         and math.hypot(*(xy - expected)) > WEAK_REACH * self._pace * max(joint.size))
         if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen)):
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
             return False
-        self.P[t, m], self.C[t, m], seen[m], agree[m] = xy, confidence, True, agreed
-        self._alike[m] = alike
+        self.P[t, m], self.C[t, m], seen[m], agree[m] = xy, confidence, True, found.agree
+        self._alike[m] = found.alike
+        self.taken[m] = found
         return True
 
     def _taken(self, t, m, xy, seen):
@@ -370,15 +376,21 @@ def moves_below(P: NDArray[np.float64], t: int, seen: NDArray[np.bool_], hangs_f
     found by its children's, recursively (with ``direct``, not at all); NaN where no joint below
     it (no child, with ``direct``) was found."""
     k = len(seen)
-    moves = np.full((k, 2), np.nan)
-    own = np.where(seen[:, None], P[t] - P[t - 1], np.nan)
+    # Plain Python over the joints: this runs three times a frame, and numpy's overhead on arrays
+    # of a few joints was a tenth of the tracking time.
+    found, parents = seen.tolist(), hangs_from.tolist()
+    steps: list[list[float]] = (P[t] - P[t - 1]).tolist()
+    kids: list[list[int]] = [[] for _ in range(k)]
+    for m, g in enumerate(parents):
+        if g >= 0:
+            kids[g].append(m)
+    moves: list[list[float] | None] = [None] * k
     for m in range(k - 1, -1, -1):  # children come after their parents
-        kids = np.flatnonzero(hangs_from == m)
-        below = np.where(seen[kids, None], own[kids], np.nan if direct else moves[kids])
-        below = below[np.isfinite(below).all(axis=1)]
-        if len(below):
-            moves[m] = below.mean(axis=0)
-    return moves
+        ways = [steps[c] if found[c] else (None if direct else moves[c]) for c in kids[m]]
+        below = [b for b in ways if b is not None and math.isfinite(b[0]) and math.isfinite(b[1])]
+        if below:
+            moves[m] = [sum(b[0] for b in below) / len(below), sum(b[1] for b in below) / len(below)]
+    return np.array([[math.nan, math.nan] if move is None else move for move in moves])
 
 
 def hidden_for(C: NDArray[np.float64], drawings: list[int], history: NDArray[np.int_]) -> NDArray[np.int_]:

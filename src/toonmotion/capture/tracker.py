@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.capture.template_match import (
+    OTHERS,
     UPDATE_CONFIDENCE,
     VISIBLE_CONFIDENCE,
     Templates,
@@ -46,6 +47,7 @@ from toonmotion.capture.track_checks import (
 )
 from toonmotion.capture.track_figure import FigureMasks, put_on_figure
 from toonmotion.capture.track_gaps import fill_hidden_spans
+from toonmotion.capture.track_path import best_paths
 from toonmotion.capture.track_prediction import COAST_STEPS, is_held, predict, turns
 from toonmotion.capture.track_search import MAX_WIDEN, FrameSearch, Plans, hidden_for, longest_bones
 from toonmotion.errors import TrackingError
@@ -125,6 +127,10 @@ class TrackSettings:
     fill_gaps : bool
         After tracking, re-place each joint where it was hidden between two frames where it was
         found, from both ends (:mod:`~toonmotion.capture.track_gaps`).
+    best_path : bool
+        After tracking, choose each joint's path again among the places its searches found, by
+        the least cost over the whole clip (:mod:`~toonmotion.capture.track_path`); before
+        ``fill_gaps``.
     figure : bool
         Where the footage is a figure on one flat colour, hold the joints to the figure: they are
         matched only on it and a joint not found is put on it
@@ -138,6 +144,7 @@ class TrackSettings:
     w_beta: float | None = None
     rotate: bool = True
     fill_gaps: bool = True
+    best_path: bool = True
     figure: bool = True
 
     def __post_init__(self) -> None:
@@ -147,7 +154,7 @@ class TrackSettings:
         object.__setattr__(self, "w_alpha", check_number(self.w_alpha, "w_alpha", 0.0, "> 0", strict=True))
         if self.w_beta is not None:
             object.__setattr__(self, "w_beta", check_number(self.w_beta, "w_beta", 0.0, ">= 0"))
-        for name in ("rotate", "fill_gaps", "figure"):
+        for name in ("rotate", "fill_gaps", "best_path", "figure"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
@@ -267,7 +274,7 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     if progress:
         progress("tracking", start, stop)
     _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress,
-         figure, on_figure)
+         figure, on_figure, settings.best_path)
     return _filled(out, plan, settings, figure, on_figure).freeze()
 
 
@@ -345,7 +352,8 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     on_figure = None if figure is None else figure.holds(frame, out.positions[frame])
     if progress:
         progress("tracking", frame, stop)
-    _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure)
+    _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure,
+         settings.best_path)
     return _filled(out, plan, settings, figure, on_figure, since=frame).freeze()
 
 
@@ -361,17 +369,19 @@ class _Arrays:
     confidence: np.ndarray
     tracked: np.ndarray
     held: np.ndarray
+    # (T, k, OTHERS, 3): the other places each joint's search found, for the whole-sequence pass.
+    options: np.ndarray
 
     @classmethod
     def empty(cls, count: int, k: int) -> _Arrays:
         return cls(np.full((count, k, 2), np.nan), np.full((count, k), np.nan), np.zeros((count, k)),
-                   np.zeros(count, dtype=bool), np.zeros(count, dtype=bool))
+                   np.zeros(count, dtype=bool), np.zeros(count, dtype=bool), _no_options(count, k))
 
     @classmethod
     def copy(cls, tracking: Tracking) -> _Arrays:
         assert tracking.held is not None  # Tracking fills it in
         return cls(tracking.positions.copy(), tracking.angles.copy(), tracking.confidence.copy(),
-                   tracking.tracked.copy(), tracking.held.copy())
+                   tracking.tracked.copy(), tracking.held.copy(), _no_options(*tracking.confidence.shape))
 
     def clear(self, begin: int, end: int) -> None:
         self.positions[begin:end] = np.nan
@@ -386,8 +396,9 @@ class _Arrays:
 
 
 def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, history, begin, stop,
-         progress, figure=None, on_figure=None):
-    """Track frames ``begin`` to ``stop - 1``; frame ``begin - 1`` is tracked; write into ``out``."""
+         progress, figure=None, on_figure=None, options=True):
+    """Track frames ``begin`` to ``stop - 1``; frame ``begin - 1`` is tracked; write into ``out``
+    (with ``options``, the other places each joint's search found too)."""
     P, C = out.positions, out.confidence
     drawings = _drawings(out, begin)
     search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
@@ -402,6 +413,10 @@ def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, 
             predicted, coast = predict(P, C, np.array(drawings), history)
             # A drawing held n frames moves n frames' worth by the next: the search widens with it.
             search.frame(image, t, predicted, coast, pace=float(min(t - drawings[-1], MAX_HOLD)))
+            if options:
+                for m, found in enumerate(search.taken):
+                    if found is not None:
+                        out.options[t, m, :len(found.others)] = found.others
             drawings = drawings[-COAST_STEPS:] + [t]
             previous = image
         if progress:
@@ -424,6 +439,16 @@ def _filled(out, plans, settings, figure, on_figure, since=0):
     """``out`` after the whole-sequence pass, if ``settings`` ask for it, from frame ``since`` on
     (the frames before a correction are kept); joints it re-placed off the figure are put back on
     it (as the frame-by-frame search puts them)."""
+    if settings.best_path:
+        drawings = np.flatnonzero(out.tracked & ~out.held)
+        radius = np.array([plans(m).radius for m in range(len(plans))], dtype=float)
+        P, C = best_paths(out.positions, out.confidence, out.options, plans.hangs_from,
+                          drawings[drawings >= since], radius)
+        for t in np.flatnonzero(out.tracked[since + 1:]) + since + 1:  # held frames repeat the one before
+            if out.held[t]:
+                P[t], C[t] = P[t - 1], C[t - 1]
+            out.angles[t] = out.angles[t - 1] + turns(P[t - 1], P[t], plans.parents, True)
+        out.positions, out.confidence = P, C
     if settings.fill_gaps:
         out.positions = fill_hidden_spans(out.positions, out.confidence, plans.hangs_from, out.tracked,
                                           out.held, since)
@@ -435,6 +460,10 @@ def _filled(out, plans, settings, figure, on_figure, since=0):
             for t in np.flatnonzero(out.held[since:]) + since:  # held frames repeat the frame before
                 out.positions[t] = out.positions[t - 1]
     return out
+
+
+def _no_options(count, k):
+    return np.full((count, k, OTHERS, 3), np.nan)
 
 
 def _drawings(out, begin):
