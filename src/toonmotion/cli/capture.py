@@ -41,6 +41,9 @@ def track(
         "the sequence, and joints are free].")] = None,
     free: Annotated[bool, typer.Option(
         "--free", help="Do not hold joints to the figure on a flat background.")] = False,
+    frame_by_frame: Annotated[bool, typer.Option(
+        "--frame-by-frame", help="Keep each frame's own choice of where the joints are: do not choose "
+        "their paths again over the whole clip (hidden spans are still filled in).")] = False,
     fps: Annotated[float | None, typer.Option(
         "--fps", help="Frame rate \\[default: the video's, else 24].")] = None,
     resume: Annotated[Path | None, typer.Option(
@@ -61,12 +64,7 @@ def track(
         raise SettingsError("--resume needs the --joints file the tracking used (for the rectangle sizes)")
     if overlay is not None:
         animation_format(overlay)
-    flat = None if background is None else options.colour(background)  # checked even when unused
-    if background is not None and flat is None:
-        raise SettingsError(
-            f"track's --background is the colour the footage is drawn on (white, black or #rrggbb), "
-            f"got {background!r}"
-        )
+    flat = None if background is None else _drawn_on(background)  # checked even when unused
     frames, video_fps = load_frames(source)
     rate = fps if fps is not None else video_fps or 24.0  # a given fps is checked by the motion
     start = 0
@@ -83,7 +81,7 @@ def track(
             joints=(skeleton, sizes),
             start=start,
             fps=rate,
-            settings=api.TrackSettings(search=search, figure=not free),
+            settings=api.TrackSettings(search=search, figure=not free, best_path=not frame_by_frame),
             background=flat,
             earlier=None if resume is None else load_motion(resume),
             corrections=dict(options.named_point(c, "--set") for c in corrections or ()),
@@ -105,6 +103,20 @@ def track(
         f"tracked {len(skeleton)} joints through {motion.frame_count} frames (from frame {captured.first}); "
         f"{repeats}{unsure:.0%} of joint-frames matched poorly (hidden or changed) -> {output}"
     )
+
+
+def _drawn_on(text: str) -> tuple[int, int, int]:
+    """track's ``--background``: the colour the footage is drawn on (not ``transparent``)."""
+    try:
+        colour = options.colour(text)
+    except SettingsError:
+        colour = None
+    if colour is None:
+        raise SettingsError(
+            f"track's --background is the colour the footage is drawn on (white, black or #rrggbb), "
+            f"got {text!r}"
+        )
+    return colour
 
 
 @app.command("retarget")
