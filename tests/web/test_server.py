@@ -781,29 +781,29 @@ def test_a_correction_tracks_again_from_its_frame_and_keeps_the_frames_before(ed
     assert bad["type"] == "error" and "'set' must give" in bad["message"]
 
 
-def test_tracking_holds_joints_to_the_figure_unless_told_they_are_free(editable, monkeypatch):
+def test_tracking_holds_joints_to_the_figure_and_chooses_paths_unless_told_not_to(editable, monkeypatch):
     folder, client = editable
     assert client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif()).status_code == 200
     joints = [{**j, "size": [16, 16]} for j in _joints(api.load_project(folder))]
     held, original = [], api.track_footage
 
     def tracking(*args, **kwargs):
-        held.append(kwargs["settings"].figure)
+        held.append((kwargs["settings"].figure, kwargs["settings"].best_path))
         return original(*args, **kwargs)
 
     monkeypatch.setattr(api, "track_footage", tracking)
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         replies = []
-        for free in (None, True, "yes"):
-            socket.send_text(json.dumps({"type": "track", "joints": joints,
-                                         **({} if free is None else {"free": free})}))
+        for how in ({}, {"free": True}, {"frame_by_frame": True}, {"free": "yes"}, {"frame_by_frame": 1}):
+            socket.send_text(json.dumps({"type": "track", "joints": joints, **how}))
             reply = socket.receive_json()
             while reply["type"] == "progress":
                 reply = socket.receive_json()
             replies.append(reply)
-    assert [r["type"] for r in replies] == ["tracked", "tracked", "error"]
-    assert held == [True, False]
-    assert "'free' must be true or false" in replies[2]["message"]
+    assert [r["type"] for r in replies] == ["tracked", "tracked", "tracked", "error", "error"]
+    assert held == [(True, True), (False, True), (True, False)]
+    assert "'free' must be true or false, got 'yes'" in replies[3]["message"]
+    assert "'frame_by_frame' must be true or false, got 1" in replies[4]["message"]
 
 
 def _png(array) -> bytes:

@@ -39,8 +39,10 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   loop, with progress messages, as an export) and saves the motion in the project folder's
   ``motions/captured.json``; with ``"at": t, "set": {name: [x, y]}`` it corrects the earlier
   tracking instead, tracking again from frame ``t``; with ``"free": true`` the joints are not held
-  to the figure on a plain background (``toonmotion track --free``). Reply ``{"type": "tracked", "first": n,
-  "names": [...], "positions": [...], "confidence": [...]}``, joints in ``names``' order.
+  to the figure on a plain background (``toonmotion track --free``); with ``"frame_by_frame":
+  true`` each frame's own choice is kept (``toonmotion track --frame-by-frame``). Reply
+  ``{"type": "tracked", "first": n, "names": [...], "positions": [...], "confidence": [...]}``,
+  joints in ``names``' order.
   ``{"type": "retarget"}`` replays it on the character; reply
   ``{"type": "retargeted", "first": n, "last": m, "fps": f}``, whose frames a ``frame`` message
   with ``"source": "capture"`` gives.
@@ -493,11 +495,13 @@ def track(editing: Editing, message: dict[str, Any],
         if not isinstance(moved, dict) or not moved:
             raise TrackingError("'set' must give the corrected joints, name to [x, y]")
         corrections = {str(name): _point(xy, f"joint {name!r}") for name, xy in moved.items()}
-    free = message.get("free", False)
-    if not isinstance(free, bool):
-        raise TrackingError(f"'free' must be true or false, got {free!r}")
+    free, frame_by_frame = (message.get(name, False) for name in ("free", "frame_by_frame"))
+    for name, value in (("free", free), ("frame_by_frame", frame_by_frame)):
+        if not isinstance(value, bool):
+            raise TrackingError(f"'{name}' must be true or false, got {value!r}")
+    settings = api.TrackSettings(figure=not free, best_path=not frame_by_frame)
     capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
-                                corrections=corrections, at=at, settings=api.TrackSettings(figure=not free),
+                                corrections=corrections, at=at, settings=settings,
                                 progress=lambda stage, index, total: progress(index, total))
     save_motion(editing.folder / CAPTURED, capture.motion)
     with editing.lock:

@@ -24,7 +24,8 @@ export function mount(ctx) {
     <p><label>or a folder of frames <input id="capture-frames" type="file" webkitdirectory multiple></label></p>
     <p id="capture-info"></p>
     <p><input id="capture-scrub" type="range" min="0" max="0" value="0" style="width: 100%" aria-label="frame"></p>
-    <p><label title="On a plain background the joints are matched only on the figure, and a hidden joint is put on it"><input id="capture-free" type="checkbox"> Leave the joints free of the figure</label></p>
+    <p><label title="On a plain background the joints are matched only on the figure, and a hidden joint is put on it"><input id="capture-free" type="checkbox"> Leave the joints free of the figure</label><br>
+      <label title="Once the clip is tracked, each joint's path is chosen again over the whole clip among the places its searches found; tick to keep each frame's own choice"><input id="capture-frame-by-frame" type="checkbox"> Keep each frame's own choice (no whole-clip pass)</label></p>
     <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
       <button id="capture-play" disabled>Retarget and play</button></p>
     <p><progress id="capture-progress" max="1" value="0" hidden></progress></p>
@@ -177,10 +178,11 @@ export function mount(ctx) {
       bar.hidden = true;
     }
   }
-  const free = () => document.getElementById("capture-free").checked;
-  document.getElementById("capture-track").onclick = () => { frame = 0; trackFrom({ type: "track", joints, free: free() }); };
+  const how = () => ({ free: document.getElementById("capture-free").checked,
+    frame_by_frame: document.getElementById("capture-frame-by-frame").checked });
+  document.getElementById("capture-track").onclick = () => { frame = 0; trackFrom({ type: "track", joints, ...how() }); };
   document.getElementById("capture-retrack").onclick = () =>
-    trackFrom({ type: "track", joints, at: frame, set: corrected, free: free() });
+    trackFrom({ type: "track", joints, at: frame, set: corrected, ...how() });
 
   document.getElementById("capture-play").onclick = async () => {
     if (playing) return stop();
