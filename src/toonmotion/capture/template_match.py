@@ -279,9 +279,14 @@ class Match:
         Up to :data:`OTHERS` other places of the search where the template is found, apart from
         the alike ones: local minima of the colour cost at least :data:`VISIBLE_CONFIDENCE`
         confident, whole-pixel ``(x, y)`` and the confidence there, most confident first.
-
-    ``alike`` and ``others`` are worked out when first asked for: most matches made are dropped
-    for a better one.
+    cells : _Cells or None
+        The search's colour costs, from which ``alike`` and ``others`` are worked out when first
+        asked for (most matches made are dropped for a better one); None where nothing could be
+        taken (the bone cannot reach the window).
+    centre : (2,) float
+        The search window's centre, (x, y) pixels.
+    angle : float
+        The window's turn, radians.
     """
 
     xy: NDArray[np.float64]
