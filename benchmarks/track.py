@@ -1,7 +1,7 @@
 """Joint tracking on rendered motion capture, against OpenCV's trackers; JSON lines.
 
     python benchmarks/track.py [CLIP.bvh ...] [--frames N] [--trackers toonmotion,MIL,CSRT,KCF]
-                               [--style textured|flat ...] [--twos] [--seed N]
+                               [--style textured|flat ...] [--twos] [--seed N] [--frame-by-frame]
 
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
 usual naming conventions (CMU, FAIR, Mixamo, Rokoko), projected orthographically from the front,
@@ -11,12 +11,14 @@ other (``toonmotion.testing.mocap_tracking``, which also scores): ``--style text
 default) a textured figure over a textured background, ``--style flat`` a cel cartoon, flat
 colours from a small palette with dark outlines over a plain background. ``--twos`` holds each
 drawing two frames (animation on twos, with a grey level or two of noise); ``--seed`` draws the
-figure with other textures or colours. Every tracker starts
+figure with other textures or colours; ``--frame-by-frame`` leaves out toonmotion's choice of each
+joint's path over the whole clip (``TrackSettings.best_path``). Every tracker starts
 from the true frame-1 rectangles (a square of the joint disc's diameter, ~30 px) and runs on
 one core.
 
 Keys, one line per clip, style and tracker:
   clip, style, twos, seed, tracker, joints, frames
+  best_path            whether toonmotion chose the paths over the whole clip (its lines only)
   mean_px, median_px   error of the tracked joint centres against the true ones, over every
                        joint and frame after the first
   pck5                 fraction of joint-frames within 5 px
@@ -40,6 +42,7 @@ from pathlib import Path  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
+from toonmotion.capture.tracker import TrackSettings  # noqa: E402
 from toonmotion.testing.mocap_tracking import render_bvh_clip, track_from_truth, tracking_scores  # noqa: E402
 
 cv2.setNumThreads(1)
@@ -67,20 +70,20 @@ def run_opencv(kind, images, start_points, side):
     return out, time.perf_counter() - start
 
 
-def bench(path, trackers, frames=None, style="textured", twos=False, seed=0):
+def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, best_path=True):
     clip = render_bvh_clip(path, frames=frames, style=style, twos=twos, seed=seed)
     images = clip.images
     lines, ours = [], None
     for name in trackers:
         if name == "toonmotion":
-            found, seconds = track_from_truth(clip)
+            found, seconds = track_from_truth(clip, settings=TrackSettings(best_path=best_path))
         else:
             found, seconds = run_opencv(name, images, clip.truth[0], clip.side)
         line = {"clip": Path(path).stem, "style": style, "twos": twos, "seed": seed, "tracker": name,
                 "joints": len(clip.skeleton), "frames": len(images),
                 **tracking_scores(found, clip.truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
         if name == "toonmotion":
-            ours = line["mean_px"]
+            ours, line["best_path"] = line["mean_px"], best_path
         elif ours:
             line["ratio_mean_px"] = round(line["mean_px"] / ours, 2)
         lines.append(line)
@@ -97,12 +100,14 @@ def main():
     parser.add_argument("--twos", action="store_true", help="hold each drawing two frames")
     parser.add_argument("--seed", type=int, default=0,
                         help="seed of the figure's textures or colours and the background (default 0)")
+    parser.add_argument("--frame-by-frame", action="store_true",
+                        help="leave out toonmotion's choice of each joint's path over the whole clip")
     args = parser.parse_args()
     clips = args.clips or sorted(DEFAULT_DIR.glob("*.bvh"))
     for clip in clips:
         for style in args.style:
             lines = bench(clip, args.trackers.split(","), frames=args.frames, style=style, twos=args.twos,
-                          seed=args.seed)
+                          seed=args.seed, best_path=not args.frame_by_frame)
             for line in lines:
                 print(json.dumps(line), flush=True)
 

@@ -1,7 +1,7 @@
 """Joint tracking on footage whose true joints are known: a video and its frame motion; JSON lines.
 
     python benchmarks/track_footage.py [VIDEO MOTION.json ...] [--drawings FOLDER ...] [--seeds N ...]
-                                       [--free]
+                                       [--free] [--frame-by-frame]
 
 Each VIDEO is read as ``toonmotion track`` reads it, and MOTION.json holds its true joints in the
 video's pixels, frame by frame (what ``toonmotion animate ... --save-frame-motion`` writes beside
@@ -13,7 +13,8 @@ animate), and measured. ``--drawings`` takes Animated Drawings character folders
 ``mask.png``, ``char_cfg.yaml``; e.g. ``../shared/data/drawings/char*``): each is rigged and
 animated into footage by key-frames that swing its bones, one clip per ``--seeds`` seed
 (``toonmotion.testing.swinging_keys``; 49 frames at 12 fps, bones turning up to 8-30 degrees
-about their parents). ``--free`` does not hold joints to the figure.
+about their parents). ``--free`` does not hold joints to the figure; ``--frame-by-frame`` leaves
+out the choice of each joint's path over the whole clip (``TrackSettings.best_path``).
 
 Keys, one line per video:
   video, joints, frames            (drawings: video is FOLDER:seed)
@@ -88,7 +89,7 @@ def make_swinging(drawing, seeds, folder):
     return clips
 
 
-def bench(video, truth_file, figure=True):
+def bench(video, truth_file, figure=True, best_path=True):
     frames, fps = load_frames(video)
     truth = load_motion(truth_file)
     skeleton = truth.skeleton
@@ -99,7 +100,8 @@ def bench(video, truth_file, figure=True):
     start = time.perf_counter()
     placed = Skeleton.from_joints([(n, p, tuple(xy)) for (n, p, _), xy in zip(skeleton.joints(), positions[0],
                                                                               strict=True)])
-    captured = capture_motion(frames, placed, sizes, fps=fps or 24.0, settings=TrackSettings(figure=figure))
+    settings = TrackSettings(figure=figure, best_path=best_path)
+    captured = capture_motion(frames, placed, sizes, fps=fps or 24.0, settings=settings)
     seconds = time.perf_counter() - start
     found = captured.motion.positions
     per_joint = tracking_errors(found, positions).reshape(count - 1, -1).mean(axis=0)
@@ -107,7 +109,7 @@ def bench(video, truth_file, figure=True):
     scores = tracking_scores(found, positions)
     return {"video": str(video), "joints": len(skeleton), "frames": count, **scores,
             "worst_joint": skeleton.names[worst], "worst_mean_px": round(float(per_joint[worst]), 3),
-            "fps": round((count - 1) / max(seconds, 1e-9), 1), "figure": figure}
+            "fps": round((count - 1) / max(seconds, 1e-9), 1), "figure": figure, "best_path": best_path}
 
 
 def main():
@@ -117,7 +119,10 @@ def main():
                         help="Animated Drawings folders to animate by swinging key-frames and track")
     parser.add_argument("--seeds", nargs="+", type=int, default=[1, 2], help="swinging key-frames' seeds")
     parser.add_argument("--free", action="store_true", help="do not hold joints to the figure")
+    parser.add_argument("--frame-by-frame", action="store_true",
+                        help="leave out the choice of each joint's path over the whole clip")
     args = parser.parse_args()
+    how = {"figure": not args.free, "best_path": not args.frame_by_frame}
     if len(args.pairs) % 2:
         parser.error("give each video with its true motion: VIDEO MOTION.json [VIDEO MOTION.json ...]")
     pairs = list(zip(args.pairs[::2], args.pairs[1::2], strict=True))
@@ -125,10 +130,10 @@ def main():
         if not pairs and not args.drawings:
             pairs = [make_demo(Path(folder))]
         for video, truth in pairs:
-            print(json.dumps(bench(video, truth, figure=not args.free)), flush=True)
+            print(json.dumps(bench(video, truth, **how)), flush=True)
         for drawing in args.drawings:
             for video, truth, seed in make_swinging(drawing, args.seeds, Path(folder)):
-                line = bench(video, truth, figure=not args.free)
+                line = bench(video, truth, **how)
                 print(json.dumps({**line, "video": f"{drawing}:{seed}"}), flush=True)
 
 
