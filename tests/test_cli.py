@@ -756,7 +756,8 @@ def test_track_writes_a_motion_csv_and_overlay(footage, tmp_path, capsys):
     assert Image.open(tmp_path / "o.gif").n_frames == 12
 
 
-@pytest.mark.parametrize("options", [[], ["--background", "#f6f0e2"], ["--free"], ["--frame-by-frame"]])
+@pytest.mark.parametrize("options", [[], ["--background", "#f6f0e2"], ["--free"], ["--frame-by-frame"],
+                                     ["--both-ways"]])
 def test_track_follows_a_cartoon_on_plain_paper(footage, tmp_path, options):
     """The waving arm drawn flat-coloured on paper (#f6f0e2): joints held to the figure read off
     the border, or off the given colour, or left free."""
@@ -775,7 +776,7 @@ def test_track_follows_a_cartoon_on_plain_paper(footage, tmp_path, options):
     assert np.hypot(*(load_motion(out).positions - truth).reshape(-1, 2).T).max() < 2.0
 
 
-def test_track_frame_by_frame_leaves_out_the_choice_of_paths(footage, tmp_path, monkeypatch):
+def test_track_frame_by_frame_and_both_ways_set_the_whole_sequence_pass(footage, tmp_path, monkeypatch):
     from toonmotion import api
 
     folder, _ = footage
@@ -786,11 +787,11 @@ def test_track_frame_by_frame_leaves_out_the_choice_of_paths(footage, tmp_path, 
         return real(*args, **kwargs)
 
     monkeypatch.setattr(api, "track_footage", spy)
-    for flag in ([], ["--frame-by-frame"]):
+    for flag in ([], ["--frame-by-frame"], ["--both-ways"]):
         assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", tmp_path / "m.json",
                     *flag) == 0
-    assert [s.best_path for s in settings] == [True, False]
-    assert [s.fill_gaps for s in settings] == [True, True]
+    assert [(s.best_path, s.both_ways) for s in settings] == [(True, False), (False, False), (True, True)]
+    assert [s.fill_gaps for s in settings] == [True, True, True]
 
 
 def test_track_says_how_many_frames_repeat_a_drawing(footage, tmp_path, capsys):
@@ -857,6 +858,8 @@ def test_retarget_replays_a_tracked_motion_and_keeps_it_in_the_project(footage, 
           "transparent"], "the colour the footage is drawn on (white, black or #rrggbb), got 'transparent'"),
         (["track", "{f}/frames", "--joints", "{f}/joints.json", "-o", "{t}/m.json", "--background",
           "sky"], "the colour the footage is drawn on (white, black or #rrggbb), got 'sky'"),
+        (["track", "{f}/frames", "--joints", "{f}/joints.json", "-o", "{t}/m.json", "--both-ways",
+          "--frame-by-frame"], "--both-ways and --frame-by-frame do not go together"),
         (["retarget", "{t}/alien.json", "{p}/hero", "-o", "{t}/r.gif"], "no bone of the target matches"),
         (["retarget", "{t}/alien.json", "{p}/hero", "-o", "{t}/r.gif", "--map", "head"], "--map takes"),
     ],

@@ -7,7 +7,6 @@ import pytest
 from toonmotion.animate.motion import motion_for
 from toonmotion.capture.footage import capture_motion, first_figure
 from toonmotion.capture.setup import rectangle_sizes
-from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
 from toonmotion.capture.track_path import best_paths
 from toonmotion.capture.tracker import TrackSettings
 from toonmotion.io.frames import load_frames
@@ -50,7 +49,7 @@ def test_a_child_goes_with_its_parent_not_with_a_look_alike_left_behind():
     assert np.allclose(found[:, 1], found[:, 0] + (0.0, 20.0))
 
 
-def test_places_are_only_swapped_for_ones_the_search_found_and_fixed_frames_are_kept():
+def test_places_are_only_swapped_for_ones_offered_and_fixed_frames_are_kept():
     rng = np.random.default_rng(3)
     T, k = 12, 3
     parents = np.array([-1, 0, 1])
@@ -64,12 +63,29 @@ def test_places_are_only_swapped_for_ones_the_search_found_and_fixed_frames_are_
     found, confidence = best_paths(P, C, options, parents, drawings, np.full(k, 10.0))
     for t in range(T):
         for m in range(k):
-            if t not in drawings[1:] or C[t, m] < VISIBLE_CONFIDENCE:
+            if t not in drawings[1:]:
                 assert (found[t, m] == P[t, m]).all() and confidence[t, m] == C[t, m]
             elif (found[t, m] != P[t, m]).any():
                 row = np.flatnonzero((options[t, m, :, :2] == found[t, m]).all(axis=1))
                 assert len(row) and confidence[t, m] == pytest.approx(options[t, m, row[0], 2])
     assert (found != P).any()  # the random places do get swapped
+
+
+def test_no_step_is_longer_than_the_widest_search_but_the_trackers_own():
+    T = 8
+    P = np.zeros((T, 1, 2))
+    C = np.full((T, 1), 0.3)  # a joint matched poorly all along
+    options = _options(T, 1)
+    options[1:, 0, 0] = (30.0, 0.0, 1.0)  # a perfect look-alike a step of 30 px away
+    options[1:, 0, 1] = (0.0, 20.0, 1.0)  # and one 20 px away
+    P[5:, 0] = (40.0, 0.0)  # the tracker found it again 40 px off
+    radius = np.array([8.0])  # the widest search reaches 3 x 8 = 24 px a frame
+    found, _ = best_paths(P, C, options, np.array([-1]), np.arange(T), radius)
+    steps = np.hypot(*np.diff(found[:, 0], axis=0).T)
+    own = np.hypot(*np.diff(P[:, 0], axis=0).T)
+    assert ((steps <= 24.0) | (steps == own)).all()
+    assert (found[1:, 0] == (0.0, 20.0)).all(axis=1).any()  # the near look-alike is taken
+    assert not (found[:, 0] == (30.0, 0.0)).all(axis=1).any()  # the far one never
 
 
 def test_fewer_than_three_drawings_are_left_as_they_are():

@@ -393,6 +393,8 @@ def test_bad_tracking_options_are_an_error(small, kwargs, message):
         ({"w_beta": "1"}, r"w_beta must be a number >= 0, got '1'"),
         ({"rotate": "yes"}, r"rotate must be True or False"),
         ({"fill_gaps": 1}, r"fill_gaps must be True or False, got 1"),
+        ({"both_ways": "no"}, r"both_ways must be True or False, got 'no'"),
+        ({"both_ways": True, "best_path": False}, r"both_ways needs best_path"),
     ],
 )
 def test_bad_settings_are_an_error(kwargs, message):

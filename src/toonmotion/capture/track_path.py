@@ -9,8 +9,9 @@ the clip is tracked, every joint's path is chosen again among those places, pare
 the path of least total cost over the drawings (held frames are left out and repeat the frame
 before):
 
-- each place costs ``-log(confidence)`` (a joint not found has only the place the tracker put it
-  at, with its confidence, which is below ``VISIBLE_CONFIDENCE``);
+- each place costs ``-log(confidence)`` (a joint not found has the place the tracker put it at,
+  with its confidence, which is below ``VISIBLE_CONFIDENCE``; tracked both ways, it also has the
+  place the tracking backwards gave it);
 - each step costs ``|e|^2 / (2 s^2)``, ``e`` the change from one drawing to the next of the
   joint's velocity relative to its parent (its own, for a root), in pixels a frame, and
   ``s = SMOOTHNESS`` times the joint's search radius;
@@ -19,9 +20,15 @@ before):
 
 These are eq. 4.6's two terms, the colour and the distance from a prediction (here of constant
 velocity), on one scale, over the whole clip: a place that fits the frames after it as well as
-those before is preferred. Joints keep their
-places where the path goes through them, so the pass can only swap a match for another the
-search found.
+those before is preferred. No step is longer than the joint's widest search reaches
+(:data:`~toonmotion.capture.track_search.MAX_WIDEN` times its radius a frame), as in the
+tracking itself. Joints keep their places where the path goes through them, so the pass can only
+swap a place for another the searches found.
+
+Tracked both ways (``TrackSettings.both_ways``), each joint also has, on every frame, the place
+the tracking backwards from the clip's last frame gave it. A joint the tracking forwards lost for
+a stretch and found again, but the tracking backwards held, is then put on the backward path for
+that stretch: the forward path jumps where it is found again, the backward one does not.
 
 Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` confidence,
 ``options`` ``(T, k, n, 3)`` the other places, ``(x, y, confidence)``, NaN where none.
@@ -32,7 +39,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.capture.track_search import MAX_WIDEN
 
 # A step's cost scale: this many times the joint's search radius, per frame the step spans. Chosen
 # on 10 footage clips of the shared drawings (swinging_keys seeds 10 and 11): 0.5 and 0.2 made them
@@ -54,7 +61,8 @@ def best_paths(P: NDArray[np.float64], C: NDArray[np.float64], options: NDArray[
     P : (T, k, 2) float
     C : (T, k) float
     options : (T, k, n, 3) float
-        Other places each joint was found at, ``(x, y, confidence)``; NaN rows are none.
+        Other places each joint was found at (or, tracked both ways, put at backwards),
+        ``(x, y, confidence)``; NaN rows are none.
     parents : (k,) int
         Each joint's parent, -1 for a root; parents come before their children.
     drawings : (d,) int
@@ -92,7 +100,8 @@ def best_paths(P: NDArray[np.float64], C: NDArray[np.float64], options: NDArray[
         g = parents[m]
         # Places relative to the parent's (already chosen) path: a bone turning steadily is smooth.
         relative = [x - (P[t, g] if g >= 0 else 0.0) for x, t in zip(places, drawings, strict=True)]
-        chosen = _viterbi(relative, costs, gaps, SMOOTHNESS * float(radius[m]), bone=g >= 0)
+        chosen = _viterbi(relative, places, costs, gaps, SMOOTHNESS * float(radius[m]),
+                          MAX_WIDEN * float(radius[m]), bone=g >= 0)
         for t, x, cost, i in zip(drawings, places, costs, chosen, strict=True):
             if i:  # 0 is the tracker's own choice
                 P[t, m], C[t, m] = x[i], np.exp(-cost[i])
@@ -101,11 +110,11 @@ def best_paths(P: NDArray[np.float64], C: NDArray[np.float64], options: NDArray[
 
 def _candidates(P, C, options, m, drawings):
     """Per drawing, joint ``m``'s places ``(n, 2)`` (the tracker's first) and their costs ``(n,)``;
-    a joint not found, and the first drawing, have only the tracker's."""
+    the first drawing has only the tracker's."""
     places, costs = [], []
     for index, t in enumerate(drawings):
         x, c = P[t, m][None], [C[t, m]]
-        if index and C[t, m] >= VISIBLE_CONFIDENCE:
+        if index:
             rows = options[t, m]
             rows = rows[np.isfinite(rows).all(axis=1)]
             x, c = np.concatenate([x, rows[:, :2]]), np.concatenate([c, rows[:, 2]])
@@ -114,13 +123,15 @@ def _candidates(P, C, options, m, drawings):
     return places, costs
 
 
-def _viterbi(places, costs, gaps, scale, *, bone):
+def _viterbi(places, absolute, costs, gaps, scale, reach, *, bone):
     """Index of the chosen place per drawing: the least total cost of places, velocity changes
     and (with ``bone``) bone-length changes, over pairs of consecutive places (a second-order
-    chain). ``gaps``: frames between consecutive drawings."""
+    chain), no step longer than ``reach`` a frame. ``places``: relative to the parent's path,
+    ``absolute``: in the picture; ``gaps``: frames between consecutive drawings."""
     d = len(places)
     # total[i, j]: least cost of a path ending at place i on drawing s - 1 and j on drawing s.
-    total = costs[0][:, None] + _bone_cost(places[0], places[1], gaps[0], scale, bone) + costs[1][None, :]
+    total = _step_cost(places, absolute, 1, gaps[0], scale, reach, bone)
+    total += costs[0][:, None] + costs[1][None, :]
     back = []
     for s in range(2, d):
         a, b, c = places[s - 2], places[s - 1], places[s]
@@ -132,7 +143,7 @@ def _viterbi(places, costs, gaps, scale, *, bone):
         through = total[:, :, None] + accel  # (i, j, l)
         best = np.argmin(through, axis=0)  # (j, l)
         total = np.take_along_axis(through, best[None], axis=0)[0]
-        total += _bone_cost(b, c, gaps[s - 1], scale, bone) + costs[s][None, :]
+        total += _step_cost(places, absolute, s, gaps[s - 1], scale, reach, bone) + costs[s][None, :]
         back.append(best)
     before, last = np.unravel_index(int(np.argmin(total)), total.shape)
     chosen = [int(last), int(before)]
@@ -142,9 +153,17 @@ def _viterbi(places, costs, gaps, scale, *, bone):
     return chosen[::-1]
 
 
-def _bone_cost(b, c, gap, scale, bone):
-    """The cost of the bone's change of length from each place in ``b`` to each in ``c`` over
-    ``gap`` frames, ``(len(b), len(c))``; zero without a ``bone`` (a root)."""
-    if not bone:
-        return np.zeros((len(b), len(c)))
-    return (np.hypot(*c.T)[None, :] - np.hypot(*b.T)[:, None]) ** 2 / (2 * (scale * gap) ** 2)
+def _step_cost(places, absolute, s, gap, scale, reach, bone):
+    """The cost of each step from a place on drawing ``s - 1`` to one on ``s``, ``gap`` frames on,
+    ``(n, n')``: the bone's change of length (with ``bone``; none for a root), and infinite where
+    the step is longer than ``reach`` a frame, but for the tracker's own step (a joint found
+    again may have moved farther), so its path is always there to take."""
+    b, c = places[s - 1], places[s]
+    cost = np.zeros((len(b), len(c)))
+    if bone:
+        cost += (np.hypot(*c.T)[None, :] - np.hypot(*b.T)[:, None]) ** 2 / (2 * (scale * gap) ** 2)
+    step = absolute[s][None, :, :] - absolute[s - 1][:, None, :]
+    too_far = np.hypot(step[..., 0], step[..., 1]) > reach * gap
+    too_far[0, 0] = False
+    cost[too_far] = np.inf
+    return cost

@@ -131,6 +131,11 @@ class TrackSettings:
         After tracking, choose each joint's path again among the places its searches found, by
         the least cost over the whole clip (:mod:`~toonmotion.capture.track_path`); before
         ``fill_gaps``.
+    both_ways : bool
+        Also track the clip backwards, from its last frame where the tracking put the joints, with
+        the templates cut where tracking started, and let ``best_path`` choose between the two
+        ways: a joint lost for a stretch and found again is put where the tracking backwards
+        held it. About twice the time; needs ``best_path``.
     figure : bool
         Where the footage is a figure on one flat colour, hold the joints to the figure: they are
         matched only on it and a joint not found is put on it
@@ -145,6 +150,7 @@ class TrackSettings:
     rotate: bool = True
     fill_gaps: bool = True
     best_path: bool = True
+    both_ways: bool = False
     figure: bool = True
 
     def __post_init__(self) -> None:
@@ -154,10 +160,14 @@ class TrackSettings:
         object.__setattr__(self, "w_alpha", check_number(self.w_alpha, "w_alpha", 0.0, "> 0", strict=True))
         if self.w_beta is not None:
             object.__setattr__(self, "w_beta", check_number(self.w_beta, "w_beta", 0.0, ">= 0"))
-        for name in ("rotate", "fill_gaps", "best_path", "figure"):
+        for name in ("rotate", "fill_gaps", "best_path", "both_ways", "figure"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
+        if self.both_ways and not self.best_path:
+            raise TrackingError(
+                "both_ways needs best_path: the whole-sequence pass chooses between the two ways"
+            )
 
 
 @dataclass(frozen=True, eq=False)
@@ -271,10 +281,13 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     templates = [Templates.cut(first, initial[m], 0.0, plan(m).size) for m in range(k)]
     figure = None if masks is None else FigureMasks(masks, count, first.shape)
     on_figure = None if figure is None else figure.holds(start, initial)
+    anchors = [Templates(t.anchor, t.anchor, t.coarse) for t in templates]
     if progress:
         progress("tracking", start, stop)
     _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress,
          figure, on_figure, settings.best_path)
+    if settings.both_ways:
+        _run_back(frames, masks, first.shape, plan, anchors, out, start, stop, on_figure)
     return _filled(out, plan, settings, figure, on_figure).freeze()
 
 
@@ -350,10 +363,13 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     history = np.where(np.isin(np.arange(k), list(fixed)), frame, begin)
     figure = None if masks is None else FigureMasks(masks, count, current.shape)
     on_figure = None if figure is None else figure.holds(frame, out.positions[frame])
+    anchors = [Templates(t.anchor, t.anchor, t.coarse) for t in templates]
     if progress:
         progress("tracking", frame, stop)
     _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure,
          settings.best_path)
+    if settings.both_ways:
+        _run_back(frames, masks, current.shape, plan, anchors, out, frame, stop, on_figure)
     return _filled(out, plan, settings, figure, on_figure, since=frame).freeze()
 
 
@@ -369,7 +385,8 @@ class _Arrays:
     confidence: np.ndarray
     tracked: np.ndarray
     held: np.ndarray
-    # (T, k, OTHERS, 3): the other places each joint's search found, for the whole-sequence pass.
+    # (T, k, OTHERS + 1, 3): the other places each joint's search found and, tracked both ways, the
+    # place the tracking backwards gave it (the last), for the whole-sequence pass.
     options: np.ndarray
 
     @classmethod
@@ -463,7 +480,39 @@ def _filled(out, plans, settings, figure, on_figure, since=0):
 
 
 def _no_options(count, k):
-    return np.full((count, k, OTHERS, 3), np.nan)
+    return np.full((count, k, OTHERS + 1, 3), np.nan)
+
+
+def _run_back(frames, masks, shape, plans, anchors, out, start, stop, on_figure):
+    """Track frames ``stop - 2`` down to ``start + 1`` backwards, from where ``out`` puts the joints
+    on frame ``stop - 1`` (as sure of them as it is) with the ``anchors``; write where each joint
+    went, with its confidence, as the last of its options (:mod:`~toonmotion.capture.track_path`)."""
+    count, k = stop - start, out.positions.shape[1]
+    if count < 3:
+        return
+    back = _Arrays.empty(count, k)
+    back.positions[0], back.angles[0] = out.positions[stop - 1], out.angles[stop - 1]
+    back.confidence[0], back.tracked[0] = out.confidence[stop - 1], True
+    figure = None if masks is None else FigureMasks(_Backwards(masks, start, stop), count, shape)
+    _run(_Backwards(frames, start, stop), shape, plans, anchors, back, np.zeros(k, int), 1, count - 1, None,
+         figure, on_figure, options=False)
+    for i in range(1, count - 1):
+        out.options[stop - 1 - i, :, OTHERS] = np.column_stack([back.positions[i], back.confidence[i]])
+
+
+class _Backwards(Sequence):
+    """Items ``start`` to ``stop - 1`` of a sequence, last first."""
+
+    def __init__(self, items, start, stop):
+        self._items, self._start, self._stop = items, start, stop
+
+    def __len__(self):
+        return self._stop - self._start
+
+    def __getitem__(self, i):
+        if not 0 <= i < len(self):
+            raise IndexError(i)
+        return self._items[self._stop - 1 - i]
 
 
 def _drawings(out, begin):

@@ -44,6 +44,9 @@ def track(
     frame_by_frame: Annotated[bool, typer.Option(
         "--frame-by-frame", help="Keep each frame's own choice of where the joints are: do not choose "
         "their paths again over the whole clip (hidden spans are still filled in).")] = False,
+    both_ways: Annotated[bool, typer.Option(
+        "--both-ways", help="Also track backwards from the last frame, and choose each joint's path "
+        "between the two ways: fewer joints lost for a stretch, in about twice the time.")] = False,
     fps: Annotated[float | None, typer.Option(
         "--fps", help="Frame rate \\[default: the video's, else 24].")] = None,
     resume: Annotated[Path | None, typer.Option(
@@ -64,6 +67,9 @@ def track(
         raise SettingsError("--resume needs the --joints file the tracking used (for the rectangle sizes)")
     if overlay is not None:
         animation_format(overlay)
+    if both_ways and frame_by_frame:
+        raise SettingsError("--both-ways and --frame-by-frame do not go together: the paths are chosen "
+                            "between the two ways over the whole clip")
     flat = None if background is None else _drawn_on(background)  # checked even when unused
     frames, video_fps = load_frames(source)
     rate = fps if fps is not None else video_fps or 24.0  # a given fps is checked by the motion
@@ -81,7 +87,8 @@ def track(
             joints=(skeleton, sizes),
             start=start,
             fps=rate,
-            settings=api.TrackSettings(search=search, figure=not free, best_path=not frame_by_frame),
+            settings=api.TrackSettings(search=search, figure=not free, best_path=not frame_by_frame,
+                                       both_ways=both_ways),
             background=flat,
             earlier=None if resume is None else load_motion(resume),
             corrections=dict(options.named_point(c, "--set") for c in corrections or ()),
