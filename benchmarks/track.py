@@ -1,7 +1,8 @@
 """Joint tracking on rendered motion capture, against OpenCV's trackers; JSON lines.
 
     python benchmarks/track.py [CLIP.bvh ...] [--frames N] [--trackers toonmotion,MIL,CSRT,KCF]
-                               [--style textured|flat ...] [--twos] [--seed N] [--frame-by-frame]
+                               [--style textured|flat ...] [--twos] [--seed N]
+                               [--frame-by-frame | --both-ways]
 
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
 usual naming conventions (CMU, FAIR, Mixamo, Rokoko), projected orthographically from the front,
@@ -12,13 +13,15 @@ default) a textured figure over a textured background, ``--style flat`` a cel ca
 colours from a small palette with dark outlines over a plain background. ``--twos`` holds each
 drawing two frames (animation on twos, with a grey level or two of noise); ``--seed`` draws the
 figure with other textures or colours; ``--frame-by-frame`` leaves out toonmotion's choice of each
-joint's path over the whole clip (``TrackSettings.best_path``). Every tracker starts
+joint's path over the whole clip (``TrackSettings.best_path``), ``--both-ways`` also tracks
+backwards and chooses between the two ways (``TrackSettings.both_ways``). Every tracker starts
 from the true frame-1 rectangles (a square of the joint disc's diameter, ~30 px) and runs on
 one core.
 
 Keys, one line per clip, style and tracker:
   clip, style, twos, seed, tracker, joints, frames
-  best_path            whether toonmotion chose the paths over the whole clip (its lines only)
+  best_path, both_ways whether toonmotion chose the paths over the whole clip, and between
+                       the two ways (its lines only)
   mean_px, median_px   error of the tracked joint centres against the true ones, over every
                        joint and frame after the first
   pck5                 fraction of joint-frames within 5 px
@@ -70,20 +73,22 @@ def run_opencv(kind, images, start_points, side):
     return out, time.perf_counter() - start
 
 
-def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, best_path=True):
+def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, best_path=True,
+          both_ways=False):
     clip = render_bvh_clip(path, frames=frames, style=style, twos=twos, seed=seed)
     images = clip.images
     lines, ours = [], None
     for name in trackers:
         if name == "toonmotion":
-            found, seconds = track_from_truth(clip, settings=TrackSettings(best_path=best_path))
+            settings = TrackSettings(best_path=best_path, both_ways=both_ways)
+            found, seconds = track_from_truth(clip, settings=settings)
         else:
             found, seconds = run_opencv(name, images, clip.truth[0], clip.side)
         line = {"clip": Path(path).stem, "style": style, "twos": twos, "seed": seed, "tracker": name,
                 "joints": len(clip.skeleton), "frames": len(images),
                 **tracking_scores(found, clip.truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
         if name == "toonmotion":
-            ours, line["best_path"] = line["mean_px"], best_path
+            ours, line["best_path"], line["both_ways"] = line["mean_px"], best_path, both_ways
         elif ours:
             line["ratio_mean_px"] = round(line["mean_px"] / ours, 2)
         lines.append(line)
@@ -100,14 +105,17 @@ def main():
     parser.add_argument("--twos", action="store_true", help="hold each drawing two frames")
     parser.add_argument("--seed", type=int, default=0,
                         help="seed of the figure's textures or colours and the background (default 0)")
-    parser.add_argument("--frame-by-frame", action="store_true",
-                        help="leave out toonmotion's choice of each joint's path over the whole clip")
+    ways = parser.add_mutually_exclusive_group()
+    ways.add_argument("--frame-by-frame", action="store_true",
+                      help="leave out toonmotion's choice of each joint's path over the whole clip")
+    ways.add_argument("--both-ways", action="store_true",
+                      help="toonmotion also tracks backwards and chooses between the two ways")
     args = parser.parse_args()
     clips = args.clips or sorted(DEFAULT_DIR.glob("*.bvh"))
     for clip in clips:
         for style in args.style:
             lines = bench(clip, args.trackers.split(","), frames=args.frames, style=style, twos=args.twos,
-                          seed=args.seed, best_path=not args.frame_by_frame)
+                          seed=args.seed, best_path=not args.frame_by_frame, both_ways=args.both_ways)
             for line in lines:
                 print(json.dumps(line), flush=True)
 

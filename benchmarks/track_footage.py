@@ -1,7 +1,7 @@
 """Joint tracking on footage whose true joints are known: a video and its frame motion; JSON lines.
 
     python benchmarks/track_footage.py [VIDEO MOTION.json ...] [--drawings FOLDER ...] [--seeds N ...]
-                                       [--free] [--frame-by-frame]
+                                       [--free] [--frame-by-frame | --both-ways]
 
 Each VIDEO is read as ``toonmotion track`` reads it, and MOTION.json holds its true joints in the
 video's pixels, frame by frame (what ``toonmotion animate ... --save-frame-motion`` writes beside
@@ -14,7 +14,8 @@ animate), and measured. ``--drawings`` takes Animated Drawings character folders
 animated into footage by key-frames that swing its bones, one clip per ``--seeds`` seed
 (``toonmotion.testing.swinging_keys``; 49 frames at 12 fps, bones turning up to 8-30 degrees
 about their parents). ``--free`` does not hold joints to the figure; ``--frame-by-frame`` leaves
-out the choice of each joint's path over the whole clip (``TrackSettings.best_path``).
+out the choice of each joint's path over the whole clip (``TrackSettings.best_path``);
+``--both-ways`` also tracks backwards and chooses between the two ways (``TrackSettings.both_ways``).
 
 Keys, one line per video:
   video, joints, frames            (drawings: video is FOLDER:seed)
@@ -89,7 +90,7 @@ def make_swinging(drawing, seeds, folder):
     return clips
 
 
-def bench(video, truth_file, figure=True, best_path=True):
+def bench(video, truth_file, figure=True, best_path=True, both_ways=False):
     frames, fps = load_frames(video)
     truth = load_motion(truth_file)
     skeleton = truth.skeleton
@@ -100,7 +101,7 @@ def bench(video, truth_file, figure=True, best_path=True):
     start = time.perf_counter()
     placed = Skeleton.from_joints([(n, p, tuple(xy)) for (n, p, _), xy in zip(skeleton.joints(), positions[0],
                                                                               strict=True)])
-    settings = TrackSettings(figure=figure, best_path=best_path)
+    settings = TrackSettings(figure=figure, best_path=best_path, both_ways=both_ways)
     captured = capture_motion(frames, placed, sizes, fps=fps or 24.0, settings=settings)
     seconds = time.perf_counter() - start
     found = captured.motion.positions
@@ -109,7 +110,8 @@ def bench(video, truth_file, figure=True, best_path=True):
     scores = tracking_scores(found, positions)
     return {"video": str(video), "joints": len(skeleton), "frames": count, **scores,
             "worst_joint": skeleton.names[worst], "worst_mean_px": round(float(per_joint[worst]), 3),
-            "fps": round((count - 1) / max(seconds, 1e-9), 1), "figure": figure, "best_path": best_path}
+            "fps": round((count - 1) / max(seconds, 1e-9), 1), "figure": figure, "best_path": best_path,
+            "both_ways": both_ways}
 
 
 def main():
@@ -119,10 +121,13 @@ def main():
                         help="Animated Drawings folders to animate by swinging key-frames and track")
     parser.add_argument("--seeds", nargs="+", type=int, default=[1, 2], help="swinging key-frames' seeds")
     parser.add_argument("--free", action="store_true", help="do not hold joints to the figure")
-    parser.add_argument("--frame-by-frame", action="store_true",
-                        help="leave out the choice of each joint's path over the whole clip")
+    ways = parser.add_mutually_exclusive_group()
+    ways.add_argument("--frame-by-frame", action="store_true",
+                      help="leave out the choice of each joint's path over the whole clip")
+    ways.add_argument("--both-ways", action="store_true",
+                      help="also track backwards, and choose each joint's path between the two ways")
     args = parser.parse_args()
-    how = {"figure": not args.free, "best_path": not args.frame_by_frame}
+    how = {"figure": not args.free, "best_path": not args.frame_by_frame, "both_ways": args.both_ways}
     if len(args.pairs) % 2:
         parser.error("give each video with its true motion: VIDEO MOTION.json [VIDEO MOTION.json ...]")
     pairs = list(zip(args.pairs[::2], args.pairs[1::2], strict=True))

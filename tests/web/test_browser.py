@@ -488,7 +488,7 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     held, original = [], api.track_footage  # whether each tracking holds joints to the figure, chooses paths
 
     def tracking(*args, **kwargs):
-        held.append((kwargs["settings"].figure, kwargs["settings"].best_path))
+        held.append((kwargs["settings"].figure, kwargs["settings"].best_path, kwargs["settings"].both_ways))
         return original(*args, **kwargs)
 
     monkeypatch.setattr(api, "track_footage", tracking)
@@ -521,11 +521,13 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     page.mouse.down()
     page.mouse.move(x + 30, y, steps=4)
     page.mouse.up()
-    page.check("#capture-free")  # and this time, joints free of the figure, each frame's choice kept
+    page.check("#capture-free")  # and this time, joints free of the figure, tracked both ways
     page.check("#capture-frame-by-frame")
+    page.check("#capture-both-ways")  # which unticks each frame's own choice
+    assert not page.is_checked("#capture-frame-by-frame")
     page.click("#capture-retrack")  # track again from frame 2 with the head moved
     page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
-    assert held == [(True, True), (False, False)]
+    assert held == [(True, True, False), (False, True, True)]
     corrected = load_motion(folder / "motions" / "captured.json")
     head = corrected.skeleton.index("head")
     np.testing.assert_allclose(corrected.positions[:2], motion.positions[:2])  # kept before frame 2

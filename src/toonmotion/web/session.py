@@ -40,7 +40,8 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   ``motions/captured.json``; with ``"at": t, "set": {name: [x, y]}`` it corrects the earlier
   tracking instead, tracking again from frame ``t``; with ``"free": true`` the joints are not held
   to the figure on a plain background (``toonmotion track --free``); with ``"frame_by_frame":
-  true`` each frame's own choice is kept (``toonmotion track --frame-by-frame``). Reply
+  true`` each frame's own choice is kept (``toonmotion track --frame-by-frame``); with
+  ``"both_ways": true`` the footage is tracked backwards too (``toonmotion track --both-ways``). Reply
   ``{"type": "tracked", "first": n, "names": [...], "positions": [...], "confidence": [...]}``,
   joints in ``names``' order.
   ``{"type": "retarget"}`` replays it on the character; reply
@@ -495,11 +496,12 @@ def track(editing: Editing, message: dict[str, Any],
         if not isinstance(moved, dict) or not moved:
             raise TrackingError("'set' must give the corrected joints, name to [x, y]")
         corrections = {str(name): _point(xy, f"joint {name!r}") for name, xy in moved.items()}
-    free, frame_by_frame = (message.get(name, False) for name in ("free", "frame_by_frame"))
-    for name, value in (("free", free), ("frame_by_frame", frame_by_frame)):
+    how = {name: message.get(name, False) for name in ("free", "frame_by_frame", "both_ways")}
+    for name, value in how.items():
         if not isinstance(value, bool):
             raise TrackingError(f"'{name}' must be true or false, got {value!r}")
-    settings = api.TrackSettings(figure=not free, best_path=not frame_by_frame)
+    settings = api.TrackSettings(figure=not how["free"], best_path=not how["frame_by_frame"],
+                                 both_ways=how["both_ways"])
     capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
                                 corrections=corrections, at=at, settings=settings,
                                 progress=lambda stage, index, total: progress(index, total))

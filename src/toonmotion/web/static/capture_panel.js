@@ -25,7 +25,8 @@ export function mount(ctx) {
     <p id="capture-info"></p>
     <p><input id="capture-scrub" type="range" min="0" max="0" value="0" style="width: 100%" aria-label="frame"></p>
     <p><label title="On a plain background the joints are matched only on the figure, and a hidden joint is put on it"><input id="capture-free" type="checkbox"> Leave the joints free of the figure</label><br>
-      <label title="Once the clip is tracked, each joint's path is chosen again over the whole clip among the places its searches found; tick to keep each frame's own choice"><input id="capture-frame-by-frame" type="checkbox"> Keep each frame's own choice (no whole-clip pass)</label></p>
+      <label title="Once the clip is tracked, each joint's path is chosen again over the whole clip among the places its searches found; tick to keep each frame's own choice"><input id="capture-frame-by-frame" type="checkbox"> Keep each frame's own choice (no whole-clip pass)</label><br>
+      <label title="Also track backwards from the last frame and choose each joint's path between the two ways: fewer joints lost for a stretch, in about twice the time"><input id="capture-both-ways" type="checkbox"> Track both ways (slower)</label></p>
     <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
       <button id="capture-play" disabled>Retarget and play</button></p>
     <p><progress id="capture-progress" max="1" value="0" hidden></progress></p>
@@ -179,7 +180,14 @@ export function mount(ctx) {
     }
   }
   const how = () => ({ free: document.getElementById("capture-free").checked,
-    frame_by_frame: document.getElementById("capture-frame-by-frame").checked });
+    frame_by_frame: document.getElementById("capture-frame-by-frame").checked,
+    both_ways: document.getElementById("capture-both-ways").checked });
+  // Both ways is a choice of paths over the whole clip: it and "each frame's own choice" exclude each other.
+  for (const [id, other] of [["capture-both-ways", "capture-frame-by-frame"], ["capture-frame-by-frame", "capture-both-ways"]]) {
+    document.getElementById(id).addEventListener("change", (event) => {
+      if (event.target.checked) document.getElementById(other).checked = false;
+    });
+  }
   document.getElementById("capture-track").onclick = () => { frame = 0; trackFrom({ type: "track", joints, ...how() }); };
   document.getElementById("capture-retrack").onclick = () =>
     trackFrom({ type: "track", joints, at: frame, set: corrected, ...how() });
