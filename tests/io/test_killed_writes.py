@@ -2,7 +2,8 @@
 successful run leaves no temporary file behind (io/atomic.py, io/video.py, io/project.py).
 
 Each case runs the real command in a child process 20 times, kills it at a random moment
-between its start-up and its end, checks the earlier output, then runs it once to the end.
+between its start-up and its end (a run that ends first sets how long the next are taken to
+last), checks the earlier output, then runs it once to the end.
 """
 
 from __future__ import annotations
@@ -94,11 +95,17 @@ def test_a_killed_write_keeps_the_old_output_and_the_next_run_sweeps_its_tempora
     chance = random.Random(f"kill {kind}")
     killed = 0
     for _ in range(KILLS):
+        began = time.perf_counter()
         child = subprocess.Popen(_command(*args), cwd=folder, stdout=subprocess.DEVNULL,
                                  stderr=subprocess.DEVNULL)
-        time.sleep(chance.uniform(0.3, 1.0) * took)
-        child.send_signal(signal.SIGKILL)
-        killed += child.wait() == -signal.SIGKILL
+        try:
+            child.wait(timeout=chance.uniform(0.3, 1.0) * took)
+            # It finished first: runs are quicker now than when timed (the machine was busier);
+            # aim the next kills by this run.
+            took = time.perf_counter() - began
+        except subprocess.TimeoutExpired:
+            child.send_signal(signal.SIGKILL)
+            killed += child.wait() == -signal.SIGKILL
         _intact(kind, output, before)
     assert killed >= KILLS // 2, f"only {killed} of {KILLS} runs were killed before they finished"
     subprocess.run(_command(*args), cwd=folder, check=True, capture_output=True)
