@@ -266,15 +266,17 @@ def test_the_tracking_is_read_only_and_checks_its_shapes():
 # --- corrections ------------------------------------------------------------------------------------
 
 
-def test_retrack_from_a_corrected_frame_mends_the_rest_and_keeps_the_frames_before(hat_and_man):
+@pytest.mark.parametrize("settings", [TrackSettings(), TrackSettings(both_ways=True)],
+                         ids=["one way", "both ways"])
+def test_retrack_from_a_corrected_frame_mends_the_rest_and_keeps_the_frames_before(hat_and_man, settings):
     frames, truth, setup = hat_and_man
     chest = setup.skeleton.index("chest")
-    good = track(frames, setup)
-    bad = retrack(good, frames, setup, 10, {"chest": truth[10, chest] + [7.0, -6.0]})
+    good = track(frames, setup, settings=settings)
+    bad = retrack(good, frames, setup, 10, {"chest": truth[10, chest] + [7.0, -6.0]}, settings=settings)
     assert _errors(bad, truth)[11:, chest].min() > 5  # it follows the wrong texture
     assert np.array_equal(bad.positions[:10], good.positions[:10])
 
-    fixed = retrack(bad, frames, setup, 10, {"chest": truth[10, chest]})
+    fixed = retrack(bad, frames, setup, 10, {"chest": truth[10, chest]}, settings=settings)
     errors = _errors(fixed, truth)
     assert errors[10:].max() <= 0.5, f"worst error per joint {np.round(errors[10:].max(axis=0), 3)}"
     for name in ("positions", "angles", "confidence", "tracked"):
