@@ -488,7 +488,8 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     held, original = [], api.track_footage  # whether each tracking holds joints to the figure, chooses paths
 
     def tracking(*args, **kwargs):
-        held.append((kwargs["settings"].figure, kwargs["settings"].best_path, kwargs["settings"].both_ways))
+        held.append((kwargs["settings"].figure, kwargs["settings"].best_path, kwargs["settings"].both_ways,
+                     kwargs["background"]))
         return original(*args, **kwargs)
 
     monkeypatch.setattr(api, "track_footage", tracking)
@@ -525,9 +526,11 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     page.check("#capture-frame-by-frame")
     page.check("#capture-both-ways")  # which unticks each frame's own choice
     assert not page.is_checked("#capture-frame-by-frame")
+    page.fill("#capture-paper-colour", "#fafaf0")  # picking the colour the footage is drawn on ticks it
+    assert page.is_checked("#capture-paper")
     page.click("#capture-retrack")  # track again from frame 2 with the head moved
     page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
-    assert held == [(True, True, False), (False, True, True)]
+    assert held == [(True, True, False, None), (False, True, True, (250, 250, 240))]
     corrected = load_motion(folder / "motions" / "captured.json")
     head = corrected.skeleton.index("head")
     np.testing.assert_allclose(corrected.positions[:2], motion.positions[:2])  # kept before frame 2

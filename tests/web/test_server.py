@@ -785,27 +785,32 @@ def test_tracking_holds_joints_to_the_figure_and_chooses_paths_unless_told_not_t
     folder, client = editable
     assert client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif()).status_code == 200
     joints = [{**j, "size": [16, 16]} for j in _joints(api.load_project(folder))]
-    held, original = [], api.track_footage
+    held, colours, original = [], [], api.track_footage
 
     def tracking(*args, **kwargs):
         held.append((kwargs["settings"].figure, kwargs["settings"].best_path, kwargs["settings"].both_ways))
+        colours.append(kwargs["background"])
         return original(*args, **kwargs)
 
     monkeypatch.setattr(api, "track_footage", tracking)
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         replies = []
-        for how in ({}, {"free": True}, {"frame_by_frame": True}, {"both_ways": True}, {"free": "yes"},
-                    {"frame_by_frame": 1}, {"both_ways": True, "frame_by_frame": True}):
+        for how in ({}, {"free": True}, {"frame_by_frame": True},
+                    {"both_ways": True, "background": [250, 240, 220]}, {"free": "yes"},
+                    {"frame_by_frame": 1}, {"both_ways": True, "frame_by_frame": True},
+                    {"background": "white"}):
             socket.send_text(json.dumps({"type": "track", "joints": joints, **how}))
             reply = socket.receive_json()
             while reply["type"] == "progress":
                 reply = socket.receive_json()
             replies.append(reply)
-    assert [r["type"] for r in replies] == ["tracked"] * 4 + ["error"] * 3
+    assert [r["type"] for r in replies] == ["tracked"] * 4 + ["error"] * 4
     assert held == [(True, True, False), (False, True, False), (True, False, False), (True, True, True)]
     assert "'free' must be true or false, got 'yes'" in replies[4]["message"]
     assert "'frame_by_frame' must be true or false, got 1" in replies[5]["message"]
     assert "both_ways needs best_path" in replies[6]["message"]
+    assert "'background' must be null or [r, g, b]" in replies[7]["message"]
+    assert colours == [None, None, None, (250, 240, 220)]
 
 
 def _png(array) -> bytes:

@@ -41,7 +41,9 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   tracking instead, tracking again from frame ``t``; with ``"free": true`` the joints are not held
   to the figure on a plain background (``toonmotion track --free``); with ``"frame_by_frame":
   true`` each frame's own choice is kept (``toonmotion track --frame-by-frame``); with
-  ``"both_ways": true`` the footage is tracked backwards too (``toonmotion track --both-ways``). Reply
+  ``"both_ways": true`` the footage is tracked backwards too (``toonmotion track --both-ways``);
+  with ``"background": [r, g, b]`` the joints are held to the figure drawn on that colour
+  (``toonmotion track --background``; default null, the border's colour when flat). Reply
   ``{"type": "tracked", "first": n, "names": [...], "positions": [...], "confidence": [...]}``,
   joints in ``names``' order.
   ``{"type": "retarget"}`` replays it on the character; reply
@@ -460,11 +462,16 @@ def _export_size(value: Any) -> tuple[int, int] | None:
 
 def _export_background(value: Any) -> tuple[int, int, int] | None:
     """An export's ``background``: null (transparent; white behind a GIF or an MP4) or ``[r, g, b]``."""
+    return _colour(value, ExportError)
+
+
+def _colour(value: Any, error: type[ToonmotionError]) -> tuple[int, int, int] | None:
+    """A message's ``background``: null or ``[r, g, b]``; else an ``error``."""
     if value is None:
         return None
     if not (isinstance(value, list) and len(value) == 3
             and all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in value)):
-        raise ExportError(f"'background' must be null or [r, g, b], each 0 to 255; got {str(value)[:40]}")
+        raise error(f"'background' must be null or [r, g, b], each 0 to 255; got {str(value)[:40]}")
     return value[0], value[1], value[2]
 
 
@@ -502,8 +509,9 @@ def track(editing: Editing, message: dict[str, Any],
             raise TrackingError(f"'{name}' must be true or false, got {value!r}")
     settings = api.TrackSettings(figure=not how["free"], best_path=not how["frame_by_frame"],
                                  both_ways=how["both_ways"])
+    background = _colour(message.get("background"), TrackingError)
     capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
-                                corrections=corrections, at=at, settings=settings,
+                                corrections=corrections, at=at, settings=settings, background=background,
                                 progress=lambda stage, index, total: progress(index, total))
     save_motion(editing.folder / CAPTURED, capture.motion)
     with editing.lock:

@@ -26,7 +26,8 @@ export function mount(ctx) {
     <p><input id="capture-scrub" type="range" min="0" max="0" value="0" style="width: 100%" aria-label="frame"></p>
     <p><label title="On a plain background the joints are matched only on the figure, and a hidden joint is put on it"><input id="capture-free" type="checkbox"> Leave the joints free of the figure</label><br>
       <label title="Once the clip is tracked, each joint's path is chosen again over the whole clip among the places its searches found; tick to keep each frame's own choice"><input id="capture-frame-by-frame" type="checkbox"> Keep each frame's own choice (no whole-clip pass)</label><br>
-      <label title="Also track backwards from the last frame and choose each joint's path between the two ways: fewer joints lost for a stretch, in about twice the time"><input id="capture-both-ways" type="checkbox"> Track both ways (slower)</label></p>
+      <label title="Also track backwards from the last frame and choose each joint's path between the two ways: fewer joints lost for a stretch, in about twice the time"><input id="capture-both-ways" type="checkbox"> Track both ways (slower)</label><br>
+      <label title="The flat colour the footage is drawn on, when its border does not show it: the joints are held to the figure that differs from it"><input id="capture-paper" type="checkbox"> Drawn on</label> <input id="capture-paper-colour" type="color" value="#ffffff" aria-label="the colour the footage is drawn on"></p>
     <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
       <button id="capture-play" disabled>Retarget and play</button></p>
     <p><progress id="capture-progress" max="1" value="0" hidden></progress></p>
@@ -179,9 +180,17 @@ export function mount(ctx) {
       bar.hidden = true;
     }
   }
+  const paper = () => {
+    if (!document.getElementById("capture-paper").checked) return null;
+    const hex = document.getElementById("capture-paper-colour").value; // "#rrggbb"
+    return [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
+  };
+  document.getElementById("capture-paper-colour").addEventListener("input", () => {
+    document.getElementById("capture-paper").checked = true; // picking a colour means it
+  });
   const how = () => ({ free: document.getElementById("capture-free").checked,
     frame_by_frame: document.getElementById("capture-frame-by-frame").checked,
-    both_ways: document.getElementById("capture-both-ways").checked });
+    both_ways: document.getElementById("capture-both-ways").checked, background: paper() });
   // Both ways is a choice of paths over the whole clip: it and "each frame's own choice" exclude each other.
   for (const [id, other] of [["capture-both-ways", "capture-frame-by-frame"], ["capture-frame-by-frame", "capture-both-ways"]]) {
     document.getElementById(id).addEventListener("change", (event) => {
