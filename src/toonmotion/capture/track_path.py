@@ -41,7 +41,8 @@ from numpy.typing import NDArray
 
 from toonmotion.capture.track_search import MAX_WIDEN
 
-# A step's cost scale: this many times the joint's search radius, per frame the step spans. Chosen
+# A step's cost scale: this many times the joint's search radius (for the bone's change of length,
+# per frame the step spans). Chosen
 # on 10 footage clips of the shared drawings (swinging_keys seeds 10 and 11): 0.5 and 0.2 made them
 # worse (111.7 -> 112.2 px summed), 1.5 better (110.9), 3 and 8 moved more and lost one clip
 # (4.7 -> 9.4 px).

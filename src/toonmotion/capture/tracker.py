@@ -281,13 +281,12 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     templates = [Templates.cut(first, initial[m], 0.0, plan(m).size) for m in range(k)]
     figure = None if masks is None else FigureMasks(masks, count, first.shape)
     on_figure = None if figure is None else figure.holds(start, initial)
-    anchors = [Templates(t.anchor, t.anchor, t.coarse) for t in templates]
     if progress:
         progress("tracking", start, stop)
     _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress,
          figure, on_figure, settings.best_path)
     if settings.both_ways:
-        _run_back(frames, masks, first.shape, plan, anchors, out, start, stop, on_figure)
+        _run_back(frames, masks, first.shape, plan, templates, out, start, stop, on_figure)
     return _filled(out, plan, settings, figure, on_figure).freeze()
 
 
@@ -363,13 +362,12 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     history = np.where(np.isin(np.arange(k), list(fixed)), frame, begin)
     figure = None if masks is None else FigureMasks(masks, count, current.shape)
     on_figure = None if figure is None else figure.holds(frame, out.positions[frame])
-    anchors = [Templates(t.anchor, t.anchor, t.coarse) for t in templates]
     if progress:
         progress("tracking", frame, stop)
     _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure,
          settings.best_path)
     if settings.both_ways:
-        _run_back(frames, masks, current.shape, plan, anchors, out, frame, stop, on_figure)
+        _run_back(frames, masks, current.shape, plan, templates, out, frame, stop, on_figure)
     return _filled(out, plan, settings, figure, on_figure, since=frame).freeze()
 
 
@@ -483,10 +481,11 @@ def _no_options(count, k):
     return np.full((count, k, OTHERS + 1, 3), np.nan)
 
 
-def _run_back(frames, masks, shape, plans, anchors, out, start, stop, on_figure):
+def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figure):
     """Track frames ``stop - 2`` down to ``start + 1`` backwards, from where ``out`` puts the joints
-    on frame ``stop - 1`` (as sure of them as it is) with the ``anchors``; write where each joint
-    went, with its confidence, as the last of its options (:mod:`~toonmotion.capture.track_path`)."""
+    on frame ``stop - 1`` (as sure of them as it is) with the ``templates``' anchors (never re-cut:
+    only the latest are); write where each joint went, with its confidence, as the last of its
+    options (:mod:`~toonmotion.capture.track_path`)."""
     count, k = stop - start, out.positions.shape[1]
     if count < 3:
         return
@@ -494,6 +493,7 @@ def _run_back(frames, masks, shape, plans, anchors, out, start, stop, on_figure)
     back.positions[0], back.angles[0] = out.positions[stop - 1], out.angles[stop - 1]
     back.confidence[0], back.tracked[0] = out.confidence[stop - 1], True
     figure = None if masks is None else FigureMasks(_Backwards(masks, start, stop), count, shape)
+    anchors = [Templates(t.anchor, t.anchor, t.coarse) for t in templates]
     _run(_Backwards(frames, start, stop), shape, plans, anchors, back, np.zeros(k, int), 1, count - 1, None,
          figure, on_figure, options=False)
     for i in range(1, count - 1):
