@@ -51,6 +51,30 @@ def test_a_look_alike_at_the_wrong_bone_length_loses_to_the_joint():
     assert np.allclose(match(image, templates, predicted, 0.0, joint, far).xy, (90, 50), atol=0.05)
 
 
+def test_the_anchor_found_as_cut_beats_a_plain_place_nearer_the_prediction():
+    """The joint's texture, as cut, 16 px from the prediction, and a copy 8 grey levels off (plain:
+    conf 0.96) 2 px from it: the prediction decides among plain places, but not against the
+    anchor found as it was cut."""
+    image = _scene()
+    image[:, 75:] = np.clip(image[:, 75:].astype(int) + 8, 0, 255).astype(np.uint8)  # the copy at x 90
+    templates = Templates.cut(image, np.array([60.0, 50.0]), 0.0, (SIDE, SIDE))
+    joint = _plan()
+    found = match(image, templates, np.array([76.0, 50.0]), 0.0, joint)
+    assert np.allclose(found.xy, (60, 50), atol=0.05) and found.confidence > 0.99
+
+
+def test_a_flat_anchor_found_as_cut_only_far_along_its_fill_stays_at_the_prediction():
+    """A flat fill is found as cut all along a stretch, which tells nothing of where the joint is:
+    with the fill shaded 8 grey levels lighter round the prediction, and as cut 35 px off within
+    the window, the prediction still chooses."""
+    image = np.full((100, 200, 3), (200, 120, 60), np.uint8)
+    image[:, 75:] += 8
+    templates = Templates.cut(image, np.array([30.0, 50.0]), 0.0, (SIDE, SIDE))
+    joint = _plan(radius=40.0)
+    found = match(image, templates, np.array([100.0, 50.0]), 0.0, joint)
+    assert np.allclose(found.xy, (100, 50), atol=0.05) and 0.8 < found.confidence < 0.99
+
+
 def test_nothing_is_taken_beyond_the_bones_reach():
     image = _scene()
     templates = Templates.cut(image, np.array([90.0, 50.0]), 0.0, (SIDE, SIDE))

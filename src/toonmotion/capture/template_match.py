@@ -3,7 +3,8 @@
 A joint's rectangle is matched by sampling a search window round its predicted centre, turned
 by the rectangle's angle, and finding its templates in it with ``cv2.matchTemplate``
 (``TM_SQDIFF``, RGB sum of squared differences, eq. 4.1). The mixed cost of eq. 4.6 picks a
-whole-pixel cell; the colour cost alone then places the match to sub-pixel precision. Each joint
+whole-pixel cell (where the anchor is found again as it was cut, at one place, that place); the
+colour cost alone then places the match to sub-pixel precision. Each joint
 keeps two templates, an *anchor* and a *latest*, matched every frame. ``docs/capture.md``
 (tracking) gives the reasons for each choice.
 
@@ -61,6 +62,14 @@ MAX_GROWTH = 3.0
 # (RMS per channel) squared match as well as it. Joined to it, they are where the texture cannot
 # tell the joint's place apart: a cell or two on a textured joint, a stretch of a flat fill.
 ALIKE_LEVEL = 3.0
+
+# A joint's anchor found again as it was cut (every cell within ALIKE_LEVEL grey levels, RMS per
+# channel: compression noise) at no more than EXACT_CELLS whole-pixel cells (a place between cells
+# takes up to 2 x 2) is there, however far from the prediction: among plain cells eq. 4.6's colour
+# weight leaves the choice to the distance from the prediction, which holds a joint that drifted
+# along a flat limb where it drifted to, even once its limb is back as it was drawn. A flat anchor
+# is found as cut along a stretch of fill; the prediction still chooses there.
+EXACT_CELLS = 9
 
 # Besides its match, a joint's search keeps up to OTHERS other places where the texture is found
 # (local minima of the colour cost, OTHER_SPACING px apart and at least VISIBLE_CONFIDENCE
@@ -508,7 +517,7 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     prior = joint.geometric if bone is None else joint.geometric + _bone_cost(predicted, angle, R, bone)
     if figure is not None:
         prior = np.where(figure_cells(figure, predicted, angle, R), prior, np.inf)
-    anchor = _best(window, templates.anchor, joint, prior)
+    anchor = _best(window, templates.anchor, joint, prior, exact=True)
     (offset, confidence, cells), agree = anchor, True
     if anchor[1] < UPDATE_CONFIDENCE and templates.anchor is not templates.latest:
         latest = _best(window, templates.latest, joint, prior)
@@ -545,17 +554,22 @@ def _bone_cost(predicted, angle, R, bone, step=1.0):
     return cost
 
 
-def _best(window, template, joint, prior):
+def _best(window, template, joint, prior, exact=False):
     """Best match of ``template`` in ``window``: sub-pixel ``(dx, dy)`` from the centre, confidence.
 
     The mixed cost (colour plus ``prior``, the geometric and kinematic terms per cell) picks the
-    cell among the plain ones, if any; the colour cost alone then places the match: a descent to
-    its local minimum and a parabola through it in x and in y.
+    cell among the plain ones, if any; with ``exact`` (the anchor), among the cells where the
+    template is found again as cut, if they are few (:data:`EXACT_CELLS`). The colour cost alone
+    then places the match: a descent to its local minimum and a parabola through it in x and in y.
     """
     R, (tw, th) = joint.radius, joint.size
     ssd = cv2.matchTemplate(window, template, cv2.TM_SQDIFF)
     cost = joint.w_alpha * ssd + prior
     plain = (ssd <= joint.plain) & np.isfinite(prior)  # cells where the texture is plainly there
+    if exact and plain.any():
+        same = plain & (ssd <= joint.alike)
+        if 0 < np.count_nonzero(same) <= EXACT_CELLS:
+            plain = same
     if plain.any():
         cost[~plain] = np.inf
     if not np.isfinite(prior).any():  # the bone cannot reach the window: nothing is found here
