@@ -1,7 +1,7 @@
 """Joint tracking on rendered motion capture, against OpenCV's trackers; JSON lines.
 
     python benchmarks/track.py [CLIP.bvh ...] [--frames N] [--trackers toonmotion,MIL,CSRT,KCF]
-                               [--style textured|flat ...] [--twos] [--seed N]
+                               [--style textured|flat ...] [--twos] [--noise SIGMA] [--seed N]
                                [--frame-by-frame | --both-ways]
 
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
@@ -11,7 +11,9 @@ from is dropped), and rendered as a limb figure drawn far to near so limbs cross
 other (``toonmotion.testing.mocap_tracking``, which also scores): ``--style textured`` (the
 default) a textured figure over a textured background, ``--style flat`` a cel cartoon, flat
 colours from a small palette with dark outlines over a plain background. ``--twos`` holds each
-drawing two frames (animation on twos, with a grey level or two of noise); ``--seed`` draws the
+drawing two frames (animation on twos); ``--noise`` adds Gaussian noise of that many grey levels
+to every frame (default 1.5 on twos, so held frames differ a little, as scanned or filmed ones do,
+and none on ones: compare twos with ``--noise 1.5`` on ones); ``--seed`` draws the
 figure with other textures or colours; ``--frame-by-frame`` leaves out toonmotion's choice of each
 joint's path over the whole clip (``TrackSettings.best_path``), ``--both-ways`` also tracks
 backwards and chooses between the two ways (``TrackSettings.both_ways``). Every tracker starts
@@ -19,7 +21,7 @@ from the true frame-1 rectangles (a square of the joint disc's diameter, ~30 px)
 one core.
 
 Keys, one line per clip, style and tracker:
-  clip, style, twos, seed, tracker, joints, frames
+  clip, style, twos, noise, seed, tracker, joints, frames
   best_path, both_ways whether toonmotion chose the paths over the whole clip, and between
                        the two ways (its lines only)
   mean_px, median_px   error of the tracked joint centres against the true ones, over every
@@ -74,8 +76,8 @@ def run_opencv(kind, images, start_points, side):
 
 
 def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, best_path=True,
-          both_ways=False):
-    clip = render_bvh_clip(path, frames=frames, style=style, twos=twos, seed=seed)
+          both_ways=False, noise=None):
+    clip = render_bvh_clip(path, frames=frames, style=style, twos=twos, seed=seed, noise=noise)
     images = clip.images
     lines, ours = [], None
     for name in trackers:
@@ -84,7 +86,8 @@ def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, bes
             found, seconds = track_from_truth(clip, settings=settings)
         else:
             found, seconds = run_opencv(name, images, clip.truth[0], clip.side)
-        line = {"clip": Path(path).stem, "style": style, "twos": twos, "seed": seed, "tracker": name,
+        line = {"clip": Path(path).stem, "style": style, "twos": twos, "noise": clip.noise, "seed": seed,
+                "tracker": name,
                 "joints": len(clip.skeleton), "frames": len(images),
                 **tracking_scores(found, clip.truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
         if name == "toonmotion":
@@ -95,6 +98,13 @@ def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, bes
     return lines
 
 
+def _grey_levels(text):
+    value = float(text)
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of grey levels >= 0")
+    return value
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("clips", nargs="*", type=Path)
@@ -103,6 +113,8 @@ def main():
     parser.add_argument("--style", nargs="+", choices=("textured", "flat"), default=["textured"],
                         help="how the figure is drawn, a set of lines each (default: textured)")
     parser.add_argument("--twos", action="store_true", help="hold each drawing two frames")
+    parser.add_argument("--noise", type=_grey_levels, default=None, metavar="SIGMA",
+                        help="Gaussian noise on every frame, grey levels (default: 1.5 on twos, else 0)")
     parser.add_argument("--seed", type=int, default=0,
                         help="seed of the figure's textures or colours and the background (default 0)")
     ways = parser.add_mutually_exclusive_group()
@@ -115,7 +127,8 @@ def main():
     for clip in clips:
         for style in args.style:
             lines = bench(clip, args.trackers.split(","), frames=args.frames, style=style, twos=args.twos,
-                          seed=args.seed, best_path=not args.frame_by_frame, both_ways=args.both_ways)
+                          seed=args.seed, best_path=not args.frame_by_frame, both_ways=args.both_ways,
+                          noise=args.noise)
             for line in lines:
                 print(json.dumps(line), flush=True)
 

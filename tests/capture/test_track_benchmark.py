@@ -69,6 +69,21 @@ def test_jumping_jacks_on_twos_are_tracked_as_well_as_on_ones(jumping_jacks):
     assert figures["mean_px"] <= MEAN_BAR_PX and figures["pck5"] >= 0.99
 
 
+def test_noise_is_added_to_every_frame_as_asked(jumping_jacks):
+    """``noise`` grey levels of Gaussian noise on every frame, rounded and clipped, and nothing
+    else changed; twos without noise hold each drawing exactly."""
+    clip = _require(SHARED_DATA / "mocap") / "cmu_jumping_jacks.bvh"
+    noisy = render_bvh_clip(clip, frames=FRAMES, noise=2.0)
+    assert (noisy.truth == jumping_jacks.truth).all() and noisy.noise == 2.0 and jumping_jacks.noise == 0.0
+    grain = noisy.images.astype(float) - jumping_jacks.images
+    inside = (jumping_jacks.images > 10) & (jumping_jacks.images < 245)  # not clipped
+    assert abs(grain[inside].std() - 2.0) < 0.05 and abs(grain[inside].mean()) < 0.05
+    held = render_bvh_clip(clip, frames=8, twos=True, noise=0)
+    assert (held.images[1::2] == held.images[0::2]).all()
+    with pytest.raises(ValueError, match="noise"):
+        render_bvh_clip(clip, frames=8, noise=-1)
+
+
 def _tracked_cartoon(name):
     """A clip rendered flat-coloured and tracked as ``toonmotion track`` tracks it: the joints held
     to the figure on its plain paper."""

@@ -43,6 +43,9 @@ from toonmotion.rig.skeleton import Skeleton
 
 SIZE = (640, 480)
 FPS = 30.0
+# Grey levels of Gaussian noise on a clip drawn on twos, unless asked otherwise: a held frame is
+# then alike but not identical to the one before, as a scan or a video makes it.
+TWOS_NOISE = 1.5
 # An error of at most this many pixels counts as found (PCK), of more than LOST_PX as lost.
 PCK_PX = 5.0
 LOST_PX = 20.0
@@ -70,8 +73,9 @@ class RenderedClip:
     style : str
         ``"textured"`` or ``"flat"`` (:func:`~toonmotion.capture.synthetic.limb_figure_frames`).
     twos : bool
-        Each drawing is held two frames (animation "on twos"), with noise of a grey level or two
-        so held frames are alike but not identical.
+        Each drawing is held two frames (animation "on twos").
+    noise : float
+        The standard deviation of the Gaussian noise on every frame, grey levels.
     """
 
     images: NDArray[np.uint8]
@@ -81,19 +85,20 @@ class RenderedClip:
     fps: float
     style: str = "textured"
     twos: bool = False
+    noise: float = 0.0
 
 
 def render_bvh_clip(path: str | Path, *, frames: int | None = None, fps: float = FPS,
                     size: tuple[int, int] = SIZE, seed: int = 0, style: str = "textured",
-                    twos: bool = False) -> RenderedClip:
+                    twos: bool = False, noise: float | None = None) -> RenderedClip:
     """Read a BVH file and render it with :func:`render_mocap`."""
     return render_mocap(load_bvh(path), frames=frames, fps=fps, size=size, seed=seed, style=style,
-                        twos=twos)
+                        twos=twos, noise=noise)
 
 
 def render_mocap(clip: BvhClip, *, frames: int | None = None, fps: float = FPS,
                  size: tuple[int, int] = SIZE, seed: int = 0, style: str = "textured",
-                 twos: bool = False) -> RenderedClip:
+                 twos: bool = False, noise: float | None = None) -> RenderedClip:
     """Render a motion-capture clip as a limb figure seen from the front.
 
     Parameters
@@ -114,7 +119,11 @@ def render_mocap(clip: BvhClip, *, frames: int | None = None, fps: float = FPS,
         plain background (a cel cartoon).
     twos : bool
         Hold each drawing two frames, as animation "on twos": frame ``t`` shows (and its truth is)
-        the pose of frame ``t - t % 2``; every frame gets Gaussian noise of 1.5 grey levels.
+        the pose of frame ``t - t % 2``.
+    noise : float, optional
+        Gaussian noise added to every frame, its standard deviation in grey levels (rounded to
+        whole levels, clipped to 0-255; drawn from ``seed``). Default: :data:`TWOS_NOISE` on twos,
+        so held frames are alike but not identical, as a scan or a video makes them; else none.
 
     Returns
     -------
@@ -137,15 +146,18 @@ def render_mocap(clip: BvhClip, *, frames: int | None = None, fps: float = FPS,
     parents = np.array([-1 if parents_by_name[n] is None else STANDARD_JOINTS.index(parents_by_name[n])
                         for n in STANDARD_JOINTS])
     images, radius = limb_figure_frames(truth, parents, depth=depth, size=size, seed=seed, style=style)
-    if twos:
-        noise = np.random.default_rng(seed + 1).normal(0.0, 1.5, images.shape)
-        images = np.clip(np.rint(images + noise), 0, 255).astype(np.uint8)
+    noise = (TWOS_NOISE if twos else 0.0) if noise is None else float(noise)
+    if noise < 0 or not np.isfinite(noise):
+        raise ValueError(f"noise must be a finite number of grey levels >= 0, not {noise}")
+    if noise > 0:
+        grain = np.random.default_rng(seed + 1).normal(0.0, noise, images.shape)
+        images = np.clip(np.rint(images + grain), 0, 255).astype(np.uint8)
     skeleton = Skeleton.from_joints(
         [(n, parents_by_name[n], tuple(truth[0, i])) for i, n in enumerate(STANDARD_JOINTS)]
     )
     order = [STANDARD_JOINTS.index(n) for n in skeleton.names]
     return RenderedClip(images=images, truth=truth[:, order], skeleton=skeleton, side=2 * radius,
-                        fps=clip.fps / step, style=style, twos=twos)
+                        fps=clip.fps / step, style=style, twos=twos, noise=noise)
 
 
 def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None = None, figure: bool = True
