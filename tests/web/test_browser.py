@@ -551,6 +551,28 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     last = np.asarray(Image.open(io.BytesIO(page.request.get(
         editor[0].replace("/?", "/api/footage/2.png?")).body())).convert("RGB"))
     np.testing.assert_array_equal(last, np.asarray(Image.open(shots / "f_10.png").convert("RGB")))
+    # The suggestions follow the colour the footage is drawn on. Drawn on white in a black frame,
+    # the border says black, and the joints suggested run round the frame; told it is white, the
+    # page suggests them on the character.
+    page.uncheck("#capture-paper")
+    framed = picture.copy()
+    framed[:3] = framed[-3:] = framed[:, :3] = framed[:, -3:] = 0
+    Image.fromarray(framed).save(tmp_path / "framed.png")
+    page.set_input_files("#capture-file", str(tmp_path / "framed.png"))
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('place the joints')")
+    character = np.argwhere(picture.min(axis=2) < 200)
+    (top, left), (bottom, right) = character.min(axis=0), character.max(axis=0)
+
+    def on_character(joints):
+        xy = np.array([j["position"] for j in joints])
+        return bool(((xy >= (left, top)) & (xy <= (right, bottom))).all())
+
+    assert not on_character(page.evaluate("window.toonmotion.capture.suggestions()"))
+    page.fill("#capture-paper-colour", "#ffffff")
+    page.wait_for_function("document.getElementById('status').textContent.includes("
+                           "'joints suggested on the figure drawn on #ffffff')")
+    again = page.evaluate("window.toonmotion.capture.suggestions()")
+    assert len(again) > 2 and on_character(again)
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 

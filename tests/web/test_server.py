@@ -813,6 +813,44 @@ def test_tracking_holds_joints_to_the_figure_and_chooses_paths_unless_told_not_t
     assert colours == [None, None, None, (250, 240, 220)]
 
 
+def test_joints_are_suggested_again_on_the_colour_the_footage_is_drawn_on(editable):
+    """Footage drawn on white inside a black frame: the border says the paper is black, and the
+    joints suggested when it is sent run round the frame. Told it is drawn on white, the page gets
+    joints on the character."""
+    from toonmotion.samples import sample_character_on
+
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        socket.send_text(json.dumps({"type": "suggest", "background": [255, 255, 255]}))
+        early = socket.receive_json()
+    assert early["type"] == "error" and "there is no footage yet" in early["message"]
+    picture = sample_character_on("white", scale=0.5)[0].copy()
+    figure = np.argwhere(picture.min(axis=2) < 200)  # the character's pixels, (row, column)
+    picture[:3] = picture[-3:] = picture[:, :3] = picture[:, -3:] = 0
+    buffer = io.BytesIO()
+    frames = [Image.fromarray(np.roll(picture, t, axis=1)) for t in range(3)]
+    frames[0].save(buffer, format="GIF", save_all=True, append_images=frames[1:], duration=80)
+    sent = client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=buffer.getvalue())
+    assert sent.status_code == 200, sent.text
+    (top, left), (bottom, right) = figure.min(axis=0), figure.max(axis=0)
+
+    def on_character(joints):
+        xy = np.array([j["position"] for j in joints])
+        return bool(((xy >= (left, top)) & (xy <= (right, bottom))).all())
+
+    assert not on_character(sent.json()["joints"])
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        replies = []
+        for background in ([255, 255, 255], None, "white"):
+            socket.send_text(json.dumps({"type": "suggest", "background": background}))
+            replies.append(socket.receive_json())
+    white, border, bad = replies
+    assert white["type"] == "suggested" and len(white["joints"]) > 2 and on_character(white["joints"])
+    assert all(set(j) == {"name", "parent", "position", "size"} for j in white["joints"])
+    assert border["joints"] == sent.json()["joints"]  # null: the border's colour, as when sent
+    assert bad["type"] == "error" and "'background' must be null or [r, g, b]" in bad["message"]
+
+
 def _png(array) -> bytes:
     buffer = io.BytesIO()
     Image.fromarray(array).save(buffer, format="PNG")

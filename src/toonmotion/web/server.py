@@ -51,6 +51,8 @@ from toonmotion.web.session import (
     export,
     one_line,
     open_drawing,
+    suggest,
+    suggested_joints,
     track,
 )
 
@@ -198,9 +200,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         rate = fps or 24.0
         editing.footage, editing.capture, editing.captured = (frames, rate), None, None
         return {"frames": len(frames), "width": frames.shape[2], "height": frames.shape[1], "fps": rate,
-                "joints": [{"name": n, "parent": None if p < 0 else skeleton.names[p],
-                            "position": skeleton.positions[i].tolist(), "size": sizes[i].tolist()}
-                           for i, (n, p) in enumerate(zip(skeleton.names, skeleton.parents, strict=True))]}
+                "joints": suggested_joints(skeleton, sizes)}
 
     @app.put("/api/uploads/{part}")
     async def upload(request: Request, part: str, format: str = "") -> dict[str, Any]:
@@ -297,7 +297,7 @@ async def _receive(request: Request, file: Path, what: str, *, already: int = 0)
 def _slow(text: str) -> Callable[..., dict[str, Any]] | None:
     """The handler of a message that runs off the event loop (an export, a tracking), or None
     (checked cheaply; a bad message goes to ``answer``)."""
-    slow = ("export", "track", "open_drawing")
+    slow = ("export", "track", "open_drawing", "suggest")
     if len(text) > MAX_MESSAGE_BYTES or not any(f'"{kind}"' in text for kind in slow):
         return None
     try:
@@ -305,5 +305,5 @@ def _slow(text: str) -> Callable[..., dict[str, Any]] | None:
     except (ValueError, RecursionError):
         return None
     kind = message.get("type") if isinstance(message, dict) else None
-    handlers = {"export": export, "track": track, "open_drawing": open_drawing}
+    handlers = {"export": export, "track": track, "open_drawing": open_drawing, "suggest": suggest}
     return handlers.get(kind) if isinstance(kind, str) else None

@@ -46,6 +46,10 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   (``toonmotion track --background``; default null, the border's colour when flat). Reply
   ``{"type": "tracked", "first": n, "names": [...], "positions": [...], "confidence": [...]}``,
   joints in ``names``' order.
+  ``{"type": "suggest", "background": [r, g, b] or null}`` suggests the joints on the footage's
+  first frame again, on the figure drawn on that colour (``toonmotion track --background``; null:
+  the border's colour when flat, as when the footage was sent). Reply ``{"type": "suggested",
+  "joints": [{"name", "parent", "position", "size"}, ...]}``, as ``PUT /api/footage`` gives them.
   ``{"type": "retarget"}`` replays it on the character; reply
   ``{"type": "retargeted", "first": n, "last": m, "fps": f}``, whose frames a ``frame`` message
   with ``"source": "capture"`` gives.
@@ -521,6 +525,26 @@ def track(editing: Editing, message: dict[str, Any],
     return {"type": "tracked", "first": capture.first, "names": list(skeleton.names),
             "positions": np.round(capture.motion.positions, 2).tolist(),
             "confidence": np.round(confidence, 3).tolist()}
+
+
+@_off_loop("suggest the joints")
+def suggest(editing: Editing, message: dict[str, Any],
+            progress: Callable[[int, int], None]) -> dict[str, Any]:
+    """The reply to a ``suggest`` message (module docstring); off the event loop, like
+    :func:`track` (the figure of a sequence without a flat border is found over every frame)."""
+    if editing.footage is None:
+        raise TrackingError("there is no footage yet: send a video, a GIF or frames first")
+    background = _colour(message.get("background"), TrackingError)
+    skeleton, sizes = api.suggest_joints(editing.footage[0], colour=background)
+    return {"type": "suggested", "joints": suggested_joints(skeleton, sizes)}
+
+
+def suggested_joints(skeleton: Skeleton, sizes: NDArray[np.float64]) -> list[dict[str, Any]]:
+    """Joints suggested on footage, for the page: name, parent (a name or null), position and
+    rectangle size."""
+    return [{"name": n, "parent": None if p < 0 else skeleton.names[p],
+             "position": skeleton.positions[i].tolist(), "size": sizes[i].tolist()}
+            for i, (n, p) in enumerate(zip(skeleton.names, skeleton.parents, strict=True))]
 
 
 def bug(error: Exception) -> str:

@@ -27,7 +27,7 @@ export function mount(ctx) {
     <p><label title="On a plain background the joints are matched only on the figure, and a hidden joint is put on it"><input id="capture-free" type="checkbox"> Leave the joints free of the figure</label><br>
       <label title="Once the clip is tracked, each joint's path is chosen again over the whole clip among the places its searches found; tick to keep each frame's own choice"><input id="capture-frame-by-frame" type="checkbox"> Keep each frame's own choice (no whole-clip pass)</label><br>
       <label title="Also track backwards from the last frame and choose each joint's path between the two ways: fewer joints lost for a stretch, in about twice the time"><input id="capture-both-ways" type="checkbox"> Track both ways (slower)</label><br>
-      <label title="The flat colour the footage is drawn on, when its border does not show it: the joints are held to the figure that differs from it"><input id="capture-paper" type="checkbox"> Drawn on</label> <input id="capture-paper-colour" type="color" value="#ffffff" aria-label="the colour the footage is drawn on"></p>
+      <label title="The flat colour the footage is drawn on, when its border does not show it: the joints are suggested on, and held to, the figure that differs from it"><input id="capture-paper" type="checkbox"> Drawn on</label> <input id="capture-paper-colour" type="color" value="#ffffff" aria-label="the colour the footage is drawn on"></p>
     <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
       <button id="capture-play" disabled>Retarget and play</button></p>
     <p><progress id="capture-progress" max="1" value="0" hidden></progress></p>
@@ -156,6 +156,7 @@ export function mount(ctx) {
     show(0);
     status("place the joints on the first frame");
     showError("");
+    if (paper()) suggestAgain(); // sent suggestions go by the border's colour
   }
 
   document.getElementById("capture-scrub").oninput = (event) => show(Number(event.target.value));
@@ -188,6 +189,23 @@ export function mount(ctx) {
   document.getElementById("capture-paper-colour").addEventListener("input", () => {
     document.getElementById("capture-paper").checked = true; // picking a colour means it
   });
+  // The orange suggestions follow the colour the footage is drawn on (once it is picked).
+  async function suggestAgain() {
+    if (!footage) return;
+    const background = paper();
+    try {
+      const reply = await live.request({ type: "suggest", background });
+      footage.joints = reply.joints;
+      const on = background ? document.getElementById("capture-paper-colour").value : "the border's colour";
+      if (!tracked) status(`${reply.joints.length} joints suggested on the figure drawn on ${on}`);
+      showError("");
+      show(frame);
+    } catch (error) {
+      showError(error.message);
+    }
+  }
+  document.getElementById("capture-paper-colour").addEventListener("change", suggestAgain);
+  document.getElementById("capture-paper").addEventListener("change", suggestAgain);
   const how = () => ({ free: document.getElementById("capture-free").checked,
     frame_by_frame: document.getElementById("capture-frame-by-frame").checked,
     both_ways: document.getElementById("capture-both-ways").checked, background: paper() });
@@ -264,9 +282,11 @@ export function mount(ctx) {
     },
     pointerup: () => { dragging = -1; resizing = -1; },
   });
-  // Where a joint is on the screen at the current frame (for the console and tests).
+  // The joints, the suggestions, and where a joint is on the screen at the current frame (for
+  // the console and tests).
   ctx.capture = {
     joints: () => joints,
+    suggestions: () => (footage ? footage.joints : []),
     screen(name) {
       const i = joints.findIndex((j) => j.name === name), [x, y] = toCanvas(positions()[i]);
       const box = view.overlay.getBoundingClientRect(), k = box.width / view.overlay.width;
