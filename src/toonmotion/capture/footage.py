@@ -26,6 +26,7 @@ from toonmotion.capture.foreground import (
     estimate_background,
     flat_figure_masks,
     foreground_masks,
+    without_frame,
 )
 from toonmotion.capture.setup import check_setup, suggest_setup
 from toonmotion.capture.tracker import Tracking, TrackSettings, TrackSetup, retrack, track
@@ -95,12 +96,13 @@ def first_figure(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | No
     (:class:`~toonmotion.capture.foreground.FlatBackgroundMasks`), cleaned of specks and small
     holes: every pixel off that colour, so fills close to the paper's colour (skin on white)
     count. Otherwise it is what differs from a background estimated from the whole sequence
-    (:func:`~toonmotion.capture.foreground.foreground_masks`).
+    (:func:`~toonmotion.capture.foreground.foreground_masks`). Either way a frame drawn round the
+    picture is left out (:func:`~toonmotion.capture.foreground.without_frame`).
     """
     flat = flat_figure_masks(frames[:1], colour=colour)
     if flat is not None:
-        return cleaned_mask(flat[0])
-    return foreground_masks(frames[:1], background=estimate_background(frames))[0]
+        return without_frame(cleaned_mask(flat[0]))
+    return without_frame(foreground_masks(frames[:1], background=estimate_background(frames))[0])
 
 
 def capture_motion(

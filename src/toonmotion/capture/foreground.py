@@ -40,6 +40,10 @@ THRESHOLD_RANGE = (20.0, 100.0)
 # Specks smaller than this share of the largest part, and holes smaller than this share of the
 # foreground, are cleaned away.
 CLEAN_FRACTION = 0.01
+# A part of a figure's mask that touches all four sides of the picture while covering less than
+# this share of its bounding box is a frame drawn round the picture (a panel border, a scanned
+# page's edge), not the figure.
+FRAME_FILL = 0.25
 
 _CROSS = ndi.generate_binary_structure(2, 1)
 
@@ -311,6 +315,25 @@ def cleaned_mask(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     small[border] = False
     return mask | small[labels]
+
+
+def without_frame(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """``mask`` ``(h, w)`` bool without the parts that frame the picture: 8-connected parts that
+    touch all four sides and cover less than :data:`FRAME_FILL` of their bounding box (which is
+    then the picture). A figure cut by the picture's edges touches fewer sides, or fills more.
+
+    >>> mask = np.zeros((40, 40), bool); mask[:2] = mask[-2:] = mask[:, :2] = mask[:, -2:] = True
+    >>> mask[15:25, 15:25] = True  # a figure inside a frame two pixels wide
+    >>> int(without_frame(mask).sum())
+    100
+    """
+    labels, count = ndi.label(mask, structure=np.ones((3, 3), bool))
+    if count == 0:
+        return mask
+    sides = [np.unique(side) for side in (labels[0], labels[-1], labels[:, 0], labels[:, -1])]
+    framing = set(sides[0].tolist()).intersection(*(s.tolist() for s in sides[1:])) - {0}
+    framing = {part for part in framing if np.count_nonzero(labels == part) < FRAME_FILL * mask.size}
+    return mask & ~np.isin(labels, list(framing)) if framing else mask
 
 
 def border_colour(frame: ArrayLike, *, spread: float = 12.0) -> tuple[int, int, int] | None:
