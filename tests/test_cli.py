@@ -834,6 +834,29 @@ def test_track_suggests_joints_when_none_are_given(footage, tmp_path, capsys):
     assert (tmp_path / "m.joints.json").is_file()
 
 
+def test_track_says_which_figure_it_suggested_joints_on(tmp_path, capsys):
+    """Drawn on white inside a dark frame: the border says the paper is dark, and the message says
+    so and how to give the colour; given white, the joints are suggested on the character alone."""
+    import json
+
+    from toonmotion.samples import sample_character_on
+
+    picture = np.pad(sample_character_on("white", scale=0.5)[0], ((20, 20), (20, 20), (0, 0)),
+                     constant_values=255)
+    picture[:4] = picture[-4:] = picture[:, :4] = picture[:, -4:] = 20
+    frames = [Image.fromarray(np.roll(picture, t, axis=1)) for t in range(3)]
+    frames[0].save(tmp_path / "framed.gif", save_all=True, append_images=frames[1:], duration=80)
+    assert _run("track", tmp_path / "framed.gif", "-o", tmp_path / "a.json") == 0
+    said = capsys.readouterr().err
+    assert "on the figure that differs from the border's colour #141414 (--background sets another)" in said
+    assert _run("track", tmp_path / "framed.gif", "-o", tmp_path / "b.json", "--background", "white") == 0
+    assert "on the figure drawn on #ffffff" in capsys.readouterr().err
+    character = np.argwhere(picture[4:-4, 4:-4].min(axis=2) < 200) + 4
+    (top, left), (bottom, right) = character.min(axis=0), character.max(axis=0)
+    joints = json.loads((tmp_path / "b.joints.json").read_text())["joints"]
+    assert all(left <= j["position"][0] <= right and top <= j["position"][1] <= bottom for j in joints)
+
+
 def test_retarget_replays_a_tracked_motion_and_keeps_it_in_the_project(footage, posable, tmp_path):
     folder, _ = footage
     project = _copy_project(posable, tmp_path)

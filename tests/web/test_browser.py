@@ -556,7 +556,7 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     # page suggests them on the character.
     page.uncheck("#capture-paper")
     framed = picture.copy()
-    framed[:3] = framed[-3:] = framed[:, :3] = framed[:, -3:] = 0
+    framed[:3] = framed[-3:] = framed[:, :3] = framed[:, -3:] = 30
     Image.fromarray(framed).save(tmp_path / "framed.png")
     page.set_input_files("#capture-file", str(tmp_path / "framed.png"))
     page.wait_for_function("document.getElementById('status').textContent.startsWith('place the joints')")
@@ -568,6 +568,7 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
         return bool(((xy >= (left, top)) & (xy <= (right, bottom))).all())
 
     assert not on_character(page.evaluate("window.toonmotion.capture.suggestions()"))
+    assert page.input_value("#capture-paper-colour") == "#1e1e1e"  # the border's colour, told from
     page.fill("#capture-paper-colour", "#ffffff")
     page.wait_for_function("document.getElementById('status').textContent.includes("
                            "'joints suggested on the figure drawn on #ffffff')")

@@ -667,6 +667,7 @@ def test_footage_is_tracked_saved_and_retargeted(editable):
     footage = sent.json()
     assert (footage["frames"], footage["width"], footage["height"]) == (4, 210, 300)
     assert footage["joints"] and all(len(j["size"]) == 2 for j in footage["joints"])
+    assert footage["border"] == [255, 255, 255]  # drawn on white: the figure is told from it
     frame = Image.open(io.BytesIO(_get(client, "/api/footage/3.png").content))
     assert frame.size == (210, 300)
     # The character's own joints, placed on the figure (here it is the figure, at its size), so
@@ -838,7 +839,7 @@ def test_joints_are_suggested_again_on_the_colour_the_footage_is_drawn_on(editab
         xy = np.array([j["position"] for j in joints])
         return bool(((xy >= (left, top)) & (xy <= (right, bottom))).all())
 
-    assert not on_character(sent.json()["joints"])
+    assert not on_character(sent.json()["joints"]) and sent.json()["border"] == [0, 0, 0]
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         replies = []
         for background in ([255, 255, 255], None, "white"):

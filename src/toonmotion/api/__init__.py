@@ -64,6 +64,7 @@ from toonmotion.api.scene3d import (
     simulate_scene,
 )
 from toonmotion.capture.footage import Capture, suggest_joints
+from toonmotion.capture.foreground import border_colour
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
 from toonmotion.deform.deformer import DeformSettings
@@ -105,6 +106,7 @@ __all__ = [
     "animate_character",
     "animate_drawing",
     "animation_frames",
+    "border_colour",
     "capture_contours",
     "capture_parts",
     "capture_video",

@@ -341,7 +341,30 @@ def border_colour(frame: ArrayLike, *, spread: float = 12.0) -> tuple[int, int, 
 
     A cartoon on a plain background has the same colour all round its edge; when the per-channel
     spread (standard deviation) of the border pixels is under ``spread``, their median is taken as
-    the background colour. Footage with a textured or varied border returns None.
+    the background colour. Footage with a textured or varied border returns None. Without a
+    colour given, :func:`~toonmotion.capture.footage.suggest_joints` and the tracker take the
+    figure to be what differs from this one.
+
+    Parameters
+    ----------
+    frame : (h, w, 3) uint8
+        An RGB frame.
+    spread : float
+        The largest standard deviation of a channel round the border, grey levels, for it to
+        count as flat.
+
+    Returns
+    -------
+    (int, int, int) or None
+
+    Examples
+    --------
+    >>> frame = np.full((20, 30, 3), 240, np.uint8); frame[5:15, 10:20] = (200, 40, 40)
+    >>> border_colour(frame)
+    (240, 240, 240)
+    >>> frame[0, :15] = 0  # half the top edge drawn dark: not flat
+    >>> border_colour(frame) is None
+    True
     """
     border = _border_pixels(frame).astype(float)
     if border.std(axis=0).max() >= spread:

@@ -80,7 +80,8 @@ def track(
         skeleton, sizes = api.suggest_joints(frames, colour=flat)
         suggested = output.with_name(output.stem + ".joints.json")
         save_joints(suggested, skeleton, sizes)
-        options.warn(f"suggested {len(skeleton)} joints from frame 0 -> {suggested} (edit it, pass --joints)")
+        options.warn(f"suggested {len(skeleton)} joints from frame 0 on {_figure_said(frames[0], flat)} "
+                      f"-> {suggested} (edit it, pass --joints)")
     with options.progress("tracking") as report:
         captured = api.track_footage(
             frames,
@@ -110,6 +111,20 @@ def track(
         f"tracked {len(skeleton)} joints through {motion.frame_count} frames (from frame {captured.first}); "
         f"{repeats}{unsure:.0%} of joint-frames matched poorly (hidden or changed) -> {output}"
     )
+
+
+def _figure_said(frame, flat):
+    """Which figure the joints were suggested on, for the user."""
+    if flat is not None:
+        return f"the figure drawn on {_hex(flat)}"
+    border = api.border_colour(frame)
+    if border is None:
+        return "what differs from a background taken over the whole clip"
+    return f"the figure that differs from the border's colour {_hex(border)} (--background sets another)"
+
+
+def _hex(colour):
+    return "#" + "".join(f"{v:02x}" for v in colour)
 
 
 def _drawn_on(text: str) -> tuple[int, int, int]:

@@ -189,7 +189,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         return await footage_read(folder)
 
     async def footage_read(source: Path) -> dict[str, Any]:
-        """Footage saved in the project, read; the joints it suggests, to track."""
+        """Footage saved in the project, read; the joints it suggests, to track, and the colour of
+        its first frame's border when that is flat (what the figure is told from), else null."""
         try:
             frames, fps = await asyncio.to_thread(load_frames, source)
         except ToonmotionError:
@@ -199,8 +200,10 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         skeleton, sizes = api.suggest_joints(frames)
         rate = fps or 24.0
         editing.footage, editing.capture, editing.captured = (frames, rate), None, None
+        border = api.border_colour(frames[0])
         return {"frames": len(frames), "width": frames.shape[2], "height": frames.shape[1], "fps": rate,
-                "joints": suggested_joints(skeleton, sizes)}
+                "joints": suggested_joints(skeleton, sizes),
+                "border": None if border is None else list(border)}
 
     @app.put("/api/uploads/{part}")
     async def upload(request: Request, part: str, format: str = "") -> dict[str, Any]:

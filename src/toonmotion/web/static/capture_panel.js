@@ -157,6 +157,10 @@ export function mount(ctx) {
     status("place the joints on the first frame");
     showError("");
     if (paper()) suggestAgain(); // sent suggestions go by the border's colour
+    else if (footage.border) { // show which colour the figure was told from
+      document.getElementById("capture-paper-colour").value =
+        "#" + footage.border.map((v) => v.toString(16).padStart(2, "0")).join("");
+    }
   }
 
   document.getElementById("capture-scrub").oninput = (event) => show(Number(event.target.value));
