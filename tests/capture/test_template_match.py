@@ -53,7 +53,7 @@ def test_a_look_alike_at_the_wrong_bone_length_loses_to_the_joint():
 
 def test_the_anchor_found_as_cut_beats_a_plain_place_nearer_the_prediction():
     """The joint's texture, as cut, 16 px from the prediction, and a copy 8 grey levels off (plain:
-    conf 0.96) 2 px from it: the prediction decides among plain places, but not against the
+    conf 0.96) 14 px from it: the prediction decides among plain places, but not against the
     anchor found as it was cut."""
     image = _scene()
     image[:, 75:] = np.clip(image[:, 75:].astype(int) + 8, 0, 255).astype(np.uint8)  # the copy at x 90
