@@ -113,13 +113,15 @@ def test_a_frame_drawn_round_the_picture_is_not_the_figure():
     """A panel border round the picture differs from the paper as the figure does; no joint is
     suggested on it. A figure cut by all four edges of a close-up is still the figure."""
     picture, _ = sample_character_on("white", scale=0.5)
-    framed = np.pad(picture, ((20, 20), (20, 20), (0, 0)), constant_values=255)
+    unframed = np.pad(picture, ((20, 20), (20, 20), (0, 0)), constant_values=255)
     truth = np.pad(sample_character(scale=0.5)[0][..., 3] > 127, 20)
+    framed = unframed.copy()
     framed[:4] = framed[-4:] = framed[:, :4] = framed[:, -4:] = 30
     found = first_figure(framed[None], colour=(255, 255, 255))
-    assert not (found[:4].any() or found[-4:].any() or found[:, :4].any() or found[:, -4:].any())
-    # Measured 0.949 (0.961 unframed: the frame's dark shifts the split of the paper's colours).
-    assert (found & truth).sum() / (found | truth).sum() >= 0.94
+    # The very figure found without the frame: the frame's dark border pixels are not paper, so
+    # they do not raise the threshold of what differs from it either.
+    assert (found == first_figure(unframed[None], colour=(255, 255, 255))).all()
+    assert (found & truth).sum() / (found | truth).sum() >= 0.95
     skeleton, _ = suggest_joints(framed[None], colour=(255, 255, 255))
     rows, cols = np.nonzero(truth)
     assert all(cols.min() <= x <= cols.max() and rows.min() <= y <= rows.max() for x, y in skeleton.positions)

@@ -214,14 +214,20 @@ def flat_threshold(frame: ArrayLike, colour: Sequence[int]) -> float:
     is the figure (:class:`FlatBackgroundMasks`): the 99th percentile of the frame's border pixels'
     differences, within :data:`THRESHOLD_RANGE`. Digital art on white gets the low end; paper
     photographed under uneven light, whose own colour drifts by tens of levels, gets above its
-    drift.
+    drift. Border pixels farther from the colour than the range's top are not paper (a frame drawn
+    round the picture, the figure cut by the edge) and do not count.
 
     >>> frame = np.full((10, 10, 3), 250, np.uint8); frame[:, :5] = 235  # light falling off
     >>> flat_threshold(frame, (250, 250, 250)), flat_threshold(np.full((4, 4, 3), 9, np.uint8), (9, 9, 9))
     (45.0, 20.0)
+    >>> frame[:, 0] = frame[0] = 20  # a dark frame on two sides
+    >>> flat_threshold(frame, (250, 250, 250))
+    45.0
     """
     border = _border_pixels(frame).astype(np.float32)
-    spread = float(np.percentile(np.abs(border - _checked_colour(colour)).sum(axis=1), 99))
+    difference = np.abs(border - _checked_colour(colour)).sum(axis=1)
+    paper = difference[difference <= THRESHOLD_RANGE[1]]
+    spread = float(np.percentile(paper, 99)) if paper.size else THRESHOLD_RANGE[0]
     return float(np.clip(spread, *THRESHOLD_RANGE))
 
 
