@@ -44,6 +44,10 @@ CLEAN_FRACTION = 0.01
 # this share of its bounding box is a frame drawn round the picture (a panel border, a scanned
 # page's edge), not the figure.
 FRAME_FILL = 0.25
+# A frame the figure touches is one part with it: lines along an edge that are at least FRAME_LINE
+# figure, up to FRAME_DEPTH of the picture's smaller side deep, are a frame's, and are cleared.
+FRAME_LINE = 0.9
+FRAME_DEPTH = 0.03
 
 _CROSS = ndi.generate_binary_structure(2, 1)
 
@@ -324,15 +328,27 @@ def cleaned_mask(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
 
 
 def without_frame(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    """``mask`` ``(h, w)`` bool without the parts that frame the picture: 8-connected parts that
-    touch all four sides and cover less than :data:`FRAME_FILL` of their bounding box (which is
-    then the picture). A figure cut by the picture's edges touches fewer sides, or fills more.
+    """``mask`` ``(h, w)`` bool without a frame drawn round the picture: lines along an edge that are
+    :data:`FRAME_LINE` figure, up to :data:`FRAME_DEPTH` of the picture's smaller side deep, are
+    cleared (a frame the figure touches), then 8-connected parts that touch all four sides and cover
+    less than :data:`FRAME_FILL` of their bounding box, the picture (a frame that stands apart). A
+    figure cut by the picture's edges fills no whole edge, touches fewer sides, or fills more.
 
-    >>> mask = np.zeros((40, 40), bool); mask[:2] = mask[-2:] = mask[:, :2] = mask[:, -2:] = True
-    >>> mask[15:25, 15:25] = True  # a figure inside a frame two pixels wide
+    >>> mask = np.zeros((100, 100), bool); mask[:2] = mask[-2:] = mask[:, :2] = mask[:, -2:] = True
+    >>> mask[40:60, 40:60] = True  # a figure inside a frame two pixels wide
     >>> int(without_frame(mask).sum())
-    100
+    400
+    >>> mask[2:40, 50] = True  # the figure touching the frame
+    >>> int(without_frame(mask).sum())
+    438
     """
+    mask = np.array(mask, dtype=bool)
+    depth = max(1, int(FRAME_DEPTH * min(mask.shape)))
+    for side in (mask, mask[::-1], mask.T, mask.T[::-1]):  # views: top, bottom, left, right
+        for line in side[:depth]:
+            if line.mean() < FRAME_LINE:
+                break
+            line[:] = False
     labels, count = ndi.label(mask, structure=np.ones((3, 3), bool))
     if count == 0:
         return mask
