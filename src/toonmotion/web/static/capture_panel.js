@@ -6,7 +6,7 @@
 // was (green sure, red unsure); drag a joint that went astray at any frame and track again from
 // there (the frames before it are kept); then retarget the motion onto the character and play it.
 
-import { listen, nearest } from "./panel_kit.js";
+import { hexOf, listen, nearest, rgbOf } from "./panel_kit.js";
 
 export const name = "capture";
 export const title = "Capture";
@@ -158,8 +158,7 @@ export function mount(ctx) {
     showError("");
     if (paper()) suggestAgain(); // sent suggestions go by the border's colour
     else if (footage.border) { // show which colour the figure was told from
-      document.getElementById("capture-paper-colour").value =
-        "#" + footage.border.map((v) => v.toString(16).padStart(2, "0")).join("");
+      document.getElementById("capture-paper-colour").value = hexOf(footage.border);
     }
   }
 
@@ -187,8 +186,7 @@ export function mount(ctx) {
   }
   const paper = () => {
     if (!document.getElementById("capture-paper").checked) return null;
-    const hex = document.getElementById("capture-paper-colour").value; // "#rrggbb"
-    return [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
+    return rgbOf(document.getElementById("capture-paper-colour").value);
   };
   document.getElementById("capture-paper-colour").addEventListener("input", () => {
     document.getElementById("capture-paper").checked = true; // picking a colour means it

@@ -2,6 +2,8 @@
 // bar: pictures (GIF, MP4, PNG frames, APNG, WebP, WebM, a sprite sheet) or rigs other tools replay
 // (glTF, Spine). Every file written can then be downloaded.
 
+import { rgbOf } from "./panel_kit.js";
+
 export const name = "export";
 export const title = "Export";
 
@@ -63,7 +65,7 @@ export function mount(ctx) {
       const width = document.getElementById("export-width").value, height = document.getElementById("export-height").value;
       if (width || height) message.size = [Number(width), Number(height)];
       const hex = colourChoice.value === "custom" ? document.getElementById("export-colour").value : colourChoice.value;
-      if (hex) message.background = [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
+      if (hex) message.background = rgbOf(hex);
       message.overlays = [...side.querySelectorAll("input[name=export-overlay]:checked:not(:disabled)")]
         .map((box) => box.value);
     }

@@ -56,3 +56,7 @@ export function capture(target, event) {
     // not an active pointer: its events still reach the target while over it
   }
 }
+
+// A colour input's "#rrggbb" as [r, g, b], 0-255, as messages carry colours, and back.
+export const rgbOf = (hex) => [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
+export const hexOf = (rgb) => "#" + rgb.map((v) => v.toString(16).padStart(2, "0")).join("");
