@@ -574,6 +574,16 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
                            "'joints suggested on the figure drawn on #ffffff')")
     again = page.evaluate("window.toonmotion.capture.suggestions()")
     assert len(again) > 2 and on_character(again)
+    # After playing the motion on the character, new footage is shown again; leaving the panel
+    # takes it off the stage.
+    drawn = """() => { const o = window.toonmotion.view.overlay, pen = o.getContext('2d');
+        const alpha = pen.getImageData(0, 0, o.width, o.height).data;
+        let opaque = 0;
+        for (let i = 3; i < alpha.length; i += 4) if (alpha[i]) opaque++;
+        return [o.width, o.height, opaque]; }"""
+    assert page.evaluate(drawn)[2] > 0  # the footage is back on the stage after playing
+    page.click("nav button[data-panel=export]")
+    assert page.evaluate(drawn)[2] == 0
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 

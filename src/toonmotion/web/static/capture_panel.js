@@ -49,7 +49,8 @@ export function mount(ctx) {
     return P.map((p, i) => corrected[joints[i].name] || p);
   };
 
-  view.drawOverlay = (pen) => {
+  // The footage, the suggestions and the rectangles, over the stage (the character is hidden).
+  const drawFootage = (pen) => {
     if (!footage) return;
     const f = fit(), image = images[frame];
     pen.fillStyle = "#fff";
@@ -81,7 +82,13 @@ export function mount(ctx) {
     });
   };
 
+  view.drawOverlay = drawFootage;
+
   function show(at) {
+    if (!playing) { // back to the footage, after playing the motion on the character
+      view.drawOverlay = drawFootage;
+      view.canvas.style.visibility = "hidden";
+    }
     if (at !== frame) corrected = {};
     frame = at;
     document.getElementById("capture-retrack").disabled = Object.keys(corrected).length === 0;
@@ -152,7 +159,6 @@ export function mount(ctx) {
                                            position: [j.position[0] * sx, j.position[1] * sy], size: [side, side] }));
     document.getElementById("capture-scrub").max = String(footage.frames - 1);
     document.getElementById("capture-track").disabled = false;
-    view.canvas.style.visibility = "hidden";
     show(0);
     status("place the joints on the first frame");
     showError("");
@@ -303,6 +309,7 @@ export function mount(ctx) {
       unlisten();
       view.canvas.style.visibility = "visible";
       view.drawOverlay = () => {};
+      view.draw(); // clear the footage off the overlay
     },
   };
 }
