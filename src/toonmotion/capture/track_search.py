@@ -87,7 +87,8 @@ WEAK_REACH = 0.25
 # does not know either, and a knee of the demo's flat-blue trousers slid 80 px up the leg going by
 # it; the joint is put among those places where its neighbours carry it (FrameSearch._settle).
 AMBIGUOUS_SPREAD = 0.125
-# The kinematic term's weight per squared pixel of bone-length change, relative to w_beta.
+# The kinematic term's weight per squared pixel of bone-length change, relative to w_beta (of the
+# window widened after a held drawing: over a double step a bone changes twice as much).
 BONE_WEIGHT = 1.0
 
 # The confidence a joint taken to be hidden is saved with, at most: just under VISIBLE_CONFIDENCE.
@@ -327,7 +328,8 @@ class FrameSearch:
 
     def _bone_rule(self, t, m, seen, *, bounded):
         """The kinematic term for joint ``m`` at ``t`` if its parent was found there, else None:
-        its bone's length at ``t - 1``, weight ``BONE_WEIGHT * w_beta``, and with ``bounded`` a
+        its bone's length at ``t - 1``, weight ``BONE_WEIGHT * w_beta`` (of the window at this
+        frame's pace), and with ``bounded`` a
         reach of REACH_SLACK times the longest the bone has been seen."""
         g = self.plans.hangs_from[m]
         if g < 0 or not seen[g]:
@@ -335,7 +337,7 @@ class FrameSearch:
         P = self.P
         length = float(np.hypot(*(P[t - 1, m] - P[t - 1, g])))
         reach = REACH_SLACK * self.longest[m] if bounded and self.longest[m] > 0 else math.inf
-        return BoneRule(P[t, g], length, BONE_WEIGHT * self.plans(m).w_beta, reach)
+        return BoneRule(P[t, g], length, BONE_WEIGHT * self.plans(m, self._pace).w_beta, reach)
 
 
 def _place_hidden(P, t, coast, seen, hangs_from, reach):
