@@ -513,14 +513,17 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     it does not drift, and the joint is plainly there (the latest may be re-cut).
     """
     R, (tw, th) = joint.radius, joint.size
-    window = sample(image, predicted, angle, (tw + 2 * R, th + 2 * R))
     prior = joint.geometric if bone is None else joint.geometric + _bone_cost(predicted, angle, R, bone)
     if figure is not None:
         prior = np.where(figure_cells(figure, predicted, angle, R), prior, np.inf)
-    anchor = _best(window, templates.anchor, joint, prior, exact=True)
+    allowed = np.isfinite(prior)
+    if not allowed.any():  # the bone cannot reach the window, or it is off the figure: nothing is found
+        return Match(predicted.copy(), 0.0, True, None, predicted, angle)
+    window = sample(image, predicted, angle, (tw + 2 * R, th + 2 * R))
+    anchor = _best(window, templates.anchor, joint, prior, allowed, exact=True)
     (offset, confidence, cells), agree = anchor, True
     if anchor[1] < UPDATE_CONFIDENCE and templates.anchor is not templates.latest:
-        latest = _best(window, templates.latest, joint, prior)
+        latest = _best(window, templates.latest, joint, prior, allowed)
         (offset, confidence, cells) = latest
         agree = bool(np.hypot(*(anchor[0] - latest[0])) <= DRIFT_TOLERANCE)
         if agree and anchor[1] >= VISIBLE_CONFIDENCE:
@@ -554,26 +557,25 @@ def _bone_cost(predicted, angle, R, bone, step=1.0):
     return cost
 
 
-def _best(window, template, joint, prior, exact=False):
+def _best(window, template, joint, prior, allowed, exact=False):
     """Best match of ``template`` in ``window``: sub-pixel ``(dx, dy)`` from the centre, confidence.
 
-    The mixed cost (colour plus ``prior``, the geometric and kinematic terms per cell) picks the
-    cell among the plain ones, if any; with ``exact`` (the anchor), among the cells where the
-    template is found again as cut, if they are few (:data:`EXACT_CELLS`). The colour cost alone
-    then places the match: a descent to its local minimum and a parabola through it in x and in y.
+    The mixed cost (colour plus ``prior``, the geometric and kinematic terms per cell; ``allowed``
+    where it is finite, some cell) picks the cell among the plain ones, if any; with ``exact``
+    (the anchor), among the cells where the template is found again as cut, if they are few
+    (:data:`EXACT_CELLS`). The colour cost alone then places the match: a descent to its local
+    minimum and a parabola through it in x and in y.
     """
     R, (tw, th) = joint.radius, joint.size
     ssd = cv2.matchTemplate(window, template, cv2.TM_SQDIFF)
     cost = joint.w_alpha * ssd + prior
-    plain = (ssd <= joint.plain) & np.isfinite(prior)  # cells where the texture is plainly there
-    if exact and plain.any():
-        same = plain & (ssd <= joint.alike)
-        if 0 < np.count_nonzero(same) <= EXACT_CELLS:
-            plain = same
+    plain = (ssd <= joint.plain) & allowed  # cells where the texture is plainly there
     if plain.any():
+        if exact:
+            same = plain & (ssd <= joint.alike)
+            if 0 < np.count_nonzero(same) <= EXACT_CELLS:
+                plain = same
         cost[~plain] = np.inf
-    if not np.isfinite(prior).any():  # the bone cannot reach the window: nothing is found here
-        return np.zeros(2), 0.0, None
     i, j = np.unravel_index(int(np.argmin(cost)), ssd.shape)
     i, j = _descend(ssd, i, j, joint.tie)
     # The map is float32 and its sums of squares round; the chosen cell's is recomputed exactly.
@@ -581,8 +583,8 @@ def _best(window, template, joint, prior, exact=False):
     exact = float(d @ d)
     dx = _vertex(ssd[i, j - 1] if j > 0 else None, exact, ssd[i, j + 1] if j < 2 * R else None, joint.tie)
     dy = _vertex(ssd[i - 1, j] if i > 0 else None, exact, ssd[i + 1, j] if i < 2 * R else None, joint.tie)
-    return np.array([j - R + dx, i - R + dy]), confidence(exact, joint.size), _Cells(ssd, np.isfinite(prior),
-                                                                                      (i, j), joint)
+    cells = _Cells(ssd, allowed, (i, j), joint)
+    return np.array([j - R + dx, i - R + dy]), confidence(exact, joint.size), cells
 
 
 def _descend(cost, i, j, tie):
