@@ -329,8 +329,8 @@ class FrameSearch:
     def _bone_rule(self, t, m, seen, *, bounded):
         """The kinematic term for joint ``m`` at ``t`` if its parent was found there, else None:
         its bone's length at ``t - 1``, weight ``BONE_WEIGHT * w_beta`` (of the window at this
-        frame's pace), and with ``bounded`` a
-        reach of REACH_SLACK times the longest the bone has been seen."""
+        frame's pace), and with ``bounded`` a reach of REACH_SLACK times the longest the bone has
+        been seen."""
         g = self.plans.hangs_from[m]
         if g < 0 or not seen[g]:
             return None
