@@ -299,8 +299,7 @@ async def _receive(request: Request, file: Path, what: str, *, already: int = 0)
 
 def _slow(text: str) -> Callable[..., dict[str, Any]] | None:
     """The handler of a message that runs off the event loop (an export, a tracking, joints
-    suggested on footage), or None
-    (checked cheaply; a bad message goes to ``answer``)."""
+    suggested on footage), or None (checked cheaply; a bad message goes to ``answer``)."""
     slow = ("export", "track", "open_drawing", "suggest")
     if len(text) > MAX_MESSAGE_BYTES or not any(f'"{kind}"' in text for kind in slow):
         return None
