@@ -2,7 +2,7 @@
 speed; JSON lines.
 
     python benchmarks/deform.py [DRAWING_DIR ...] [--decomposition straight|geodesic]
-                                [--skinning one-bone|weights ...]
+                                [--skinning one-bone|weights ...] [--joint-anchor W]
 
 Each drawing folder (texture.png, mask.png, char_cfg.yaml; default: every drawing in
 ../shared/data/drawings) is rigged to about 1,500 vertices. Every pose is built from the
@@ -35,6 +35,11 @@ Keys, one line per drawing and binding (--skinning one-bone weights, both by def
                                  after stage two summed over it (goal: 0)
   area_change_max                largest whole-figure area change over every bone stretched 1.5x,
                                  one at a time, and the single-frame filter's jump (goal: 0.02)
+  joint_anchor                   stage two's joint anchor weight (DeformSettings.joint_anchor)
+  joint_gap_px, joint_gap_max_px how far the drawing carries its joints from the skeleton's (the
+                                 point of the drawing at each joint in the rest pose, against the
+                                 pose's joint), mean and largest over the sequence's frames and the
+                                 extreme poses, joints drawn inside the figure
 One more line: render_1024_ms, the median time to render one 1024x1024 frame of the bundled
 character (goal: at most 15).
 """
@@ -85,20 +90,22 @@ def handles(mesh, skeleton):
     return np.unique(nearest)
 
 
-def bench_drawing(folder, decomposition, skinning):
+def bench_drawing(folder, decomposition, skinning, joint_anchor):
     import igl  # the benchmark extra
 
     character = rig_drawing_folder(folder, settings=RigSettings(decomposition=decomposition))
     skeleton, mesh = character.skeleton, character.mesh
 
     start = time.perf_counter()
-    deformer = Deformer(character, DeformSettings(skinning=skinning))
+    settings = DeformSettings(skinning=skinning) if joint_anchor is None else \
+        DeformSettings(skinning=skinning, joint_anchor=joint_anchor)
+    deformer = Deformer(character, settings)
     precompute_ms = (time.perf_counter() - start) * 1e3
 
     keys = key_poses(skeleton)
     sequence = pose_sequence(skeleton, keys)
-    times, iterations, stage_ones = [], [], []
-    for _ in range(3):
+    times, iterations, stage_ones, gaps = [], [], [], []
+    for round_ in range(3):
         previous = None
         for pose in sequence:
             t0 = time.perf_counter()
@@ -106,6 +113,8 @@ def bench_drawing(folder, decomposition, skinning):
             times.append((time.perf_counter() - t0) * 1e3)
             iterations.append(previous.iterations)
             stage_ones.append(previous.stage_one)
+            if round_ == 0:
+                gaps.append(joint_gaps(deformer, previous.U, pose))
     cold = []
     for pose in keys[1:-1]:
         for _ in range(5):
@@ -131,7 +140,12 @@ def bench_drawing(folder, decomposition, skinning):
     libigl_ms = statistics.median(igl_times)
     F = mesh.F
     extremes = extreme_poses(skeleton)
-    inverted = sum(int((triangle_areas(deformer.deform(pose).U, F) <= 0).sum()) for _, pose in extremes)
+    inverted = 0
+    for _, pose in extremes:
+        U = deformer.deform(pose).U
+        inverted += int((triangle_areas(U, F) <= 0).sum())
+        gaps.append(joint_gaps(deformer, U, pose))
+    gaps = np.concatenate(gaps)
     rest_area = float(triangle_areas(mesh.V, F).sum())
     area_cases = [*stretch_poses(skeleton), ("filter jump", filter_jump(character))]
     area_change = max(abs(float(triangle_areas(deformer.deform(pose).U, F).sum()) / rest_area - 1)
@@ -153,7 +167,17 @@ def bench_drawing(folder, decomposition, skinning):
         "extreme_poses": len(extremes),
         "inverted": inverted,
         "area_change_max": round(area_change, 4),
+        "joint_anchor": deformer.settings.joint_anchor,
+        "joint_gap_px": round(float(gaps.mean()), 3),
+        "joint_gap_max_px": round(float(gaps.max()), 2),
     }
+
+
+def joint_gaps(deformer, U, pose):
+    """How far the drawing deformed to ``U`` carries each joint drawn inside it from ``pose``'s."""
+    drawn = deformer.drawn_joints(U)
+    inside = np.isfinite(drawn[:, 0])
+    return np.hypot(*(drawn[inside] - pose.positions[inside]).T)
 
 
 def bench_render():
@@ -183,6 +207,8 @@ def main(argv=None):
     parser.add_argument("--skinning", choices=("one-bone", "weights"), nargs="+",
                         default=["one-bone", "weights"],
                         help="the bindings to measure, a line each (default: both)")
+    parser.add_argument("--joint-anchor", type=float, default=None, metavar="W",
+                        help="stage two's joint anchor weight (default: DeformSettings' default)")
     args = parser.parse_args(argv)
     try:
         import cv2
@@ -195,7 +221,8 @@ def main(argv=None):
         sys.exit(f"no drawings found (looked in {DEFAULT_DIR})")
     for folder in folders:
         for skinning in args.skinning:
-            print(json.dumps(bench_drawing(folder, args.decomposition, skinning)), flush=True)
+            line = bench_drawing(folder, args.decomposition, skinning, args.joint_anchor)
+            print(json.dumps(line), flush=True)
     print(json.dumps(bench_render()), flush=True)
 
 

@@ -250,6 +250,30 @@ def test_stage_two_stops_near_its_minimum(rigged, name, kind):
 
 
 @pytest.mark.parametrize("name", CHARACTERS)
+def test_the_drawing_keeps_its_joints_where_the_skeleton_puts_them(rigged):
+    """In every test pose the point of the drawing at each joint (where it lay at rest) stays
+    within half a mesh spacing of the pose's joint. The thesis' stage two (``joint_anchor=0``)
+    lets a joint area settle as a block, further off than that on every character."""
+    def worst_gap(deformer):
+        gaps = []
+        for kind in POSES:
+            pose = Pose(_test_pose(deformer.character.skeleton, kind))
+            drawn = deformer.drawn_joints(deformer.deform(pose).U)
+            inside = np.isfinite(drawn[:, 0])
+            gaps.append(np.hypot(*(drawn[inside] - pose.positions[inside]).T).max())
+        return max(gaps)
+
+    deformer = rigged()
+    # Every joint of these drawings lies inside its figure, so every one is held.
+    assert np.isfinite(deformer.drawn_joints(deformer.character.mesh.V)).all()
+    anchored, thesis = worst_gap(deformer), worst_gap(rigged(joint_anchor=0.0))
+    half = deformer.character.mesh.spacing / 2
+    print(f"\nworst joint gap: {anchored:.2f} px anchored, {thesis:.2f} px without "
+          f"(half a spacing {half:.2f})")
+    assert anchored <= half < thesis
+
+
+@pytest.mark.parametrize("name", CHARACTERS)
 def test_stage_two_moves_only_the_joint_area(rigged):
     deformer = rigged()
     skeleton = deformer.character.skeleton
@@ -317,6 +341,9 @@ def test_a_warm_start_worse_than_stage_one_is_ignored(rigged):
         ({"edge_term": "springy"}, r"edge term must be one of rigid, length, got 'springy'"),
         ({"unfold": -1}, r"unfold must be a whole number >= 0, got -1"),
         ({"unfold": 1.5}, r"unfold must be a whole number >= 0"),
+        ({"joint_anchor": -1.0}, r"joint anchor weight must be a finite number >= 0, got -1.0"),
+        ({"joint_anchor": np.inf}, r"joint anchor weight must be a finite number >= 0"),
+        ({"joint_anchor": True}, r"joint anchor weight must be a finite number >= 0, got True"),
     ],
 )
 def test_bad_settings_are_refused(settings, message, rigs):

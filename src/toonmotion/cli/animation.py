@@ -39,6 +39,7 @@ def pose(
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",
     joint_width: options.JointWidth = 1.5,
+    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
     skinning: options.Skinning = "one-bone",
     accel: Annotated[str | None, typer.Option(
         "--accel", help="Cartoon filter: acceleration DX,DY at the root, pixels.")] = None,
@@ -64,7 +65,8 @@ def pose(
         character, load_pose(pose_file, character.skeleton), edits=edits,
         accel=None if accel is None else options.point(accel, "--accel"),
         fixed=options.names(fixed) if fixed is not None else (), root=root,
-        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning))
+        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning,
+                                         joint_anchor))
     picture = api.render_pose(character, frame, size=options.size(size),
                               background=options.colour(background), overlays=options.overlays(overlay))
     save_png(output, picture)
@@ -126,6 +128,7 @@ def animate(
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",
     joint_width: options.JointWidth = 1.5,
+    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
     skinning: options.Skinning = "one-bone",
 ) -> None:
     """Animate a rigged drawing through key-frames or a motion, to GIF, MP4 or PNGs.
@@ -137,7 +140,7 @@ def animate(
         if path is not None:
             options.suffix(path, ".json", "a motion file")
     exaggeration = options.filter_settings(exaggerate, sigma, shift)
-    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning)
+    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning, joint_anchor)
     character, animation, what = make_animation(project, keys_file, settings=settings, fps=fps, ease=ease,
                                                 exaggeration=exaggeration, solve_inbetweens=solve_inbetweens)
     count, out_size = write(

@@ -159,6 +159,7 @@ def retarget_command(
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",
     joint_width: options.JointWidth = 1.5,
+    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
     skinning: options.Skinning = "one-bone",
 ) -> None:
     """Replay a captured motion on a rigged drawing (thesis 4.5); the result is kept in the project."""
@@ -169,7 +170,8 @@ def retarget_command(
     motion = api.exaggerate(motion, options.filter_settings(exaggerate, sigma, shift))
     animation = api.animate_character(
         character, motion,
-        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning)
+        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning,
+                                         joint_anchor)
     )
     count, _ = write(
         output, character, animation, kind=kind, size=size, background=background, overlay=overlay

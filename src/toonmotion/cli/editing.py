@@ -114,6 +114,7 @@ def tune(
     preview: Annotated[Path | None, typer.Option(
         "-o", "--output", help="Also render the tuned pose to this PNG.")] = None,
     joint_width: options.JointWidth = 1.5,
+    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
 ) -> None:
     """Fine-tune a deformed pose: sketch curves and point drags, saved in the pose or key file.
 
@@ -137,7 +138,8 @@ def tune(
     elif undo_last:
         tuned, taken = without_last_edit(tuned)
     frame = api.pose_character(
-        character, tuned.pose, edits=tuned.edits, settings=DeformSettings(joint_width=joint_width)
+        character, tuned.pose, edits=tuned.edits,
+        settings=DeformSettings(joint_width=joint_width, joint_anchor=joint_anchor),
     )
     # Drawn before anything is saved: an edit whose frame cannot be drawn is refused.
     picture = api.render_pose(character, frame) if preview is not None else None

@@ -42,6 +42,7 @@ def export(
     stage_one_only: options.StageOne = False,
     weights: options.Weights = "1,1,1",
     joint_width: options.JointWidth = 1.5,
+    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
     skinning: options.Skinning = "one-bone",
 ) -> None:
     """Export an animation for other tools: a skinned glTF or Spine rig, a sprite sheet, or frames.
@@ -52,7 +53,7 @@ def export(
     hash layout (Phaser, PixiJS, Godot). APNG, WebP and WebM keep soft transparent edges.
     """
     kind = api.export_format(output, format)
-    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning)
+    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning, joint_anchor)
     exaggeration = options.filter_settings(exaggerate, sigma, shift)
     character, animation, what = make_animation(project, keys_file, settings=settings, fps=fps, ease=ease,
                                                 exaggeration=exaggeration, solve_inbetweens=solve_inbetweens)

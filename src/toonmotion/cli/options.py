@@ -19,6 +19,9 @@ from toonmotion.render.frame import check_overlays
 
 err = Console(stderr=True)
 
+# DeformSettings' own default, shown by --help.
+DEFAULT_JOINT_ANCHOR = DeformSettings.joint_anchor
+
 Project = Annotated[Path, typer.Argument(help="Project folder made by 'toonmotion rig'.")]
 Size = Annotated[str | None, typer.Option("--size", help="Output WxH pixels \\[default: the view at 1:1].")]
 Overlay = Annotated[str, typer.Option("--overlay", help="Comma list of mesh, skeleton, rest.")]
@@ -33,6 +36,9 @@ Skinning = Annotated[str, typer.Option(
 JointWidth = Annotated[
     float, typer.Option("--joint-width", help="Joint-area size, in limb half-thicknesses.", min=0)
 ]
+JointAnchor = Annotated[float, typer.Option(
+    "--joint-anchor", help="How firmly the drawing is held at each joint where the skeleton puts it "
+    "(0: the thesis, whose joint areas can settle away from the joints).", min=0)]
 Strength = Annotated[
     float, typer.Option("--strength", help="Filter strength A (0 leaves the motion as it is).")
 ]
@@ -67,13 +73,14 @@ Report = Callable[[str, int, int], None]
 
 
 def deform_settings(no_area: bool, stage_one_only: bool, weights: str, joint_width: float,
-                    skinning: str = "one-bone") -> DeformSettings:
+                    skinning: str = "one-bone", joint_anchor: float = DEFAULT_JOINT_ANCHOR) -> DeformSettings:
     return DeformSettings(
         preserve_area=not no_area,
         stage_two=not stage_one_only,
         weights=numbers(weights, 3, "--weights"),
         joint_width=joint_width,
         skinning=skinning,
+        joint_anchor=joint_anchor,
     )
 
 

@@ -11,7 +11,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver, SolveResult, joint_area, joint_radii
+from toonmotion.deform.joint_solve import (
+    EDGE_TERMS,
+    JointSolver,
+    SolveResult,
+    joint_anchors,
+    joint_area,
+    joint_radii,
+)
 from toonmotion.deform.needles import needle_model, stage_one, stretch_maps, triangle_shapes
 from toonmotion.deform.skinning import heat_weights, skinned_needles, skinned_stage_one
 from toonmotion.deform.unfold import rings_round, topology, untangle
@@ -59,12 +66,19 @@ class DeformSettings:
         Times stage two may widen its joint area where a triangle is left inverted or crushed
         below a fifth of its rest area (two rings of triangles round each, then solved again from
         the result; a frame deformed after another starts from the other's widened area); what is
-        still inverted after that is untangled locally (:mod:`toonmotion.deform.unfold`). 0 keeps
-        to one solve and untangles nothing.
+        still inverted after that is untangled locally (:mod:`toonmotion.deform.unfold`), and a
+        joint anchor gives way where a triangle stays inverted (``joint_anchor``). 0 keeps to one
+        solve, untangles nothing and holds every anchor.
     edge_term : str
         ``"rigid"``: each joint triangle's edges keep their lengths *and* their orientation
         (the edges of a triangle turn together), so triangles do not flip; ``"length"``: the
         thesis' edge-length term (eq. 3.7), which cannot tell a triangle from its mirror image.
+    joint_anchor : float
+        How firmly stage two holds the point of the drawing at each joint where the skeleton
+        puts it (``w4`` of :class:`~toonmotion.deform.joint_solve.Anchors`, against eq. 3.8's
+        weights summing to 1); 0 is the thesis, which let the drawn knees of the bundled
+        character's crouch settle 20-24 px from the skeleton's. Where holding a joint leaves a
+        triangle inverted, its anchor gives way, nearest the fold first (with ``unfold`` > 0).
 
     Construction raises :class:`SettingsError` for a value out of range.
     """
@@ -78,6 +92,7 @@ class DeformSettings:
     edge_term: str = "rigid"
     unfold: int = 3
     skinning: str = "one-bone"
+    joint_anchor: float = 10.0
 
     def __post_init__(self) -> None:
         for name in ("preserve_area", "stage_two"):
@@ -105,6 +120,11 @@ class DeformSettings:
             raise SettingsError(f"max_iterations must be a whole number >= 1, got {self.max_iterations!r}")
         if self.skinning not in SKINNINGS:
             raise SettingsError(f"skinning must be one of {', '.join(SKINNINGS)}, got {self.skinning!r}")
+        anchor = self.joint_anchor
+        if isinstance(anchor, bool) or not (isinstance(anchor, int | float) and np.isfinite(anchor)
+                                            and anchor >= 0):
+            raise SettingsError(f"the joint anchor weight must be a finite number >= 0, got {anchor!r}")
+        object.__setattr__(self, "joint_anchor", float(anchor))
         if isinstance(self.unfold, bool) or not (isinstance(self.unfold, int) and self.unfold >= 0):
             raise SettingsError(f"unfold must be a whole number >= 0, got {self.unfold!r}")
         if not (isinstance(self.tolerance, (int, float)) and np.isfinite(self.tolerance)
@@ -156,6 +176,8 @@ class Deformer:
         The blended needles with ``skinning="weights"``, else None.
     free : (n,) bool
         The joint-area vertices stage two moves.
+    anchors : Anchors
+        The skeleton's joints drawn inside the figure, which stage two holds at the joints.
     joint_width_px : (b,) float
         Each bone's joint width: how far round the joints at its ends stage two frees vertices
         (:func:`~toonmotion.deform.joint_solve.joint_radii`, the larger end), at least the mesh
@@ -176,8 +198,9 @@ class Deformer:
                                width=settings.joint_width, radius=radius)
         ends = radius[character.skeleton.bones]
         self.joint_width_px = np.maximum(ends.max(axis=1), mesh.spacing)
+        self.anchors = joint_anchors(mesh, character.skeleton.positions, settings.joint_anchor)
         self.solver = JointSolver(mesh, self.free, weights=settings.weights,
-                                  edge_term=settings.edge_term)
+                                  edge_term=settings.edge_term, anchors=self.anchors)
         self._rest_triangle_areas = triangle_areas(mesh.V, mesh.F)
         self._rest_area = float(self._rest_triangle_areas.sum())
         self._F = np.asarray(mesh.F)
@@ -185,6 +208,16 @@ class Deformer:
         self._topology: tuple | None = None  # for untangling, built when first needed
         cell = np.floor((mesh.V - mesh.V.min(axis=0)) / (_CELL * mesh.spacing)).astype(np.int64)
         self._cell = cell[:, 0] * (cell[:, 1].max() + 1) + cell[:, 1]
+
+    def drawn_joints(self, U: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Where the drawing deformed to ``U`` (``(n, 2)``) carries each of the skeleton's joints:
+        ``(k, 2)``, the point of the drawing at the joint in the rest pose, NaN for a joint drawn
+        outside the figure. Compare with the pose's joints to see how closely the drawing follows
+        its skeleton."""
+        out = np.full((len(self.character.skeleton.names), 2), np.nan)
+        a = self.anchors
+        out[a.points] = np.einsum("ij,ijk->ik", a.barycentric, np.asarray(U, dtype=float)[a.corners])
+        return out
 
     def stage_one(self, pose: Pose) -> NDArray[np.float64]:
         """The needle model alone for ``pose``: ``(n, 2)``."""
@@ -224,15 +257,38 @@ class Deformer:
         # places frame after frame, and one widened solve costs less than a plain one and another.
         free = previous.free if previous is not None and previous.free is not None and s.unfold \
             else self.free
-        iterations = 0
+        held = np.ones(len(self.anchors.points), dtype=bool)
+        iterations, start = 0, None
+        while True:
+            U, free, result, solver, converged, spent = self._solve(U1, maps, shape, area, free, initial,
+                                                                    held)
+            iterations += spent
+            if start is None:  # eq. 3.8 at the start; the anchors' term is 0 there
+                start = result.energy_start if solver is self.solver else self.solver.energy(U1, shape=shape)
+            folded = triangle_areas(U, self._F) <= 0
+            if not (s.unfold and folded.any() and self.solver.anchors is not None and held.any()):
+                break
+            # Holding a joint there folds the drawing: the anchor nearest the fold gives way.
+            held[self._nearest_anchor(folded, held)] = False
+        # Energies are eq. 3.8 (plus the anchors held) over the deformer's own joint area, whichever
+        # solve ran (the start: the plain solve's, warm or not, or stage one's when the first solve
+        # was a widened one).
+        plain = solver is self.solver and U is result.U
+        energy = result.energy if plain else self.solver.energy(U, shape=shape, stage_one=U1, held=held)
+        return Deformation(U=U, stage_one=U1, iterations=iterations, energy_start=start,
+                           energy=energy, converged=converged, free=free)
+
+    def _solve(self, U1, maps, shape, area, free, initial, held):
+        """Stage two from stage one ``U1`` over joint area ``free``, with the anchors ``held``:
+        widened where it folds, up to ``unfold`` times, then untangled. Returns the vertices, the
+        joint area, the last solve's result and solver, whether it converged, and the iterations."""
+        s, iterations = self.settings, 0
         for round_ in range(s.unfold + 1):
-            solver = self._solver_for(free)
+            solver = self._solver_for(free, held)
             result = solver.solve(U1, initial=initial, max_iterations=s.max_iterations, tolerance=s.tolerance,
                                   shape=shape if solver is self.solver else self._shape_for(solver, maps),
                                   area=area)
-            if round_ == 0:
-                start = result.energy_start if solver is self.solver else self.solver.energy(U1, shape=shape)
-            U, iterations, converged = result.U, iterations + result.iterations, result.converged
+            U, iterations = result.U, iterations + result.iterations
             areas = triangle_areas(U, self._F)
             wider = free | self._cells_round(areas <= _CRUSHED * self._rest_triangle_areas)
             if round_ == s.unfold or not (wider != free).any():
@@ -242,12 +298,15 @@ class Deformer:
             if self._topology is None:
                 self._topology = topology(self._F, len(U))
             U = untangle(U, self._F, free, self._topology)
-        # Energies are eq. 3.8 over the deformer's own joint area, whichever solve ran (the start:
-        # the plain solve's, warm or not, or stage one's when the first solve was a widened one).
-        plain = solver is self.solver and U is result.U
-        energy = result.energy if plain else self.solver.energy(U, shape=shape)
-        return Deformation(U=U, stage_one=U1, iterations=iterations, energy_start=start,
-                           energy=energy, converged=converged, free=free)
+        return U, free, result, solver, result.converged, iterations
+
+    def _nearest_anchor(self, folded, held):
+        """The held anchor whose joint lies nearest a ``folded`` triangle, at rest."""
+        a = self.anchors
+        centres = self.character.mesh.V[self._F[folded]].mean(axis=1)
+        joints = self.character.skeleton.positions[a.points]
+        gap = np.hypot(*(centres[:, None] - joints[None]).transpose(2, 0, 1)).min(axis=0)
+        return int(np.argmin(np.where(held, gap, np.inf)))
 
     def _cells_round(self, crushed):
         """Every vertex in a cell of :data:`_CELL` mesh spacings that holds a vertex of a
@@ -257,17 +316,18 @@ class Deformer:
         near = rings_round(self._F, crushed, len(self.free))
         return np.isin(self._cell, np.unique(self._cell[near]))
 
-    def _solver_for(self, free):
-        """A JointSolver for the joint area ``free``, widened or not; the last few widened ones
-        are kept."""
-        if not (free != self.free).any():
+    def _solver_for(self, free, held):
+        """A JointSolver for the joint area ``free``, widened or not, holding the anchors ``held``;
+        the last few others than the deformer's own are kept."""
+        if not (free != self.free).any() and held.all():
             return self.solver
-        key = np.packbits(free).tobytes()
+        key = np.packbits(free).tobytes() + np.packbits(held).tobytes()
         if key not in self._unfold_solvers:
             if len(self._unfold_solvers) >= _UNFOLD_SOLVERS:
                 self._unfold_solvers.pop(next(iter(self._unfold_solvers)))
             self._unfold_solvers[key] = JointSolver(self.character.mesh, free, weights=self.settings.weights,
-                                                    edge_term=self.settings.edge_term)
+                                                    edge_term=self.settings.edge_term,
+                                                    anchors=self.anchors.subset(held))
         return self._unfold_solvers[key]
 
     def _shape_for(self, solver, maps):

@@ -33,6 +33,11 @@ of that linear system depends on the rest mesh only, so its normal matrix is fac
 Each iteration fixes the edge directions at their best values for the current positions and
 then solves exactly for the positions, so the energy never goes up.
 
+The thesis' energy lets a wide joint area settle as a block, away from the joint the skeleton
+puts it round; a solve may therefore be given *anchors* (:class:`Anchors`): the skeleton's
+joints, each held near where stage one puts it (at the joint) by a fourth term ``E4``, linear
+like E1 and E2, so it only adds to the normal matrix and the right-hand side.
+
 Points are complex numbers ``x + iy`` here: the RSI Laplacian's rotation-and-scale factor is
 then one complex coefficient and the whole system is one ``m x m`` complex solve.
 """
@@ -52,6 +57,7 @@ from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.coordinates import (
     as_complex,
     as_points,
+    barycentric,
     mean_value_weights,
     rsi_laplacian_coefficients,
 )
@@ -107,6 +113,63 @@ class SolveResult:
         object.__setattr__(self, "U", U)
         object.__setattr__(self, "iterations", int(iterations))
         object.__setattr__(self, "converged", bool(self.converged))
+
+
+@dataclass(frozen=True, eq=False)
+class Anchors:
+    """Points of the rest mesh that stage two holds where stage one puts them: a term ``E4``,
+    ``weight`` times the squared distance of each point from there, beside eq. 3.8's.
+
+    The thesis' stage two frees the joint areas and lets them settle as their outline, inner
+    shape and edges ask (eq. 3.8); nothing keeps the joint itself where the skeleton puts it.
+    Where a joint area is wide and stiff (knees in wide trousers), it settles as a block, and
+    the drawn knee ended 20-24 px from the skeleton's knee on the bundled character's crouch.
+    Stage one puts every point at a joint at that joint (both bones' needles turn about it), so
+    anchoring the joints' own points there keeps the drawing on the skeleton the animator drew.
+
+    Attributes
+    ----------
+    points : (a,) int
+        Which of the points asked for (:func:`joint_anchors`) each anchor is.
+    corners : (a, 3) int
+        The rest triangle holding each point.
+    barycentric : (a, 3) float
+        Each point's weights on its triangle's corners.
+    weight : float
+        ``w4``, >= 0; 0 leaves the thesis' energy alone.
+
+    Construction copies the arrays (read-only) and raises :class:`SettingsError` for a weight
+    that is not a finite number >= 0.
+    """
+
+    points: NDArray[np.int64]
+    corners: NDArray[np.int64]
+    barycentric: NDArray[np.float64]
+    weight: float
+
+    def __post_init__(self) -> None:
+        corners = frozen_array(self.corners, dtype=np.int64, shape=(None, 3), name="anchor corners")
+        object.__setattr__(self, "points", frozen_array(self.points, dtype=np.int64, shape=(len(corners),),
+                                                        name="anchored points"))
+        object.__setattr__(self, "corners", corners)
+        object.__setattr__(self, "barycentric", frozen_array(self.barycentric, dtype=np.float64,
+                                                             shape=corners.shape, name="anchor weights"))
+        if not (np.isfinite(self.weight) and self.weight >= 0):
+            raise SettingsError(f"the joint anchor weight must be a finite number >= 0, got {self.weight}")
+        object.__setattr__(self, "weight", float(self.weight))
+
+    def subset(self, keep: NDArray[np.bool_]) -> Anchors:
+        """The anchors where ``keep`` (``(a,) bool``) is True."""
+        keep = np.asarray(keep, dtype=bool)
+        return Anchors(self.points[keep], self.corners[keep], self.barycentric[keep], self.weight)
+
+
+def joint_anchors(mesh: Mesh, points: NDArray[np.float64], weight: float) -> Anchors:
+    """:class:`Anchors` for the rest ``points`` (``(p, 2)``, the skeleton's joints) that lie in
+    ``mesh``; a joint drawn outside the figure is not anchored."""
+    triangle, bary = barycentric(mesh.V, mesh.F, points)
+    inside = np.flatnonzero(triangle >= 0)
+    return Anchors(inside, np.asarray(mesh.F)[triangle[inside]].reshape(-1, 3), bary[inside], weight)
 
 
 def joint_area(
@@ -178,6 +241,9 @@ class JointSolver:
         The form of E3 (see :class:`~toonmotion.deform.deformer.DeformSettings`); "rigid" by
         default. :class:`~toonmotion.deform.deformer.Deformer` passes its settings' weights and
         edge term, whose defaults are these.
+    anchors : Anchors, optional
+        Points held where stage one puts them (``E4``, added to eq. 3.8); none by default (the
+        thesis). :class:`~toonmotion.deform.deformer.Deformer` passes the skeleton's joints.
 
     Attributes
     ----------
@@ -188,7 +254,7 @@ class JointSolver:
     """
 
     def __init__(self, mesh: Mesh, free: NDArray[np.bool_], *, weights: Sequence[float] = (1.0, 1.0, 1.0),
-                 edge_term: str = "rigid") -> None:
+                 edge_term: str = "rigid", anchors: Anchors | None = None) -> None:
         if edge_term not in EDGE_TERMS:
             raise SettingsError(f"the edge term must be one of {', '.join(EDGE_TERMS)}, got {edge_term!r}")
         self.edge_term = edge_term
@@ -219,9 +285,17 @@ class JointSolver:
         w1, w2, w3 = self.weights
         self._linear = sp.vstack([np.sqrt(w1) * A1, np.sqrt(w2) * A2]).tocsr()
         self._A3 = A3
+        anchors = anchors if anchors is not None and anchors.weight > 0 else None
+        self.anchors = anchors
+        A4 = None if anchors is None else _anchor_rows(anchors, len(mesh.V))
+        self._A4, self._anchor_weight = A4, 0.0 if anchors is None else anchors.weight
+        self._anchor_target = np.zeros(0, complex)
         if len(self.free) == 0:
             return
-        Af = sp.vstack([self._linear, np.sqrt(w3) * A3]).tocsc()
+        rows = [self._linear, np.sqrt(w3) * A3]
+        if A4 is not None:
+            rows.append(np.sqrt(self._anchor_weight) * A4)
+        Af = sp.vstack(rows).tocsc()
         Ff, Fx = Af[:, self.free], Af[:, self.fixed]
         normal = (Ff.conj().T @ Ff).tocsc()
         self._epsilon = _REGULARISE * max(float(np.abs(normal.diagonal()).mean()), 1e-300)
@@ -235,6 +309,8 @@ class JointSolver:
                             "(rig the drawing again)") from None
         self._from_fixed = (-(Ff.conj().T @ Fx)).tocsr()
         self._from_edges = (w3 * A3[:, self.free].conj().T).tocsr()
+        if A4 is not None:
+            self._from_anchors = (self._anchor_weight * A4[:, self.free].conj().T).tocsr()
 
     @property
     def triangles(self) -> NDArray[np.int64]:
@@ -242,10 +318,25 @@ class JointSolver:
         edges (``"length"``): what a ``shape`` given to :meth:`solve` has one entry for."""
         return self._corners if self._corners is not None else self.edges
 
-    def energy(self, U: NDArray[np.float64], *, shape: NDArray[np.complex128] | None = None) -> float:
-        """Eq. 3.8 at vertices ``U`` (``(n, 2)``), with ``shape`` as for :meth:`solve`."""
+    def energy(self, U: NDArray[np.float64], *, shape: NDArray[np.complex128] | None = None,
+               stage_one: NDArray[np.float64] | None = None,
+               held: NDArray[np.bool_] | None = None) -> float:
+        """Eq. 3.8 at vertices ``U`` (``(n, 2)``), with ``shape`` as for :meth:`solve`; with
+        anchors, plus their term (those ``held``, default all), measured from where ``stage_one``
+        (default ``U``) puts them."""
         self._set_shape(shape)
-        return self._energy(as_complex(U))
+        self._set_anchor_target(U if stage_one is None else stage_one)
+        z = as_complex(U)
+        energy = self._energy(z)
+        if self._A4 is not None and held is not None:
+            off = (self._A4 @ z - self._anchor_target)[~np.asarray(held, dtype=bool)]
+            energy -= self._anchor_weight * float(np.vdot(off, off).real)
+        return energy
+
+    def _set_anchor_target(self, U):
+        """Where the anchored points are held: where stage one (``U``) puts them."""
+        if self._A4 is not None:
+            self._anchor_target = self._A4 @ as_complex(U)
 
     def _set_shape(self, shape):
         """Rest edges (and lengths) mapped by ``shape``: ``(k, 2)`` complex ``(a, b)`` per entry of
@@ -294,6 +385,7 @@ class JointSolver:
             summed) to keep, a constraint (module docstring); None: no constraint.
         """
         self._set_shape(shape)
+        self._set_anchor_target(U)
         z = as_complex(U).copy()
         start = self._energy(z)
         if initial is not None and len(self.free):
@@ -306,6 +398,8 @@ class JointSolver:
             return SolveResult(U=np.array(U, dtype=float), iterations=0, energy_start=start,
                                energy=start, converged=True)
         base = self._from_fixed @ z[self.fixed] + self._epsilon * z[self.free]
+        if self._A4 is not None:
+            base = base + self._from_anchors @ self._anchor_target
         targets, energy = self._local(z)
         if area is not None:
             # The moving triangles' share of the target: the others keep their area in ``U``.
@@ -350,6 +444,9 @@ class JointSolver:
         """
         linear = self._linear @ z
         energy = np.vdot(linear, linear).real
+        if self._A4 is not None:
+            off = self._A4 @ z - self._anchor_target
+            energy += self._anchor_weight * np.vdot(off, off).real
         if self._corners is None:
             e = z[self.edges[:, 0]] - z[self.edges[:, 1]]
             length = np.abs(e)
@@ -368,6 +465,14 @@ class JointSolver:
         targets = rotation[:, None] * self._rest
         r = e - targets
         return targets.ravel(), float(energy + self.weights[2] * np.vdot(r, r).real)
+
+
+def _anchor_rows(anchors, n):
+    """E4 rows: one per anchored point, its barycentric combination of its triangle's corners."""
+    a = len(anchors.corners)
+    rows = np.repeat(np.arange(a), 3)
+    return sp.csr_matrix((anchors.barycentric.ravel().astype(complex), (rows, anchors.corners.ravel())),
+                         shape=(a, n))
 
 
 def _area_form(F, n):

@@ -98,3 +98,45 @@ def rsi_laplacian_coefficients(prev, point, after):
     c = np.zeros(len(chord), dtype=complex)
     c[ok] = delta[ok] / chord[ok]
     return c
+
+
+def barycentric(V, F, points, *, tolerance=1e-9):
+    """The triangle of ``F`` holding each of ``points`` and the point's barycentric weights in it.
+
+    Parameters
+    ----------
+    V : (n, 2) float
+    F : (m, 3) int
+    points : (p, 2) float
+    tolerance : float
+        How far below 0 a weight may be and the point still count as inside (on an edge).
+
+    Returns
+    -------
+    triangle : (p,) int
+        Index into ``F``; -1 for a point in no triangle.
+    weights : (p, 3) float
+        ``points[i] = weights[i] @ V[F[triangle[i]]]``; zeros where ``triangle`` is -1.
+
+    Examples
+    --------
+    >>> V = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 4.0], [4.0, 4.0]])
+    >>> F = np.array([[0, 1, 2], [1, 3, 2]])
+    >>> t, w = barycentric(V, F, np.array([[1.0, 1.0], [3.0, 3.0], [9.0, 9.0]]))
+    >>> t.tolist(), w[0].tolist()
+    ([0, 1, -1], [0.5, 0.25, 0.25])
+    """
+    V, F = np.asarray(V, dtype=float), np.asarray(F)
+    P = np.asarray(points, dtype=float).reshape(-1, 2)
+    a = V[F[:, 0]]
+    e1, e2 = V[F[:, 1]] - a, V[F[:, 2]] - a
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    det = np.where(det == 0, np.inf, det)  # a degenerate triangle holds nothing
+    d = P[:, None, :] - a[None]  # (p, m, 2)
+    w1 = (d[..., 0] * e2[:, 1] - d[..., 1] * e2[:, 0]) / det
+    w2 = (e1[:, 0] * d[..., 1] - e1[:, 1] * d[..., 0]) / det
+    w = np.stack([1.0 - w1 - w2, w1, w2], axis=-1)  # (p, m, 3)
+    best = np.argmax(w.min(axis=-1), axis=1)
+    weights = w[np.arange(len(P)), best]
+    inside = weights.min(axis=1) >= -tolerance
+    return np.where(inside, best, -1), np.where(inside[:, None], weights, 0.0)
