@@ -81,6 +81,11 @@ class TrackingError(ToonmotionError):
     differing sizes, an empty sequence."""
 
 
+class Cancelled(ToonmotionError):
+    """Long work stopped because the user asked (the editor's Cancel): what it would have written
+    was not written, and what was saved before it is as it was."""
+
+
 class VideoReadError(ToonmotionError):
     """An image sequence cannot be read: a video that cannot be decoded, an empty folder."""
 

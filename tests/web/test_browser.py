@@ -400,6 +400,44 @@ def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
     assert page.locator("#error").is_hidden()
 
 
+def test_an_export_can_be_cancelled_and_the_file_before_it_is_kept(page, editor, monkeypatch):
+    folder = editor[1]
+    stopped = []
+    for call in ("write_animation", "export_animation"):  # with overlays drawn, and without
+        monkeypatch.setattr(api, call, _slow_work(stopped))
+    page.click("nav button[data-panel=export]")
+    page.fill("#export-name", "kept")
+    page.select_option("#export-format", "gif")
+    before = b"GIF89a an export made before"
+    (folder / "exports").mkdir(exist_ok=True)
+    (folder / "exports" / "kept.gif").write_bytes(before)
+    page.click("#export-go")
+    page.wait_for_function("document.getElementById('export-progress').value > 0")
+    page.click("#export-cancel")
+    page.wait_for_function(
+        "document.getElementById('status').textContent === 'export cancelled: nothing was written'")
+    assert stopped == ["Cancelled"]
+    assert (folder / "exports" / "kept.gif").read_bytes() == before
+    assert page.locator("#export-cancel").is_hidden() and page.locator("#export-progress").is_hidden()
+    assert page.locator("#error").is_hidden() and not page.locator("#export-go").is_disabled()
+
+
+def _slow_work(stopped):
+    """A stand-in for a long library call that only reports progress, every 10 ms, until it is
+    stopped (it appends what stopped it to ``stopped``)."""
+    def work(*args, progress, **kwargs):
+        try:
+            for index in range(3000):
+                progress("working", index, 3000)
+                time.sleep(0.01)
+        except Exception as error:
+            stopped.append(type(error).__name__)
+            raise
+        raise AssertionError("it was never stopped")
+
+    return work
+
+
 def test_export_a_spine_rig_and_a_sprite_sheet_with_a_link_per_file(page, editor):
     folder = editor[1]
     page.click("nav button[data-panel=export]")
@@ -535,6 +573,17 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     head = corrected.skeleton.index("head")
     np.testing.assert_allclose(corrected.positions[:2], motion.positions[:2])  # kept before frame 2
     assert corrected.positions[2, head, 0] > motion.positions[2, head, 0] + 8
+    # A long tracking can be stopped; the one before it stays, in the page and in the project.
+    stopped, saved = [], (folder / "motions" / "captured.json").read_bytes()
+    monkeypatch.setattr(api, "track_footage", _slow_work(stopped))
+    page.click("#capture-track")
+    page.wait_for_function("document.getElementById('capture-progress').value > 0")
+    page.click("#capture-cancel")
+    page.wait_for_function("document.getElementById('status').textContent"
+                           " === 'tracking cancelled: the earlier tracking is kept'")
+    assert stopped == ["Cancelled"] and (folder / "motions" / "captured.json").read_bytes() == saved
+    assert page.locator("#capture-cancel").is_hidden() and page.locator("#error").is_hidden()
+    monkeypatch.setattr(api, "track_footage", tracking)
     page.click("#capture-play")
     page.wait_for_function("document.getElementById('status').textContent.startsWith('the character plays')")
     page.wait_for_timeout(500)
@@ -559,6 +608,8 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     framed[:3] = framed[-3:] = framed[:, :3] = framed[:, -3:] = 30
     Image.fromarray(framed).save(tmp_path / "framed.png")
     page.set_input_files("#capture-file", str(tmp_path / "framed.png"))
+    # (The status said so for the frames before it too: wait for this picture's own.)
+    page.wait_for_function("document.getElementById('capture-info').textContent.startsWith('1 frames')")
     page.wait_for_function("document.getElementById('status').textContent.startsWith('place the joints')")
     character = np.argwhere(picture.min(axis=2) < 200)
     (top, left), (bottom, right) = character.min(axis=0), character.max(axis=0)

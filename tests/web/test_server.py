@@ -3,6 +3,7 @@ and one-line errors."""
 
 import io
 import json
+import time
 
 import numpy as np
 import pytest
@@ -746,6 +747,73 @@ def test_bad_frames_are_refused_in_one_line(editable, url, said):
     folder, client = editable
     reply = client.put(url, content=b"x", headers={"X-Toonmotion-Token": TOKEN})
     assert reply.status_code == 400 and said in reply.json()["error"], reply.text
+
+
+def _slow_tracking(stopped):
+    """A stand-in for ``api.track_footage`` that only reports progress, every 10 ms, until it is
+    stopped (it appends what stopped it to ``stopped``)."""
+    def tracking(*args, progress, **kwargs):
+        try:
+            for index in range(2000):
+                progress("tracking", index, 2000)
+                time.sleep(0.01)
+        except Exception as error:
+            stopped.append(type(error).__name__)
+            raise
+        raise AssertionError("the tracking was never stopped")
+
+    return tracking
+
+
+def test_a_tracking_can_be_cancelled_and_the_earlier_one_is_kept(editable, monkeypatch):
+    folder, client = editable
+    assert client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif()).status_code == 200
+    joints = [{**j, "size": [16, 16]} for j in _joints(api.load_project(folder))]
+    saved = folder / "motions" / "captured.json"
+    stopped: list[str] = []
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        first = _send(socket, {"type": "track", "joints": joints})
+        while first["type"] == "progress":
+            first = socket.receive_json()
+        assert first["type"] == "tracked", first
+        before = saved.read_bytes()
+        monkeypatch.setattr(api, "track_footage", _slow_tracking(stopped))
+        socket.send_text(json.dumps({"id": 7, "type": "track", "joints": joints}))
+        assert socket.receive_json() == {"id": 7, "type": "progress", "index": 0, "count": 2000}
+        # A message sent while it runs is answered after it; a cancel for another id is not its own.
+        socket.send_text(json.dumps({"id": 8, "type": "retarget"}))
+        socket.send_text(json.dumps({"id": 6, "type": "cancel"}))
+        socket.send_text(json.dumps({"id": 7, "type": "cancel"}))
+        replies = [socket.receive_json()]
+        while replies[-1]["type"] == "progress":
+            replies.append(socket.receive_json())
+        after = socket.receive_json()
+        late = _send(socket, {"id": 9, "type": "retarget"})
+        socket.send_text(json.dumps({"id": 7, "type": "cancel"}))  # after its reply: let be
+        last = _send(socket, {"id": 10, "type": "retarget"})
+    cancelled = replies[-1]
+    assert cancelled == {"id": 7, "type": "error", "cancelled": True,
+                         "message": "cancelled: did not track the footage; nothing saved before was changed"}
+    assert stopped == ["Cancelled"]
+    assert saved.read_bytes() == before  # the earlier tracking is as it was
+    assert (after["id"], after["type"]) == (8, "retargeted")  # the earlier tracking's
+    assert (late["id"], late["type"], last["id"], last["type"]) == (9, "retargeted", 10, "retargeted")
+
+
+def test_leaving_the_page_stops_a_slow_request(editable, monkeypatch):
+    folder, client = editable
+    assert client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif()).status_code == 200
+    joints = [{**j, "size": [16, 16]} for j in _joints(api.load_project(folder))]
+    stopped: list[str] = []
+    monkeypatch.setattr(api, "track_footage", _slow_tracking(stopped))
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        socket.send_text(json.dumps({"id": 3, "type": "track", "joints": joints}))
+        assert socket.receive_json()["type"] == "progress"
+    deadline = time.monotonic() + 10
+    while not stopped and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert stopped == ["Cancelled"]
+    assert not (folder / "motions" / "captured.json").exists()
 
 
 def test_tracking_and_retargeting_need_their_inputs(client):

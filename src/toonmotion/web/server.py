@@ -15,11 +15,13 @@ What the WebSocket carries, and the open project's state, are :mod:`toonmotion.w
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
 import hmac
 import json
 import logging
 import secrets
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -31,7 +33,7 @@ from fastapi.responses import FileResponse, JSONResponse, Response
 from starlette.exceptions import HTTPException
 
 from toonmotion import api, limits
-from toonmotion.errors import ToonmotionError
+from toonmotion.errors import Cancelled, ToonmotionError
 from toonmotion.io.atomic import atomic_path
 from toonmotion.io.frames import load_frames
 from toonmotion.io.image import load_image, png_bytes
@@ -259,26 +261,60 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
             return
         await socket.accept()
         loop = asyncio.get_running_loop()
+        # Messages are read as they come, into a queue (None: the page went away), so that a
+        # cancel can reach a slow request while it runs; other messages wait for it, in order.
+        inbox: asyncio.Queue[str | None] = asyncio.Queue()
+        waiting: collections.deque[str | None] = collections.deque()
+
+        async def read() -> None:
+            try:
+                while True:
+                    await inbox.put(await socket.receive_text())
+            except WebSocketDisconnect:
+                await inbox.put(None)
+
+        reader = asyncio.create_task(read())
+        stop = threading.Event()  # the running slow request's: set, it stops at its next step
         try:
             while True:
-                text = await socket.receive_text()
+                text = waiting.popleft() if waiting else await inbox.get()
+                if text is None:
+                    return
                 slow = _slow(text)
                 if slow is not None:  # long: off the event loop, with progress messages
                     ident = json.loads(text).get("id")
-
-                    def progress(index: int, count: int, ident: Any = ident) -> None:
-                        said = {"id": ident, "type": "progress", "index": index, "count": count}
-                        asyncio.run_coroutine_threadsafe(socket.send_text(json.dumps(said)), loop)
-
+                    stop = threading.Event()
+                    progress = _progress(socket, loop, ident, stop)
                     if slow is export:
                         with contextlib.suppress(ToonmotionError, ValueError, AttributeError):
                             editing.animated(exaggeration_of(json.loads(text)))  # solved on the loop
-                    reply = await asyncio.to_thread(slow, editing, text, progress)
+                    job = asyncio.ensure_future(asyncio.to_thread(slow, editing, text, progress))
+                    while not job.done():
+                        heard = asyncio.ensure_future(inbox.get())
+                        await asyncio.wait({job, heard}, return_when=asyncio.FIRST_COMPLETED)
+                        if not heard.done():
+                            heard.cancel()
+                            continue
+                        other = heard.result()
+                        if other is not None and _cancels(other, ident):
+                            stop.set()
+                            continue
+                        waiting.append(other)  # answered after it, in order
+                        if other is None:  # the page went away: nobody waits for the reply
+                            stop.set()
+                    reply = job.result()
+                    if waiting and waiting[-1] is None:
+                        return
+                elif _cancels(text, None):
+                    continue  # a cancel that came after its request was answered
                 else:
                     reply = answer(editing, text)
                 await socket.send_text(json.dumps(reply))
         except WebSocketDisconnect:
             return
+        finally:  # the page went away, or the server stops: so does what runs for it
+            stop.set()
+            reader.cancel()
 
     return app
 
@@ -295,6 +331,31 @@ async def _receive(request: Request, file: Path, what: str, *, already: int = 0)
                 raise HTTPException(413, f"{what} is over the limit upload_bytes={limit:,}; make it "
                                          "smaller (or raise the limit with --limit)")
             out.write(chunk)
+
+
+def _progress(socket: WebSocket, loop: asyncio.AbstractEventLoop, ident: Any,
+              stop: threading.Event) -> Callable[[int, int], None]:
+    """A slow request's ``progress(index, count)``, called off the loop: a progress message to
+    the page with the request's id, or :class:`Cancelled` once ``stop`` is set."""
+    def progress(index: int, count: int) -> None:
+        if stop.is_set():
+            raise Cancelled("cancelled")
+        said = {"id": ident, "type": "progress", "index": index, "count": count}
+        asyncio.run_coroutine_threadsafe(socket.send_text(json.dumps(said)), loop)
+
+    return progress
+
+
+def _cancels(text: str, ident: Any) -> bool:
+    """Whether ``text`` is ``{"type": "cancel", "id": ident}`` (any id when ``ident`` is None)."""
+    if len(text) > 200 or '"cancel"' not in text:
+        return False
+    try:
+        message = json.loads(text)
+    except (ValueError, RecursionError):
+        return False
+    return isinstance(message, dict) and message.get("type") == "cancel" and (
+        ident is None or message.get("id") == ident)
 
 
 def _slow(text: str) -> Callable[..., dict[str, Any]] | None:

@@ -72,6 +72,11 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   the request's id; the reply is ``{"type": "exported", "file": "exports/walk.gif", "files":
   [...every file written], "frames": n, "size": [w, h] | null}``. The name is letters, digits,
   ``-`` and ``_``: a request never names a path.
+* ``{"type": "cancel", "id": n}``: stop the slow request ``n`` (an export, a tracking, a drawing
+  opened, suggestions) at its next progress step. Its reply is then ``{"id": n, "type":
+  "error", "cancelled": true, "message": "cancelled: ..."}`` and nothing it would have saved is
+  saved; a cancel has no reply of its own. Messages sent while a slow request runs are answered
+  after it, in order.
 """
 
 from __future__ import annotations
@@ -96,6 +101,7 @@ from toonmotion.deform.deformer import Deformer
 from toonmotion.deform.depth import draw_order
 from toonmotion.deform.tuning import TuningEdit
 from toonmotion.errors import (
+    Cancelled,
     EditError,
     ExportError,
     FilterError,
@@ -330,6 +336,9 @@ def _off_loop(verb: str) -> Callable[[SlowHandler], SlowReply]:
                 message = json.loads(text)
                 ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
                 return {"id": ident, **handler(editing, message, progress)}
+            except Cancelled:
+                return {"id": ident, "type": "error", "cancelled": True,
+                        "message": f"cancelled: did not {verb}; nothing saved before was changed"}
             except ToonmotionError as error:
                 return {"id": ident, "type": "error", "message": one_line(str(error))}
             except OSError as error:

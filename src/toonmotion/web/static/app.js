@@ -42,7 +42,8 @@ function loadImage(src) {
 
 // The live connection: request(message, onProgress) resolves with the server's reply to it.
 // Replies carry the id of the message they answer; an error reply rejects; progress messages
-// on the way go to onProgress.
+// on the way go to onProgress. A slow request (tracking, an export) can be stopped with
+// cancel(reply.id): it then rejects with an error whose .cancelled is true.
 class Live {
   constructor(url) {
     this.next = 1;
@@ -62,7 +63,7 @@ class Live {
         return;
       }
       this.waiting.delete(reply.id);
-      if (reply.type === "error") pending.reject(new Error(reply.message));
+      if (reply.type === "error") pending.reject(Object.assign(new Error(reply.message), { cancelled: !!reply.cancelled }));
       else pending.resolve(reply);
     };
     this.socket.onclose = (event) => {
@@ -72,13 +73,18 @@ class Live {
     };
   }
 
-  async request(message, progress = null) {
-    await this.opened;
+  request(message, progress = null) {
     const id = this.next++;
-    return new Promise((resolve, reject) => {
+    const reply = this.opened.then(() => new Promise((resolve, reject) => {
       this.waiting.set(id, { resolve, reject, progress });
       this.socket.send(JSON.stringify({ ...message, id }));
-    });
+    }));
+    reply.id = id;
+    return reply;
+  }
+
+  cancel(id) {
+    if (this.waiting.has(id)) this.socket.send(JSON.stringify({ type: "cancel", id }));
   }
 }
 

@@ -30,7 +30,8 @@ export function mount(ctx) {
       <label title="The flat colour the footage is drawn on, when its border does not show it: the joints are suggested on, and held to, the figure that differs from it"><input id="capture-paper" type="checkbox"> Drawn on</label> <input id="capture-paper-colour" type="color" value="#ffffff" aria-label="the colour the footage is drawn on"></p>
     <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
       <button id="capture-play" disabled>Retarget and play</button></p>
-    <p><progress id="capture-progress" max="1" value="0" hidden></progress></p>
+    <p><progress id="capture-progress" max="1" value="0" hidden></progress>
+      <button id="capture-cancel" hidden>Cancel</button></p>
     <p>Drag the joints onto the figure in the first frame (they snap to the orange suggestions),
     drag a rectangle's corner to size it, then track.</p>`;
 
@@ -171,11 +172,14 @@ export function mount(ctx) {
   document.getElementById("capture-scrub").oninput = (event) => show(Number(event.target.value));
 
   async function trackFrom(message) {
-    const bar = document.getElementById("capture-progress");
+    const bar = document.getElementById("capture-progress"), cancel = document.getElementById("capture-cancel");
     bar.hidden = false;
     status("tracking…");
+    const job = live.request(message, ({ index, count }) => { bar.max = count; bar.value = index; });
+    cancel.hidden = false;
+    cancel.onclick = () => { live.cancel(job.id); status("cancelling…"); };
     try {
-      tracked = await live.request(message, ({ index, count }) => { bar.max = count; bar.value = index; });
+      tracked = await job;
       // The motion lists the joints parents first: follow its order.
       joints = tracked.names.map((n) => joints.find((j) => j.name === n));
       corrected = {};
@@ -184,10 +188,16 @@ export function mount(ctx) {
       showError("");
       show(frame);
     } catch (error) {
-      showError(error.message);
-      status("");
+      if (error.cancelled) {
+        showError("");
+        status(tracked ? "tracking cancelled: the earlier tracking is kept" : "tracking cancelled");
+      } else {
+        showError(error.message);
+        status("");
+      }
     } finally {
       bar.hidden = true;
+      cancel.hidden = true;
     }
   }
   const paper = () => {
@@ -200,9 +210,10 @@ export function mount(ctx) {
   // The orange suggestions follow the colour the footage is drawn on (once it is picked).
   async function suggestAgain() {
     if (!footage) return;
-    const background = paper();
+    const background = paper(), asked = footage;
     try {
       const reply = await live.request({ type: "suggest", background });
+      if (footage !== asked) return; // other footage was sent meanwhile: it came with its own
       footage.joints = reply.joints;
       const on = background ? document.getElementById("capture-paper-colour").value : "the border's colour";
       if (!tracked) status(`${reply.joints.length} joints suggested on the figure drawn on ${on}`);

@@ -39,7 +39,8 @@ export function mount(ctx) {
       <label><input type="checkbox" name="export-overlay" value="mesh"> mesh</label>
       <label><input type="checkbox" name="export-overlay" value="rest"> rest bones</label></p>
     <p><button id="export-go">Export</button></p>
-    <p><progress id="export-progress" max="1" value="0" hidden></progress></p>
+    <p><progress id="export-progress" max="1" value="0" hidden></progress>
+      <button id="export-cancel" hidden>Cancel</button></p>
     <p id="export-result"></p>
     <img id="export-preview" alt="the exported animation" hidden style="max-width: 100%">`;
   const formatChoice = document.getElementById("export-format");
@@ -56,6 +57,7 @@ export function mount(ctx) {
   colourChoice.onchange = () => { document.getElementById("export-colour").hidden = colourChoice.value !== "custom"; };
   const button = document.getElementById("export-go");
   const bar = document.getElementById("export-progress");
+  const cancel = document.getElementById("export-cancel");
   const result = document.getElementById("export-result");
 
   button.onclick = async () => {
@@ -77,11 +79,14 @@ export function mount(ctx) {
     bar.value = 0;
     result.textContent = "";
     status("exporting…");
+    const job = live.request(message, ({ index, count }) => {
+      bar.max = count;
+      bar.value = index;
+    });
+    cancel.hidden = false;
+    cancel.onclick = () => { live.cancel(job.id); status("cancelling…"); };
     try {
-      const reply = await live.request(message, ({ index, count }) => {
-        bar.max = count;
-        bar.value = index;
-      });
+      const reply = await job;
       const size = reply.size ? `, ${reply.size[0]}×${reply.size[1]}` : "";
       result.textContent = `${reply.frames} frames${size} → ${reply.file} `;
       const preview = document.getElementById("export-preview");
@@ -105,9 +110,10 @@ export function mount(ctx) {
       status("exported");
       showError("");
     } catch (error) {
-      showError(error.message);
-      status("");
+      showError(error.cancelled ? "" : error.message);
+      status(error.cancelled ? "export cancelled: nothing was written" : "");
     } finally {
+      cancel.hidden = true;
       button.disabled = false;
       bar.hidden = true;
     }
