@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from tests.web.slow_work import slow_work
 from toonmotion import api
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose
@@ -404,7 +405,7 @@ def test_an_export_can_be_cancelled_and_the_file_before_it_is_kept(page, editor,
     folder = editor[1]
     stopped = []
     for call in ("write_animation", "export_animation"):  # with overlays drawn, and without
-        monkeypatch.setattr(api, call, _slow_work(stopped))
+        monkeypatch.setattr(api, call, slow_work(stopped))
     page.click("nav button[data-panel=export]")
     page.fill("#export-name", "kept")
     page.select_option("#export-format", "gif")
@@ -420,22 +421,6 @@ def test_an_export_can_be_cancelled_and_the_file_before_it_is_kept(page, editor,
     assert (folder / "exports" / "kept.gif").read_bytes() == before
     assert page.locator("#export-cancel").is_hidden() and page.locator("#export-progress").is_hidden()
     assert page.locator("#error").is_hidden() and not page.locator("#export-go").is_disabled()
-
-
-def _slow_work(stopped):
-    """A stand-in for a long library call that only reports progress, every 10 ms, until it is
-    stopped (it appends what stopped it to ``stopped``)."""
-    def work(*args, progress, **kwargs):
-        try:
-            for index in range(3000):
-                progress("working", index, 3000)
-                time.sleep(0.01)
-        except Exception as error:
-            stopped.append(type(error).__name__)
-            raise
-        raise AssertionError("it was never stopped")
-
-    return work
 
 
 def test_export_a_spine_rig_and_a_sprite_sheet_with_a_link_per_file(page, editor):
@@ -575,7 +560,7 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     assert corrected.positions[2, head, 0] > motion.positions[2, head, 0] + 8
     # A long tracking can be stopped; the one before it stays, in the page and in the project.
     stopped, saved = [], (folder / "motions" / "captured.json").read_bytes()
-    monkeypatch.setattr(api, "track_footage", _slow_work(stopped))
+    monkeypatch.setattr(api, "track_footage", slow_work(stopped))
     page.click("#capture-track")
     page.wait_for_function("document.getElementById('capture-progress').value > 0")
     page.click("#capture-cancel")

@@ -11,6 +11,7 @@ from fastapi.testclient import TestClient
 from PIL import Image
 from starlette.websockets import WebSocketDisconnect
 
+from tests.web.slow_work import slow_work
 from toonmotion import api
 from toonmotion.errors import ProjectError
 from toonmotion.rig.pipeline import rig_drawing
@@ -749,22 +750,6 @@ def test_bad_frames_are_refused_in_one_line(editable, url, said):
     assert reply.status_code == 400 and said in reply.json()["error"], reply.text
 
 
-def _slow_tracking(stopped):
-    """A stand-in for ``api.track_footage`` that only reports progress, every 10 ms, until it is
-    stopped (it appends what stopped it to ``stopped``)."""
-    def tracking(*args, progress, **kwargs):
-        try:
-            for index in range(2000):
-                progress("tracking", index, 2000)
-                time.sleep(0.01)
-        except Exception as error:
-            stopped.append(type(error).__name__)
-            raise
-        raise AssertionError("the tracking was never stopped")
-
-    return tracking
-
-
 def test_a_tracking_can_be_cancelled_and_the_earlier_one_is_kept(editable, monkeypatch):
     folder, client = editable
     assert client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif()).status_code == 200
@@ -777,9 +762,9 @@ def test_a_tracking_can_be_cancelled_and_the_earlier_one_is_kept(editable, monke
             first = socket.receive_json()
         assert first["type"] == "tracked", first
         before = saved.read_bytes()
-        monkeypatch.setattr(api, "track_footage", _slow_tracking(stopped))
+        monkeypatch.setattr(api, "track_footage", slow_work(stopped))
         socket.send_text(json.dumps({"id": 7, "type": "track", "joints": joints}))
-        assert socket.receive_json() == {"id": 7, "type": "progress", "index": 0, "count": 2000}
+        assert socket.receive_json() == {"id": 7, "type": "progress", "index": 0, "count": 3000}
         # A message sent while it runs is answered after it; a cancel for another id is not its own.
         socket.send_text(json.dumps({"id": 8, "type": "retarget"}))
         socket.send_text(json.dumps({"id": 6, "type": "cancel"}))
@@ -805,7 +790,7 @@ def test_leaving_the_page_stops_a_slow_request(editable, monkeypatch):
     assert client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif()).status_code == 200
     joints = [{**j, "size": [16, 16]} for j in _joints(api.load_project(folder))]
     stopped: list[str] = []
-    monkeypatch.setattr(api, "track_footage", _slow_tracking(stopped))
+    monkeypatch.setattr(api, "track_footage", slow_work(stopped))
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         socket.send_text(json.dumps({"id": 3, "type": "track", "joints": joints}))
         assert socket.receive_json()["type"] == "progress"
