@@ -24,6 +24,7 @@ from toonmotion.deform.joint_solve import joint_area
 from toonmotion.errors import PoseError, SettingsError
 from toonmotion.geometry.polygon import triangle_areas
 from toonmotion.rig.pose import Pose, descendants, rest_pose, rotate_about
+from toonmotion.testing.poses import extreme_poses
 
 CHARACTERS = ("sample", "char1", "char2", "char3", "char4")
 
@@ -271,6 +272,25 @@ def test_the_drawing_keeps_its_joints_where_the_skeleton_puts_them(rigged):
     print(f"\nworst joint gap: {anchored:.2f} px anchored, {thesis:.2f} px without "
           f"(half a spacing {half:.2f})")
     assert anchored <= half < thesis
+
+
+@pytest.mark.parametrize("name", ["char1"])
+def test_the_anchors_are_kept_where_the_drawing_folds_without_them_too(rigged, monkeypatch):
+    """An anchor gives way only for a fold it makes. With the thesis' edge term a shoulder bent
+    150 degrees folds triangles with the anchors and without them (one solve holding none tells):
+    every anchor is kept, and the drawn joints stay nearer the skeleton's than without them."""
+    deformer = rigged(edge_term="length")
+    skeleton, F = deformer.character.skeleton, deformer.character.mesh.F
+    pose = dict(extreme_poses(skeleton))["right_shoulder -150"]
+    loose = rigged(edge_term="length", joint_anchor=0.0).deform(pose)
+    assert (triangle_areas(loose.U, F) <= 0).any()  # it folds without the anchors
+    gave_way = []
+    monkeypatch.setattr(deformer, "_nearest_anchor", lambda *args: gave_way.append(args) or 0)
+    held = deformer.deform(pose)
+    assert (triangle_areas(held.U, F) <= 0).any() and gave_way == []
+    gaps = [np.hypot(*(deformer.drawn_joints(result.U) - pose.positions).T) for result in (held, loose)]
+    print(f"\nworst joint gap: {gaps[0].max():.2f} px held, {gaps[1].max():.2f} px without anchors")
+    assert gaps[0].mean() < gaps[1].mean() and gaps[0].max() < gaps[1].max()
 
 
 @pytest.mark.parametrize("name", CHARACTERS)

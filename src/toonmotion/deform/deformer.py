@@ -77,8 +77,9 @@ class DeformSettings:
         How firmly stage two holds the point of the drawing at each joint where the skeleton
         puts it (``w4`` of :class:`~toonmotion.deform.joint_solve.Anchors`, against eq. 3.8's
         weights summing to 1); 0 is the thesis, which let the drawn knees of the bundled
-        character's crouch settle 20-24 px from the skeleton's. Where holding a joint leaves a
-        triangle inverted, its anchor gives way, nearest the fold first (with ``unfold`` > 0).
+        character's crouch settle 20-24 px from the skeleton's. Where holding the joints leaves a
+        triangle inverted that a solve holding none does not, the anchors give way one at a time,
+        nearest the fold first (with ``unfold`` > 0).
 
     Construction raises :class:`SettingsError` for a value out of range.
     """
@@ -268,6 +269,11 @@ class Deformer:
             folded = triangle_areas(U, self._F) <= 0
             if not (s.unfold and folded.any() and self.solver.anchors is not None and held.any()):
                 break
+            if held.all():  # whether the anchors fold it: the solve holding none tells
+                loose = self._solve(U1, maps, shape, area, free, initial, ~held)
+                iterations += loose[-1]
+                if (triangle_areas(loose[0], self._F) <= 0).any():
+                    break  # it folds without them too: they are kept
             # Holding a joint there folds the drawing: the anchor nearest the fold gives way.
             held[self._nearest_anchor(folded, held)] = False
         # Energies are eq. 3.8 (plus the anchors held) over the deformer's own joint area, whichever
