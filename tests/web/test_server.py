@@ -801,6 +801,15 @@ def test_leaving_the_page_stops_a_slow_request(editable, monkeypatch):
     assert not (folder / "motions" / "captured.json").exists()
 
 
+def test_a_binary_frame_ends_the_live_session_with_a_close_that_says_why(client, caplog):
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        socket.send_bytes(b"\x00\x01")
+        with pytest.raises(WebSocketDisconnect) as closed:
+            socket.receive_json()
+    assert closed.value.code == 1003 and "text messages" in closed.value.reason
+    assert "the live connection broke: KeyError" in caplog.text
+
+
 def test_tracking_and_retargeting_need_their_inputs(client):
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         track = _send(socket, {"type": "track", "joints": []})

@@ -265,13 +265,18 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         # cancel can reach a slow request while it runs; other messages wait for it, in order.
         inbox: asyncio.Queue[str | None] = asyncio.Queue()
         waiting: collections.deque[str | None] = collections.deque()
+        broken: list[str] = []  # why the connection broke, when it did not just close
 
         async def read() -> None:
             try:
                 while True:
                     await inbox.put(await socket.receive_text())
             except WebSocketDisconnect:
-                await inbox.put(None)
+                pass
+            except Exception as error:  # a binary frame, a broken connection: the session ends
+                broken.append(f"{type(error).__name__}: {error}")
+            finally:
+                inbox.put_nowait(None)
 
         reader = asyncio.create_task(read())
         stop = threading.Event()  # the running slow request's: set, it stops at its next step
@@ -315,6 +320,10 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         finally:  # the page went away, or the server stops: so does what runs for it
             stop.set()
             reader.cancel()
+            if broken:
+                log.warning("the live connection broke: %s", broken[0])
+                with contextlib.suppress(Exception):
+                    await socket.close(code=1003, reason="the editor sends text messages only; reload")
 
     return app
 
