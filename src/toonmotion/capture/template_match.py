@@ -15,6 +15,7 @@ pixel ``(u, v)`` is the image at ``centre + rotation(angle) (u - (w-1)/2, v - (h
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -363,8 +364,7 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     # The turns are ranked at half resolution, and matched finely best first.
     half: NDArray[np.uint8] = np.asarray(cv2.pyrDown(image) if small is None else small, np.uint8)
     radius = max(joint.radius, 1)
-    coarse = [locate(half, templates, predicted, angle, joint, radius, bone, figure, turns=(extra,))[1]
-              for extra in joint.turns]
+    coarse = _coarse_turns(half, templates, predicted, angle, joint, radius, bone, figure, joint.turns)[1]
     for k in np.argsort(coarse)[::-1][:FINE_TURNS]:
         if found.confidence >= TURN_CONFIDENCE:
             break
@@ -394,38 +394,58 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
     angle : float
         The rectangle's angle there, radians.
     """
+    places, confidences, angles = _coarse_turns(small, templates, centre, angle, joint, radius, bone, figure,
+                                                turns)
+    best = int(np.argmax(confidences))
+    if not confidences[best] > 0.0:
+        return np.asarray(centre, dtype=float), 0.0, angle
+    return places[best], confidences[best], angles[best]
+
+
+def _coarse_turns(small, templates, centre, angle, joint, radius, bone, figure, turns):
+    """:func:`locate` at each of ``turns`` apart: per turn, the best place (full-resolution (x, y)),
+    its coarse confidence (0 where no cell could be taken) and the rectangle's angle, as lists.
+    The turns' windows are costed together (the ranking of a joint's turns runs for a third of
+    the matches on a flat cartoon)."""
     template = templates.coarse
     th, tw = template.shape[:2]
     R = max(1, int(math.ceil(radius / 2)))
     w_alpha = joint.w_alpha * joint.size[0] * joint.size[1] / (tw * th)
-    offsets = (2.0 * np.arange(-R, R + 1)) ** 2
-    geometric = (offsets[:, None] + offsets[None, :]) / radius**2
     plain_ssd = ssd_at(UPDATE_CONFIDENCE, (tw, th))
+    centre = np.asarray(centre, dtype=float)
     # Pixel centres: full-resolution x is half-resolution 2 x + 0.5.
-    middle = (np.asarray(centre, dtype=float) - 0.5) / 2
-    best, best_conf, best_angle = np.asarray(centre, dtype=float), 0.0, angle
-    for turn in turns:
-        a = angle + turn
-        window = sample(small, middle, a, (tw + 2 * R, th + 2 * R))
-        ssd = cv2.matchTemplate(window, template, cv2.TM_SQDIFF)
-        cost = w_alpha * ssd + geometric
-        if bone is not None:
-            cost += _bone_cost(centre, a, R, bone, step=2.0)
-        if figure is not None:
-            cost[~figure_cells(figure, np.asarray(centre, dtype=float), a, R, step=2.0)] = np.inf
-        plain = (ssd <= plain_ssd) & np.isfinite(cost)  # as in the fine search: plain cells first
-        if plain.any():
-            cost[~plain] = np.inf
-        i, j = np.unravel_index(int(np.argmin(cost)), cost.shape)
-        if not np.isfinite(cost[i, j]):
+    middle = (centre - 0.5) / 2
+    angles = [angle + turn for turn in turns]
+    size = (tw + 2 * R, th + 2 * R)
+    windows = [sample(small, middle, a, size) for a in angles]
+    ssd = np.stack([cv2.matchTemplate(window, template, cv2.TM_SQDIFF) for window in windows])
+    cost = w_alpha * ssd + _coarse_geometric(R, radius)
+    if bone is not None:
+        cost += _bone_cost(centre, angles, R, bone, step=2.0)
+    if figure is not None:
+        cost[~np.stack([figure_cells(figure, centre, a, R, step=2.0) for a in angles])] = np.inf
+    plain = (ssd <= plain_ssd) & np.isfinite(cost)  # as in the fine search: plain cells first
+    cost[plain.any(axis=(1, 2))[:, None, None] & ~plain] = np.inf
+    cells = np.argmin(cost.reshape(len(angles), -1), axis=1)
+    places, confidences = [], []
+    for a, turn_cost, turn_ssd, cell in zip(angles, cost, ssd, cells.tolist(), strict=True):
+        i, j = divmod(cell, 2 * R + 1)
+        if not np.isfinite(turn_cost[i, j]):
+            places.append(centre)
+            confidences.append(0.0)
             continue
-        conf = confidence(float(ssd[i, j]), (tw, th))
-        if conf > best_conf:
-            c, s = math.cos(a), math.sin(a)
-            dx, dy = 2.0 * (j - R), 2.0 * (i - R)
-            best, best_conf = np.asarray(centre, dtype=float) + [c * dx - s * dy, s * dx + c * dy], conf
-            best_angle = a
-    return best, best_conf, best_angle
+        c, s = math.cos(a), math.sin(a)
+        dx, dy = 2.0 * (j - R), 2.0 * (i - R)
+        places.append(centre + [c * dx - s * dy, s * dx + c * dy])
+        confidences.append(confidence(float(turn_ssd[i, j]), (tw, th)))
+    return places, confidences, angles
+
+
+@functools.lru_cache(maxsize=64)
+def _coarse_geometric(R, radius):
+    """The coarse search's geometric term: cells 2 px apart, ``w_beta = 1 / radius^2``."""
+    offsets = (2.0 * np.arange(-R, R + 1)) ** 2
+    return (offsets[:, None] + offsets[None, :]) / radius**2
 
 
 def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPlan, bone: BoneRule,
@@ -545,8 +565,12 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
 def _bone_cost(predicted, angle, R, bone, step=1.0):
     """The kinematic term (:class:`BoneRule`) of every cell of a window round ``predicted``
     turned by ``angle``, ``(2R+1, 2R+1)``, cells ``step`` pixels apart; inf beyond the bone's
-    longest reach."""
-    c, s = math.cos(angle), math.sin(angle)
+    longest reach. With a list of angles, one window per angle: ``(n, 2R+1, 2R+1)``."""
+    if isinstance(angle, list):
+        c = np.array([math.cos(a) for a in angle])[:, None, None]
+        s = np.array([math.sin(a) for a in angle])[:, None, None]
+    else:
+        c, s = math.cos(angle), math.sin(angle)
     d = step * np.arange(-R, R + 1, dtype=float)
     # Cell (i, j) lies at predicted + rotation(angle) (j - R, i - R) in the image.
     x = predicted[0] - bone.parent[0] + c * d[None, :] - s * d[:, None]

@@ -52,7 +52,7 @@ class FigureMasks:
         self._kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
 
     def near(self, t: int) -> NDArray[np.uint8]:
-        """``(h, w)`` uint8, 255 where frame ``t``'s figure is within :data:`FIGURE_SLACK` px, else 0."""
+        """``(h, w)`` uint8, non-zero where frame ``t``'s figure is within :data:`FIGURE_SLACK` px."""
         if self._cache is None or self._cache[0] != t:
             mask = np.asarray(self._masks[t])
             if mask.shape != self._shape:
@@ -60,7 +60,9 @@ class FigureMasks:
                     f"the figure mask of frame {t} has shape {mask.shape} but the frames are "
                     f"{self._shape[1]}x{self._shape[0]}; give (h, w) masks of the frames' size"
                 )
-            near = np.asarray(cv2.dilate(mask.astype(np.uint8) * 255, self._kernel), dtype=np.uint8)
+            # A bool mask is dilated as the 0s and 1s it holds, uncopied.
+            ones = mask.view(np.uint8) if mask.dtype == bool else (mask != 0).view(np.uint8)
+            near = np.asarray(cv2.dilate(ones, self._kernel), dtype=np.uint8)
             self._cache = (t, near)
         return self._cache[1]
 
