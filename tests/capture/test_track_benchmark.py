@@ -149,3 +149,16 @@ def test_tracking_both_ways_keeps_more_of_a_run():
     assert tracking_scores(found, run.truth)["mean_px"] <= one_way - 0.5
     step = np.hypot(*np.diff(found, axis=0).transpose(2, 0, 1))
     assert step.max() <= MAX_WIDEN * SEARCH_FRACTION * run.side + 1e-9
+
+
+def test_a_textured_hand_lost_on_twos_is_found_again_where_it_hangs_in_view():
+    """Waving on twos, the hand is lost as the arm swings down 25-35 px a drawing (frames 142-147)
+    and put where its elbow carries it, a guess 100 px off by the time the arm hangs still. It is
+    in plain view there, found by its search at 0.47 confidence: weak, but a textured hand is
+    taken wherever its search reaches. (Held to the guess, it stayed 116 px off to the end.)"""
+    clip = _require(SHARED_DATA / "mocap") / "fair_wave_hello.bvh"
+    twos = render_bvh_clip(clip, frames=170, twos=True)
+    found, _ = track_from_truth(twos)
+    errors = np.hypot(*(found - twos.truth).transpose(2, 0, 1))
+    worst = errors[150:].max(axis=0)
+    assert worst.max() < MEAN_BAR_PX, f"worst error per joint over the last 20 frames: {np.round(worst, 2)}"

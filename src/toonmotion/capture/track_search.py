@@ -44,6 +44,7 @@ from toonmotion.capture.template_match import (
     JointPlan,
     Match,
     Templates,
+    is_textured,
     locate,
     match,
     plan_joint,
@@ -78,7 +79,11 @@ REACH_SLACK = 1.2
 # larger side from where it was expected (predicted; carried, when hidden), times the pace (as
 # the windows widen after a held drawing): a weak match may refine where a joint is (its looks
 # partly covered, or changed as its limb bends), but not carry it off along a flat limb that
-# looks alike all the way.
+# looks alike all the way. A hidden joint whose template is textured (template_match.is_textured)
+# is the exception: it is found again by a weak match wherever its search reaches, since where it
+# is carried is only a guess, the longer it hides the worse, and a texture of its own is not found
+# on another limb. (Held to its guess, a hand lost on twos as its arm swung down stayed 116 px off
+# for the last 50 frames of the wave clip, in plain view, found there at 0.47 every drawing.)
 WEAK_CONFIDENCE = 0.5
 WEAK_REACH = 0.25
 # A joint found is ambiguous when the places joined to its match that match as well as it
@@ -178,6 +183,7 @@ class FrameSearch:
         self.figure = figure
         self.held_to_figure = np.ones(len(plans), bool) if on_figure is None else np.asarray(on_figure, bool)
         self._near: NDArray[np.uint8] | None = None
+        self._textured = [is_textured(t.anchor) for t in templates]
         self._half: NDArray[np.uint8] | None = None
         self._pace = 1.0
         # Per joint, this frame: the places alike to its match (template_match.Match), and the match
@@ -274,7 +280,8 @@ class FrameSearch:
     def _try(self, image, t, m, joint, centre, angle, needed, seen, agree, *, bounded=False, turn=True,
              expected=None):
         """Match joint ``m`` round ``centre``; if at least ``needed`` confident (and, when weak, near
-        where it is ``expected``: default ``centre``), write it into ``P[t]``, ``C[t]``, ``seen``
+        where it is ``expected``: default ``centre``; a hidden joint with a textured template, given
+        ``expected``, anywhere), write it into ``P[t]``, ``C[t]``, ``seen``
         and ``agree`` (its latest template may be re-cut there) and return True, else keep its best
         confidence so far (below VISIBLE_CONFIDENCE)."""
         bone = self._bone_rule(t, m, seen, bounded=bounded)
@@ -290,9 +297,12 @@ class FrameSearch:
                 if other.confidence > found.confidence:
                     found = other
         xy, confidence = found.xy, found.confidence
-        expected = centre if expected is None else expected
-        weak_and_far = (confidence < WEAK_CONFIDENCE
-                        and math.hypot(*(xy - expected)) > WEAK_REACH * self._pace * max(joint.size))
+        # A weak match is taken only near where the joint was expected, but for a hidden joint
+        # with a texture of its own, taken wherever its search reached (WEAK_REACH).
+        held_near = expected is None or not self._textured[m]
+        far = math.hypot(*(xy - (centre if expected is None else expected)))
+        weak_and_far = (confidence < WEAK_CONFIDENCE and held_near
+                        and far > WEAK_REACH * self._pace * max(joint.size))
         if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen)):
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
             return False
