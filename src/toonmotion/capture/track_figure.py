@@ -61,7 +61,7 @@ class FigureMasks:
                     f"{self._shape[1]}x{self._shape[0]}; give (h, w) masks of the frames' size"
                 )
             # A bool mask is dilated as the 0s and 1s it holds, uncopied.
-            ones = mask.view(np.uint8) if mask.dtype == bool else (mask != 0).view(np.uint8)
+            ones = np.ascontiguousarray(mask if mask.dtype == bool else mask != 0).view(np.uint8)
             near = np.asarray(cv2.dilate(ones, self._kernel), dtype=np.uint8)
             self._cache = (t, near)
         return self._cache[1]
