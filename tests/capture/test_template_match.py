@@ -15,6 +15,7 @@ from toonmotion.capture.template_match import (
     plan_joint,
     search_round,
 )
+from toonmotion.capture.track_search import REACQUIRE_CONFIDENCE
 
 SIDE = 21
 
@@ -118,6 +119,28 @@ def test_a_hidden_joint_is_found_round_its_parent_turned_with_its_bone():
     # Only where the bone reaches: a span of 60 degrees from where it was does not get there.
     assert all(np.hypot(*(p - truth)) > SIDE for p, _, _ in
                search_round(cv2.pyrDown(later), templates, joint, bone, 0.0, math.radians(60), 0.0))
+
+
+def test_a_joint_whose_bone_grew_while_it_hid_is_looked_for_where_it_shows():
+    """A textured foot hidden while its shin swung out of foreshortening: its bone was 40 px when
+    last seen and the foot shows 70 px from the knee. The places round the knee are picked where
+    the foot's look is (a rectangle apart), and only ordered by the bone's last length: picked by
+    that length (as a flat-coloured joint's are), the grid's best place near the foot is one 30 px
+    nearer the knee, and the foot is never looked for where it shows."""
+    patch = _patch(np.random.default_rng(6)).astype(np.uint8)
+    image = np.full((120, 160, 3), 128, np.uint8)
+    image[60 - SIDE // 2:60 + SIDE // 2 + 1, 100 - SIDE // 2:100 + SIDE // 2 + 1] = patch
+    templates = Templates.cut(image, np.array([100.0, 60.0]), 0.0, (SIDE, SIDE))
+    joint = _plan()
+    bone = BoneRule(parent=np.array([30.0, 60.0]), length=40.0, weight=joint.w_beta, longest=80.0)
+    places = search_round(cv2.pyrDown(image), templates, joint, bone, 0.0, math.pi, 0.0, by_look=True)
+    assert min(np.hypot(*(xy - (100, 60))) for xy, _, _ in places) < SIDE / 4
+    by_length = search_round(cv2.pyrDown(image), templates, joint, bone, 0.0, math.pi, 0.0)
+    assert min(np.hypot(*(xy - (100, 60))) for xy, _, _ in by_length) > SIDE
+    # As the tracker does: the places are matched finely in order until one is found again.
+    found = next(f for f in (match(image, templates, xy, angle, joint, bone) for xy, _, angle in places)
+                 if f.confidence >= REACQUIRE_CONFIDENCE)
+    assert np.hypot(*(found.xy - (100, 60))) < 0.5 and found.confidence > 0.8
 
 
 def test_the_coarse_search_finds_a_joint_far_outside_the_fine_window():

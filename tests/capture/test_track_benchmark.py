@@ -138,12 +138,14 @@ def test_a_flat_coloured_walk_is_tracked(flat_walk):
 def test_tracking_both_ways_keeps_more_of_a_run():
     """The run's arms and legs cross fast and joints are lost for stretches; tracked backwards
     from the last frame as well, the whole-sequence pass takes the backward path where the forward
-    one went astray (measured: 6.99 -> 6.09 px). Here no joint moves farther in a frame than its
-    widest search reaches: the pass takes no longer step than the tracking itself."""
+    one went astray (the cel run: 9.49 -> 8.71 px). Here no joint moves farther in a frame than its
+    widest search reaches: the pass takes no longer step than the tracking itself. (The textured
+    run gained 6.99 -> 6.09 until hidden joints were looked for where they look alike rather than
+    where their bones last were; now one way keeps it as well, 5.78 against 5.80.)"""
     from toonmotion.capture.track_search import MAX_WIDEN
     from toonmotion.capture.tracker import SEARCH_FRACTION, TrackSettings
 
-    run = render_bvh_clip(_require(SHARED_DATA / "mocap") / "cmu_02_03_run.bvh")
+    run = render_bvh_clip(_require(SHARED_DATA / "mocap") / "cmu_02_03_run.bvh", style="flat")
     one_way = tracking_scores(track_from_truth(run)[0], run.truth)["mean_px"]
     found, _ = track_from_truth(run, settings=TrackSettings(both_ways=True))
     assert tracking_scores(found, run.truth)["mean_px"] <= one_way - 0.5

@@ -474,7 +474,8 @@ def _coarse_geometric(R, radius):
 
 def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPlan, bone: BoneRule,
                  start: float, span: float, turn: float, count: int = 2,
-                 figure: NDArray[np.uint8] | None = None) -> list[tuple[NDArray[np.float64], float, float]]:
+                 figure: NDArray[np.uint8] | None = None, by_look: bool = False
+                 ) -> list[tuple[NDArray[np.float64], float, float]]:
     """Look for a hidden joint round its parent, found this frame: at every place within the
     bone's reach (``bone.longest``, at least half the rectangle from the parent) whose direction
     from the parent lies within ``span`` radians of ``start``, a quarter rectangle apart, with the
@@ -482,14 +483,15 @@ def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPla
     ``start``). The anchor's coarse template is compared with each place in ``small`` (the frame
     after ``cv2.pyrDown``) by eq. 4.6's mixed cost with the kinematic term; only where to look
     again, to be refined by :func:`match`. With ``figure`` (full resolution), places off the
-    figure are left out.
+    figure are left out. With ``by_look`` (a joint with a texture of its own,
+    :func:`is_textured`), the places are picked by their look alone and ordered by that cost.
 
     Returns
     -------
     list of (xy, confidence, angle)
-        The ``count`` best places at least a rectangle apart, best first (none if no place lies
-        within reach): full-resolution (x, y) pixels, the coarse match's confidence, and the
-        rectangle's angle there (radians).
+        The ``count`` best places at least a rectangle apart (with ``by_look``, best-looking), the
+        least mixed cost first (none if no place lies within reach): full-resolution (x, y)
+        pixels, the coarse match's confidence, and the rectangle's angle there (radians).
     """
     template = templates.coarse
     th, tw = template.shape[:2]
@@ -518,14 +520,21 @@ def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPla
     w_alpha = joint.w_alpha * joint.size[0] * joint.size[1] / (tw * th)
     rho = np.hypot(*(xy - bone.parent).T)
     cost = w_alpha * ssd + bone.weight * (rho - bone.length) ** 2
-    # The best places at least a rectangle apart: a coarse grid a quarter rectangle wide misses the
-    # joint by up to an eighth of one, which costs a fine texture most of its likeness, so
-    # likeness here only ranks places and :func:`match` decides.
+    # The best place of each neighbourhood, a rectangle apart, then the least mixed cost first. A
+    # coarse grid a quarter rectangle wide misses the joint by up to an eighth of one, which costs
+    # a fine texture most of its likeness, so likeness here only picks and ranks places and
+    # :func:`match` decides. Picked by the mixed cost, a neighbourhood's place is the one nearest
+    # the bone's last length: a textured foot hidden while its shin came out of foreshortening was
+    # left 15-30 px from every place looked at (the walk on twos), so a textured joint's places
+    # are picked by look. A flat-coloured joint's look-alikes are all over a cartoon, and picked
+    # by look it was found again on them (a drawn hand 135 px off).
+    unpicked = (ssd if by_look else cost).astype(float)
     picked: list[int] = []
-    while len(picked) < count and np.isfinite(cost).any():
-        best = int(np.argmin(cost))
+    while len(picked) < count and np.isfinite(unpicked).any():
+        best = int(np.argmin(unpicked))
         picked.append(best)
-        cost[np.hypot(*(xy - xy[best]).T) < side] = np.inf
+        unpicked[np.hypot(*(xy - xy[best]).T) < side] = np.inf
+    picked.sort(key=lambda i: cost[i])
     return [(xy[i], confidence(float(ssd[i]), (tw, th)), float(angles[i])) for i in picked]
 
 

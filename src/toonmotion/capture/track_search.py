@@ -13,7 +13,11 @@ A frame is searched in four passes over the skeleton:
    hidden (:func:`~toonmotion.capture.template_match.locate`). The best places are then matched
    finely, and the joint is taken as found again only by a match at least
    :data:`REACQUIRE_CONFIDENCE` confident, within :data:`REACH_SLACK` times the longest its bone
-   has been seen.
+   has been seen. A joint with a texture of its own
+   (:func:`~toonmotion.capture.template_match.is_textured`) is looked for where it looks alike:
+   its places are picked by look, it is not held to its bone's last length, and a weak match is
+   taken wherever it lies; a flat-coloured one, whose look-alikes are all over a cartoon, is held
+   to where its bone and its guessed place put it.
 2. **Up** (children before parents). A joint still not found is looked for where the joints
    hanging from it that were found put it (each moved as its child moved).
 3. **Settle** (parents first). A joint found on a flat fill, where places along the fill match as
@@ -28,6 +32,7 @@ Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` co
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -270,7 +275,7 @@ class FrameSearch:
             span = min(math.pi, SPAN_STEP * self.lost[m])
             turned = float(self.angles[t - 1, m])
             found = search_round(small, self.templates[m], joint, bone, start, span, turned, count=PLACES,
-                                 figure=self._figure(m))
+                                 figure=self._figure(m), by_look=self._textured[m])
             return [(xy, turned) for xy, coarse, turned in found if coarse >= COARSE_CONFIDENCE]
         radius = joint.radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
         xy, coarse, turned = locate(small, self.templates[m], carried, angle, joint, radius, bone,
@@ -285,6 +290,10 @@ class FrameSearch:
         and ``agree`` (its latest template may be re-cut there) and return True, else keep its best
         confidence so far (below VISIBLE_CONFIDENCE)."""
         bone = self._bone_rule(t, m, seen, bounded=bounded)
+        if bone is not None and expected is not None and self._textured[m]:
+            # A joint of a texture of its own, looked for again where it looks alike, is not held
+            # to its bone's last length: the bone may have come out of foreshortening meanwhile.
+            bone = dataclasses.replace(bone, weight=0.0)
         figure = self._figure(m)
         found = match(image, self.templates[m], centre, angle, joint, bone, turn=turn, figure=figure,
                       small=self._small(image))
