@@ -32,7 +32,6 @@ Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` co
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -289,11 +288,11 @@ class FrameSearch:
         ``expected``, anywhere), write it into ``P[t]``, ``C[t]``, ``seen``
         and ``agree`` (its latest template may be re-cut there) and return True, else keep its best
         confidence so far (below VISIBLE_CONFIDENCE)."""
-        bone = self._bone_rule(t, m, seen, bounded=bounded)
-        if bone is not None and expected is not None and self._textured[m]:
-            # A joint of a texture of its own, looked for again where it looks alike, is not held
-            # to its bone's last length: the bone may have come out of foreshortening meanwhile.
-            bone = dataclasses.replace(bone, weight=0.0)
+        # A hidden joint with a texture of its own is looked for again where it looks alike: not
+        # held to its bone's last length (the bone may have come out of foreshortening meanwhile),
+        # and a weak match taken wherever its search reached (WEAK_REACH).
+        by_look = expected is not None and self._textured[m]
+        bone = self._bone_rule(t, m, seen, bounded=bounded, hold_length=not by_look)
         figure = self._figure(m)
         found = match(image, self.templates[m], centre, angle, joint, bone, turn=turn, figure=figure,
                       small=self._small(image))
@@ -306,11 +305,8 @@ class FrameSearch:
                 if other.confidence > found.confidence:
                     found = other
         xy, confidence = found.xy, found.confidence
-        # A weak match is taken only near where the joint was expected, but for a hidden joint
-        # with a texture of its own, taken wherever its search reached (WEAK_REACH).
-        held_near = expected is None or not self._textured[m]
         far = math.hypot(*(xy - (centre if expected is None else expected)))
-        weak_and_far = (confidence < WEAK_CONFIDENCE and held_near
+        weak_and_far = (confidence < WEAK_CONFIDENCE and not by_look
                         and far > WEAK_REACH * self._pace * max(joint.size))
         if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen)):
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
@@ -345,18 +341,19 @@ class FrameSearch:
         """This frame's figure (``near`` mask) if joint ``m`` is held to it, else None."""
         return self._near if self.held_to_figure[m] else None
 
-    def _bone_rule(self, t, m, seen, *, bounded):
+    def _bone_rule(self, t, m, seen, *, bounded, hold_length=True):
         """The kinematic term for joint ``m`` at ``t`` if its parent was found there, else None:
         its bone's length at ``t - 1``, weight ``BONE_WEIGHT * w_beta`` (of the window at this
-        frame's pace), and with ``bounded`` a reach of REACH_SLACK times the longest the bone has
-        been seen."""
+        frame's pace; 0 without ``hold_length``), and with ``bounded`` a reach of REACH_SLACK
+        times the longest the bone has been seen."""
         g = self.plans.hangs_from[m]
         if g < 0 or not seen[g]:
             return None
         P = self.P
         length = float(np.hypot(*(P[t - 1, m] - P[t - 1, g])))
         reach = REACH_SLACK * self.longest[m] if bounded and self.longest[m] > 0 else math.inf
-        return BoneRule(P[t, g], length, BONE_WEIGHT * self.plans(m, self._pace).w_beta, reach)
+        weight = BONE_WEIGHT * self.plans(m, self._pace).w_beta if hold_length else 0.0
+        return BoneRule(P[t, g], length, weight, reach)
 
 
 def _place_hidden(P, t, coast, seen, hangs_from, reach):
