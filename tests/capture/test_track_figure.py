@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import SHARED_DATA, _require
-from toonmotion.capture.foreground import FlatBackgroundMasks, flat_figure_masks
+from toonmotion.capture.foreground import FlatBackgroundMasks, flat_figure_masks, flat_threshold
 from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
 from toonmotion.capture.track_figure import FIGURE_SLACK, FigureMasks, figure_cells, on_figure, onto_figure
 from toonmotion.capture.tracker import TrackSettings, TrackSetup, track
@@ -73,6 +73,19 @@ def test_a_cartoon_on_plain_paper_has_every_joint_on_its_masks(flat_walk):
     assert all(figure.holds(t, flat_walk.truth[t]).all() for t in range(FRAMES))
     paper = np.all(flat_walk.images == flat_walk.images[0, 0, 0], axis=-1)
     assert not (masks[0] & paper[0]).any() and (masks[0] | paper[0]).mean() > 0.999
+
+
+def test_each_mask_is_its_own_array_though_the_work_is_done_in_kept_ones(flat_walk):
+    """The masks are made in arrays kept from frame to frame; those handed out are not overwritten
+    by the next: each is the summed channel difference from the paper above the threshold."""
+    masks = flat_figure_masks(flat_walk.images)
+    kept = list(masks)
+    paper = np.asarray(flat_walk.images[0, 0, 0], dtype=int)
+    threshold = flat_threshold(flat_walk.images[0], paper)
+    for frame, mask in zip(flat_walk.images, kept, strict=True):
+        difference = np.minimum(np.abs(frame.astype(int) - paper).sum(axis=-1), 255)
+        np.testing.assert_array_equal(mask, difference > threshold)
+    assert len({id(mask) for mask in kept}) == FRAMES
 
 
 def test_a_textured_background_gives_no_masks():

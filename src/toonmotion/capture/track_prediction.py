@@ -136,16 +136,19 @@ def hidden_at(P: Points, t: int, m: int, coast: Points, hangs_from: NDArray[np.i
     return P[t, p] + offset
 
 
-def is_held(image: NDArray[np.uint8], previous: NDArray[np.uint8]) -> bool:
+def is_held(image: NDArray[np.uint8], previous: NDArray[np.uint8], *,
+            work: NDArray[np.uint8] | None = None) -> bool:
     """Whether ``image`` repeats ``previous`` (both ``(h, w, 3)`` uint8) up to noise: the same
-    drawing held another frame, as animation on twos or threes does.
+    drawing held another frame, as animation on twos or threes does. ``work``, an array of their
+    shape and type, is worked in if given (a tracker asks every frame: a frame-sized array made
+    afresh is mapped in from the system page by page, nine tenths of the time here).
 
     >>> still = np.full((40, 40, 3), 128, np.uint8)
     >>> moved = still.copy(); moved[10:20, 10:12] = 0
-    >>> is_held(still + 3, still), is_held(moved, still)
+    >>> is_held(still + 3, still), is_held(moved, still, work=np.empty_like(still))
     (True, False)
     """
     h, w = image.shape[:2]
-    diff = cv2.absdiff(image, previous).reshape(h, -1)
-    changed = cv2.countNonZero(cv2.threshold(diff, HELD_LEVEL, 255, cv2.THRESH_BINARY)[1])
+    diff = cv2.absdiff(image, previous, dst=work).reshape(h, -1)
+    changed = cv2.countNonZero(cv2.threshold(diff, HELD_LEVEL, 255, cv2.THRESH_BINARY, dst=diff)[1])
     return changed <= HELD_FRACTION * diff.size

@@ -419,10 +419,11 @@ def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, 
     search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
                          longest_bones(P, C, drawings, plans.hangs_from), figure, on_figure)
     previous = read_frame(frames, begin - 1, shape)
+    work = np.empty_like(previous)
     for t in range(begin, stop):
         image = read_frame(frames, t, shape)
         out.tracked[t] = True
-        if is_held(image, previous):
+        if is_held(image, previous, work=work):
             P[t], C[t], out.angles[t], out.held[t] = P[t - 1], C[t - 1], out.angles[t - 1], True
         else:
             predicted, coast = predict(P, C, np.array(drawings), history)
