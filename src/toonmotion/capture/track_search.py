@@ -96,6 +96,14 @@ WEAK_REACH = 0.25
 # does not know either, and a knee of the demo's flat-blue trousers slid 80 px up the leg going by
 # it; the joint is put among those places where its neighbours carry it (FrameSearch._settle).
 AMBIGUOUS_SPREAD = 0.125
+# A joint with a texture of its own (template_match.is_textured) weighs its colour this many times
+# as much as eq. 4.6's w_alpha: its colour cost has one sharp minimum, which the distances from the
+# prediction and from its bone's last length should not outweigh. At w_alpha = 1 / 255^2 a wave's
+# hand swinging 21 px a drawing on twos was taken 11 px short of it, where it matched at 0.09, over
+# where it matched at 0.67 (the prior: 0.1 in cost for those 13 px off the prediction and 15 px of
+# bone shortened, the colour 0.17). 16 times and more all gave the same (colour decides but for
+# near-ties); a flat-coloured joint's colour cost is flat along its fills, and the prior decides there.
+TEXTURED_COLOUR_WEIGHT = 16.0
 # The kinematic term's weight per squared pixel of bone-length change, relative to w_beta (of the
 # window widened after a held drawing: over a double step a bone changes twice as much).
 BONE_WEIGHT = 1.0
@@ -106,7 +114,8 @@ _HIDDEN = float(np.nextafter(VISIBLE_CONFIDENCE, 0))
 
 class Plans:
     """Each joint's :class:`~toonmotion.capture.template_match.JointPlan`, and its plan with the
-    search widened: ``plans(m)``, ``plans(m, factor)`` (cached).
+    search widened, and with its colour weighed more: ``plans(m)``, ``plans(m, factor)``,
+    ``plans(m, factor, colour)`` (cached).
 
     Parameters
     ----------
@@ -140,19 +149,20 @@ class Plans:
         self._joints = [((int(w), int(h)), float(r)) for (w, h), r in zip(sizes, radii, strict=True)]
         self.hangs_from = np.asarray(parents, dtype=int)
         self.parents = self.hangs_from if rotate else np.full(len(self.hangs_from), -1)
-        self._cache: dict[tuple[int, float], JointPlan] = {}
+        self._cache: dict[tuple[int, float, float], JointPlan] = {}
 
     def __len__(self) -> int:
         return len(self._joints)
 
-    def __call__(self, m: int, factor: float = 1.0) -> JointPlan:
-        if (m, factor) not in self._cache:
+    def __call__(self, m: int, factor: float = 1.0, colour: float = 1.0) -> JointPlan:
+        if (m, factor, colour) not in self._cache:
             size, r = self._joints[m]
             r = min(r * factor, self._widest)
             w_beta = (1.0 / r) ** 2 if self._w_beta is None else self._w_beta
-            self._cache[m, factor] = plan_joint(size, r, self._w_alpha, w_beta, int(self.parents[m]),
-                                                int(self.hangs_from[m]), pace=factor)
-        return self._cache[m, factor]
+            parent, hangs_from = int(self.parents[m]), int(self.hangs_from[m])
+            self._cache[m, factor, colour] = plan_joint(size, r, colour * self._w_alpha, w_beta, parent,
+                                                        hangs_from, pace=factor)
+        return self._cache[m, factor, colour]
 
 
 class FrameSearch:
@@ -188,6 +198,7 @@ class FrameSearch:
         self.held_to_figure = np.ones(len(plans), bool) if on_figure is None else np.asarray(on_figure, bool)
         self._near: NDArray[np.uint8] | None = None
         self._textured = [is_textured(t.anchor) for t in templates]
+        self._colour = [TEXTURED_COLOUR_WEIGHT if textured else 1.0 for textured in self._textured]
         self._half: NDArray[np.uint8] | None = None
         self._pace = 1.0
         # Per joint, this frame: the places alike to its match (template_match.Match), and the match
@@ -212,19 +223,19 @@ class FrameSearch:
         self.C[t] = 0.0
         for m in range(k):  # down
             if not self.lost[m]:
-                self._try(image, t, m, plans(m, pace), predicted[m], angle[m], VISIBLE_CONFIDENCE, seen,
+                self._try(image, t, m, self._plan(m, pace), predicted[m], angle[m], VISIBLE_CONFIDENCE, seen,
                           agree)
                 continue
             carried = hidden_at(P, t, m, coast[m], plans.hangs_from)
             for centre, turned in self._places_to_look(self._small(image), t, m, carried, angle[m], seen):
-                if self._try(image, t, m, plans(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen, agree,
-                             bounded=True, turn=False, expected=carried):
+                if self._try(image, t, m, self._plan(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen,
+                             agree, bounded=True, turn=False, expected=carried):
                     break
         moves = moves_below(P, t, seen, plans.hangs_from)
         for m in range(k - 1, -1, -1):  # up
             if not seen[m] and np.isfinite(moves[m]).all():
-                self._try(image, t, m, plans(m), P[t - 1, m] + moves[m], angle[m], REACQUIRE_CONFIDENCE, seen,
-                          agree, bounded=True)
+                self._try(image, t, m, self._plan(m), P[t - 1, m] + moves[m], angle[m], REACQUIRE_CONFIDENCE,
+                          seen, agree, bounded=True)
         self._settle(t, coast, seen)
         # A joint not found goes no farther in one frame than its search could have reached.
         reach = np.array([plans(m, pace).radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
@@ -266,7 +277,7 @@ class FrameSearch:
         there: round its parent if that was found, else near ``carried``, where its parent carries
         it or it coasts (module docstring). Places whose coarse match is hopeless are left out."""
         P, plans = self.P, self.plans
-        joint = plans(m)
+        joint = self._plan(m)
         bone = self._bone_rule(t, m, seen, bounded=True)
         if bone is not None and math.isfinite(bone.longest):
             g = plans.hangs_from[m]
@@ -336,6 +347,11 @@ class FrameSearch:
         """Whether joint ``m``'s bone was shorter than its rectangle at ``t - 1`` (seen end-on)."""
         g = self.plans.hangs_from[m]
         return g >= 0 and float(np.hypot(*(self.P[t - 1, m] - self.P[t - 1, g]))) < max(self.plans(m).size)
+
+    def _plan(self, m, pace=1.0):
+        """Joint ``m``'s plan to match it by at this frame's ``pace``: with a texture of its own, its
+        colour weighs :data:`TEXTURED_COLOUR_WEIGHT` times as much."""
+        return self.plans(m, pace, self._colour[m])
 
     def _figure(self, m):
         """This frame's figure (``near`` mask) if joint ``m`` is held to it, else None."""
