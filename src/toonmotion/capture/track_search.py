@@ -5,7 +5,8 @@ A frame is searched in four passes over the skeleton:
 
 1. **Down** (parents before children). A joint seen last drawing is matched round its
    prediction (eq. 4.4-4.6). A joint with a parent found this frame is held near its bone's last
-   length, a kinematic term beside eq. 4.6 (:class:`~toonmotion.capture.template_match.BoneRule`).
+   length, a kinematic term beside eq. 4.6 (:class:`~toonmotion.capture.template_match.BoneRule`);
+   one with a texture of its own weighs its colour :data:`TEXTURED_COLOUR_WEIGHT` times as much.
    A *hidden* joint is looked for afresh: round its parent, if that was found, at every place its
    bone can reach in directions widening from where it was last (:data:`SPAN_STEP` a drawing),
    its rectangle turned with its bone there (:func:`~toonmotion.capture.template_match.search_round`);
