@@ -20,7 +20,8 @@ A frame is searched in four passes over the skeleton:
    taken wherever it lies; a flat-coloured one, whose look-alikes are all over a cartoon, is held
    to where its bone and its guessed place put it.
 2. **Up** (children before parents). A joint still not found is looked for where the joints
-   hanging from it that were found put it (each moved as its child moved).
+   hanging from it that were found put it (each moved as its child moved), if its coarse match
+   there is not hopeless.
 3. **Settle** (parents first). A joint found on a flat fill, where places along the fill match as
    well as its match (:data:`AMBIGUOUS_SPREAD`), is put among them where its parent and its
    children found plainly carry it.
@@ -66,7 +67,10 @@ MAX_WIDEN = 3.0
 # A hidden joint whose parent is found is looked for round it, in directions up to this many
 # radians from where it was last for every drawing it has been hidden (all round at most).
 SPAN_STEP = math.radians(45)
-# Places whose coarse match is less confident than this are not looked at closely; of the others,
+# Places whose coarse match is less confident than this are not looked at closely (in the up pass:
+# at the joint's angle and at every turn its plan tries. 78% of the up pass's tries on the seed-0
+# flat renders were, and 8 of its 45 finds there, all on the zombie walk; it made a fifth of all
+# matches, about 1% of its tries finding a joint); of the others,
 # a rectangle apart, the PLACES best are matched finely, best first, until one is found. The coarse
 # match only ranks places (a quarter-rectangle grid misses a fine texture by up to an eighth of a
 # rectangle): refining the best 2 instead of the best 64 lost joints on 4 of the 14 rendered
@@ -235,8 +239,10 @@ class FrameSearch:
         moves = moves_below(P, t, seen, plans.hangs_from)
         for m in range(k - 1, -1, -1):  # up
             if not seen[m] and np.isfinite(moves[m]).all():
-                self._try(image, t, m, self._plan(m), P[t - 1, m] + moves[m], angle[m], REACQUIRE_CONFIDENCE,
-                          seen, agree, bounded=True)
+                centre = P[t - 1, m] + moves[m]
+                if self._worth_matching(self._small(image), t, m, centre, angle[m], seen):
+                    self._try(image, t, m, self._plan(m), centre, angle[m], REACQUIRE_CONFIDENCE, seen, agree,
+                              bounded=True)
         self._settle(t, coast, seen)
         # A joint not found goes no farther in one frame than its search could have reached.
         reach = np.array([plans(m, pace).radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
@@ -292,6 +298,16 @@ class FrameSearch:
         xy, coarse, turned = locate(small, self.templates[m], carried, angle, joint, radius, bone,
                                     self._figure(m))
         return [(xy, turned)] if coarse >= COARSE_CONFIDENCE else []
+
+    def _worth_matching(self, small, t, m, centre, angle, seen):
+        """Whether hidden joint ``m``'s coarse match round ``centre``, at ``angle`` or turned by any of
+        its plan's turns, is at least :data:`COARSE_CONFIDENCE` confident, as the places the down pass
+        matches finely must be."""
+        joint = self._plan(m)
+        bone = self._bone_rule(t, m, seen, bounded=True)
+        coarse = locate(small, self.templates[m], centre, angle, joint, joint.radius, bone, self._figure(m),
+                        turns=(0.0, *joint.turns))[1]
+        return coarse >= COARSE_CONFIDENCE
 
     def _try(self, image, t, m, joint, centre, angle, needed, seen, agree, *, bounded=False, turn=True,
              expected=None):
