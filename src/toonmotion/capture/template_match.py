@@ -349,7 +349,8 @@ class Match:
 
 def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.float64], angle: float,
           joint: JointPlan, bone: BoneRule | None = None, *, turn: bool = True,
-          figure: NDArray[np.uint8] | None = None, small: NDArray[np.uint8] | None = None) -> Match:
+          figure: NDArray[np.uint8] | None = None, small: NDArray[np.uint8] | None = None,
+          turn_ranks: list[float] | None = None) -> Match:
     """Match a joint's templates round ``predicted``, its rectangle turned by ``angle`` radians.
 
     A rectangle that turns and matches less confidently than :data:`TURN_CONFIDENCE` is also
@@ -377,6 +378,9 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
         are not matched.
     small : (h/2, w/2, 3) uint8, optional
         ``image`` after ``cv2.pyrDown``, for the coarse turns; made here when not given.
+    turn_ranks : list of float, optional
+        The coarse confidences of the plan's turns round ``predicted``, if already worked out
+        (:func:`coarse_turns` with the same arguments and ``joint.turns``).
 
     Returns
     -------
@@ -386,9 +390,11 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     if joint.parent < 0 or not turn or found.confidence >= TURN_CONFIDENCE:
         return found
     # The turns are ranked at half resolution, and matched finely best first.
-    half: NDArray[np.uint8] = np.asarray(cv2.pyrDown(image) if small is None else small, np.uint8)
-    radius = max(joint.radius, 1)
-    coarse = _coarse_turns(half, templates, predicted, angle, joint, radius, bone, figure, joint.turns)[1]
+    coarse = turn_ranks
+    if coarse is None:
+        half: NDArray[np.uint8] = np.asarray(cv2.pyrDown(image) if small is None else small, np.uint8)
+        coarse = coarse_turns(half, templates, predicted, angle, joint, max(joint.radius, 1), bone, figure,
+                              joint.turns)[1]
     for k in np.argsort(coarse)[::-1][:FINE_TURNS]:
         if found.confidence >= TURN_CONFIDENCE:
             break
@@ -418,15 +424,17 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
     angle : float
         The rectangle's angle there, radians.
     """
-    places, confidences, angles = _coarse_turns(small, templates, centre, angle, joint, radius, bone, figure,
-                                                turns)
+    places, confidences, angles = coarse_turns(small, templates, centre, angle, joint, radius, bone, figure,
+                                               turns)
     best = int(np.argmax(confidences))
     if not confidences[best] > 0.0:
         return np.asarray(centre, dtype=float), 0.0, angle
     return places[best], confidences[best], angles[best]
 
 
-def _coarse_turns(small, templates, centre, angle, joint, radius, bone, figure, turns):
+def coarse_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.float64], angle: float,
+                 joint: JointPlan, radius: float, bone: BoneRule | None, figure: NDArray[np.uint8] | None,
+                 turns: tuple[float, ...]) -> tuple[list[NDArray[np.float64]], list[float], list[float]]:
     """:func:`locate` at each of ``turns`` apart: per turn, the best place (full-resolution (x, y)),
     its coarse confidence (0 where no cell could be taken) and the rectangle's angle, as lists.
     The turns' windows are costed together (the ranking of a joint's turns runs for a third of

@@ -50,6 +50,7 @@ from toonmotion.capture.template_match import (
     JointPlan,
     Match,
     Templates,
+    coarse_turns,
     is_textured,
     locate,
     match,
@@ -240,9 +241,10 @@ class FrameSearch:
         for m in range(k - 1, -1, -1):  # up
             if not seen[m] and np.isfinite(moves[m]).all():
                 centre = P[t - 1, m] + moves[m]
-                if self._worth_matching(self._small(image), t, m, centre, angle[m], seen):
+                ranks = self._coarse_ranks(self._small(image), t, m, centre, angle[m], seen)
+                if max(ranks) >= COARSE_CONFIDENCE:
                     self._try(image, t, m, self._plan(m), centre, angle[m], REACQUIRE_CONFIDENCE, seen, agree,
-                              bounded=True)
+                              bounded=True, turn_ranks=ranks[1:])
         self._settle(t, coast, seen)
         # A joint not found goes no farther in one frame than its search could have reached.
         reach = np.array([plans(m, pace).radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
@@ -299,18 +301,16 @@ class FrameSearch:
                                     self._figure(m))
         return [(xy, turned)] if coarse >= COARSE_CONFIDENCE else []
 
-    def _worth_matching(self, small, t, m, centre, angle, seen):
-        """Whether hidden joint ``m``'s coarse match round ``centre``, at ``angle`` or turned by any of
-        its plan's turns, is at least :data:`COARSE_CONFIDENCE` confident, as the places the down pass
-        matches finely must be."""
+    def _coarse_ranks(self, small, t, m, centre, angle, seen):
+        """Hidden joint ``m``'s coarse confidences round ``centre`` at ``angle`` and turned by each of
+        its plan's turns, as :func:`~toonmotion.capture.template_match.match` ranks them."""
         joint = self._plan(m)
         bone = self._bone_rule(t, m, seen, bounded=True)
-        coarse = locate(small, self.templates[m], centre, angle, joint, joint.radius, bone, self._figure(m),
-                        turns=(0.0, *joint.turns))[1]
-        return coarse >= COARSE_CONFIDENCE
+        return coarse_turns(small, self.templates[m], centre, angle, joint, max(joint.radius, 1), bone,
+                            self._figure(m), (0.0, *joint.turns))[1]
 
     def _try(self, image, t, m, joint, centre, angle, needed, seen, agree, *, bounded=False, turn=True,
-             expected=None):
+             expected=None, turn_ranks=None):
         """Match joint ``m`` round ``centre``; if at least ``needed`` confident (and, when weak, near
         where it is ``expected``: default ``centre``; a hidden joint with a textured template, given
         ``expected``, anywhere), write it into ``P[t]``, ``C[t]``, ``seen``
@@ -323,7 +323,7 @@ class FrameSearch:
         bone = self._bone_rule(t, m, seen, bounded=bounded, hold_length=not by_look)
         figure = self._figure(m)
         found = match(image, self.templates[m], centre, angle, joint, bone, turn=turn, figure=figure,
-                      small=self._small(image))
+                      small=self._small(image), turn_ranks=turn_ranks)
         if found.confidence < TURN_CONFIDENCE and turn and self._end_on(t, m):
             # A bone seen end-on gives no angle: the rectangle is looked for at turns all round.
             place, coarse, turned = locate(self._small(image), self.templates[m], centre, angle, joint,
