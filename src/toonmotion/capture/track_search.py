@@ -16,8 +16,9 @@ A frame is searched in four passes over the skeleton:
    :data:`REACQUIRE_CONFIDENCE` confident, within :data:`REACH_SLACK` times the longest its bone
    has been seen. A joint with a texture of its own
    (:func:`~toonmotion.capture.template_match.is_textured`) is looked for where it looks alike:
-   its places are picked by look, it is not held to its bone's last length, and a weak match is
-   taken wherever it lies; a flat-coloured one, whose look-alikes are all over a cartoon, is held
+   its places are picked by look, it is not held to its bone's last length, a weak match is
+   taken wherever it lies, and one at least :data:`WEAK_CONFIDENCE` confident even beside a joint
+   that shows; a flat-coloured one, whose look-alikes are all over a cartoon, is held
    to where its bone and its guessed place put it.
 2. **Up** (children before parents). A joint still not found is looked for where the joints
    hanging from it that were found put it (each moved as its child moved), if its coarse match
@@ -336,7 +337,10 @@ class FrameSearch:
         far = math.hypot(*(xy - (centre if expected is None else expected)))
         weak_and_far = (confidence < WEAK_CONFIDENCE and not by_look
                         and far > WEAK_REACH * self._pace * max(joint.size))
-        if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen)):
+        # Found plainly by a texture of its own, it may lie beside a joint that shows (a hand
+        # before the face, a foot passing the other): look-alike limbs are a cartoon's.
+        beside = by_look and confidence >= WEAK_CONFIDENCE
+        if confidence < needed or weak_and_far or (bounded and not beside and self._taken(t, m, xy, seen)):
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
             return False
         self.P[t, m], self.C[t, m], seen[m], agree[m] = xy, confidence, True, found.agree
@@ -347,7 +351,8 @@ class FrameSearch:
     def _taken(self, t, m, xy, seen):
         """Whether another joint showing at ``xy`` (found at ``t``, or not yet looked for at ``t`` and
         found at ``t - 1``) lies within half of ``m``'s rectangle: a hidden joint is not found again
-        on a joint that shows (on a cartoon the left leg looks like the right one)."""
+        on a joint that shows (on a cartoon the left leg looks like the right one), unless it has a
+        texture of its own and matches plainly (:meth:`_try`)."""
         others = np.where(seen[:, None], self.P[t], self.P[t - 1])
         showing = seen | (self.lost == 0)
         showing[m] = False
