@@ -18,7 +18,7 @@ A frame is searched in four passes over the skeleton:
    (:func:`~toonmotion.capture.template_match.is_textured`) is looked for where it looks alike:
    its places are picked by look, it is not held to its bone's last length, a weak match is
    taken wherever it lies, and one at least :data:`WEAK_CONFIDENCE` confident even beside a joint
-   that shows; a flat-coloured one, whose look-alikes are all over a cartoon, is held
+   that shows (not on it); a flat-coloured one, whose look-alikes are all over a cartoon, is held
    to where its bone and its guessed place put it.
 2. **Up** (children before parents). A joint still not found is looked for where the joints
    hanging from it that were found put it (each moved as its child moved), if its coarse match
@@ -338,9 +338,11 @@ class FrameSearch:
         weak_and_far = (confidence < WEAK_CONFIDENCE and not by_look
                         and far > WEAK_REACH * self._pace * max(joint.size))
         # Found plainly by a texture of its own, it may lie beside a joint that shows (a hand
-        # before the face, a foot passing the other): look-alike limbs are a cartoon's.
-        beside = by_look and confidence >= WEAK_CONFIDENCE
-        if confidence < needed or weak_and_far or (bounded and not beside and self._taken(t, m, xy, seen)):
+        # before the face, a foot passing the other), though not on it: a textured patch moved a
+        # few pixels no longer matches itself, so a plain match there is the joint that shows,
+        # which may look the same (twin gloves).
+        apart = WEAK_REACH if by_look and confidence >= WEAK_CONFIDENCE else 0.5
+        if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen, apart)):
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
             return False
         self.P[t, m], self.C[t, m], seen[m], agree[m] = xy, confidence, True, found.agree
@@ -348,15 +350,16 @@ class FrameSearch:
         self.taken[m] = found
         return True
 
-    def _taken(self, t, m, xy, seen):
+    def _taken(self, t, m, xy, seen, apart=0.5):
         """Whether another joint showing at ``xy`` (found at ``t``, or not yet looked for at ``t`` and
-        found at ``t - 1``) lies within half of ``m``'s rectangle: a hidden joint is not found again
-        on a joint that shows (on a cartoon the left leg looks like the right one), unless it has a
-        texture of its own and matches plainly (:meth:`_try`)."""
+        found at ``t - 1``) lies within ``apart`` of ``m``'s rectangle's larger side: a hidden joint
+        is not found again on a joint that shows (on a cartoon the left leg looks like the right
+        one); half a rectangle, or less for a joint with a texture of its own that matches plainly
+        (:meth:`_try`)."""
         others = np.where(seen[:, None], self.P[t], self.P[t - 1])
         showing = seen | (self.lost == 0)
         showing[m] = False
-        near = np.hypot(*(others[showing] - xy).T) < max(self.plans(m).size) / 2
+        near = np.hypot(*(others[showing] - xy).T) < apart * max(self.plans(m).size)
         return bool(near.any())
 
     def _small(self, image):
