@@ -184,11 +184,10 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
     def __getitem__(self, t: int | slice) -> NDArray[np.bool_] | list[NDArray[np.bool_]]:
         if isinstance(t, slice):
             return [self[i] for i in range(*t.indices(len(self)))]
-        # The channels' absolute differences summed, in uint8: sums past 255 saturate, far past
-        # any threshold, and uint8 keeps this under a millisecond a frame (adding the split
-        # channels takes a third of the time of cv2.transform's weighted sum).
-        # The steps write into arrays kept from frame to frame: a frame-sized array made afresh
-        # is mapped in from the system page by page, which took four fifths of the time.
+        # The channels' absolute differences summed, in uint8 (sums past 255 saturate, far past
+        # any threshold; adding the split channels takes a third of the time of cv2.transform's
+        # weighted sum), in arrays kept from frame to frame: a frame-sized array made afresh is
+        # mapped in from the system page by page, which took four fifths of the time.
         frame = np.asarray(self._frames[t])
         if self._plate is None or self._plate.shape != frame.shape:
             self._plate = np.empty_like(frame)
