@@ -77,7 +77,8 @@ def test_a_cartoon_on_plain_paper_has_every_joint_on_its_masks(flat_walk):
 
 def test_each_mask_is_its_own_array_though_the_work_is_done_in_kept_ones(flat_walk):
     """The masks are made in arrays kept from frame to frame; those handed out are not overwritten
-    by the next: each is the summed channel difference from the paper above the threshold."""
+    by the next: each is the summed channel difference from the paper above the threshold, for
+    frames of any type."""
     masks = flat_figure_masks(flat_walk.images)
     kept = list(masks)
     paper = np.asarray(flat_walk.images[0, 0, 0], dtype=int)
@@ -86,6 +87,8 @@ def test_each_mask_is_its_own_array_though_the_work_is_done_in_kept_ones(flat_wa
         difference = np.minimum(np.abs(frame.astype(int) - paper).sum(axis=-1), 255)
         np.testing.assert_array_equal(mask, difference > threshold)
     assert len({id(mask) for mask in kept}) == FRAMES
+    floats = flat_figure_masks(flat_walk.images[:3].astype(np.float32))  # split into arrays of their own
+    assert all(np.array_equal(floats[t], kept[t]) for t in range(3))
 
 
 def test_a_textured_background_gives_no_masks():

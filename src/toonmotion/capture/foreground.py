@@ -194,10 +194,10 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
             self._plate[:] = self._colour
             self._difference = np.empty_like(frame)
             self._channels = tuple(np.empty(frame.shape[:2], np.uint8) for _ in range(3))
-        red, green, blue = self._channels
-        cv2.split(cv2.absdiff(frame, self._plate, dst=self._difference), self._channels)
-        cv2.add(cv2.add(red, green, dst=red), blue, dst=red)
-        return np.asarray(red > self._threshold)
+        # (Frames of another type than uint8 are split into arrays of their own.)
+        red, green, blue = cv2.split(cv2.absdiff(frame, self._plate, dst=self._difference), self._channels)
+        total = cv2.add(cv2.add(red, green, dst=red), blue, dst=red)
+        return np.asarray(total > self._threshold)
 
 
 def flat_figure_masks(frames: NDArray[np.uint8] | Sequence[NDArray[np.uint8]], *,
