@@ -69,10 +69,10 @@ MAX_WIDEN = 3.0
 # A hidden joint whose parent is found is looked for round it, in directions up to this many
 # radians from where it was last for every drawing it has been hidden (all round at most).
 SPAN_STEP = math.radians(45)
-# Places whose coarse match is less confident than this are not looked at closely (in the up pass:
-# at the joint's angle and at every turn its plan tries. 78% of the up pass's tries on the seed-0
-# flat renders were, and 8 of its 45 finds there, all on the zombie walk; it made a fifth of all
-# matches, about 1% of its tries finding a joint); of the others,
+# Places whose coarse match is less confident than this are not looked at closely (in the up pass,
+# at the joint's angle and at every turn its plan tries: that leaves out 78% of its tries on the
+# seed-0 flat renders, and 8 of its 45 finds, all on the zombie walk; it made a fifth of all
+# matches and found a joint in about 1% of its tries); of the others,
 # a rectangle apart, the PLACES best are matched finely, best first, until one is found. The coarse
 # match only ranks places (a quarter-rectangle grid misses a fine texture by up to an eighth of a
 # rectangle): refining the best 2 instead of the best 64 lost joints on 4 of the 14 rendered
@@ -107,9 +107,10 @@ AMBIGUOUS_SPREAD = 0.125
 # as much as eq. 4.6's w_alpha: its colour cost has one sharp minimum, which the distances from the
 # prediction and from its bone's last length should not outweigh. At w_alpha = 1 / 255^2 a wave's
 # hand swinging 21 px a drawing on twos was taken 11 px short of it, where it matched at 0.09, over
-# where it matched at 0.67 (the prior: 0.1 in cost for those 13 px off the prediction and 15 px of
-# bone shortened, the colour 0.17). 16 times and more all gave the same (colour decides but for
-# near-ties); a flat-coloured joint's colour cost is flat along its fills, and the prior decides there.
+# where it matched at 0.67: there the prior cost 0.27 more (13 px farther from the prediction, 6 px
+# more of bone shortened), the colour 0.17 less. 16 times and more all gave the same (colour decides
+# but for near-ties); a flat-coloured joint's colour cost is flat along its fills, and the prior
+# decides there.
 TEXTURED_COLOUR_WEIGHT = 16.0
 # The kinematic term's weight per squared pixel of bone-length change, relative to w_beta (of the
 # window widened after a held drawing: over a double step a bone changes twice as much).
