@@ -126,14 +126,24 @@ def hidden_at(P: Points, t: int, m: int, coast: Points, hangs_from: NDArray[np.i
         return coast
     offset = P[t - 1, m] - P[t - 1, p]
     g = hangs_from[p]
-    if g >= 0:
-        before, after = P[t - 1, p] - P[t - 1, g], P[t, p] - P[t, g]
-        if np.hypot(*before) > MIN_BONE_LENGTH and np.hypot(*after) > MIN_BONE_LENGTH:
-            turn = math.atan2(before[0] * after[1] - before[1] * after[0], before @ after)
-            # Turned by hand, not with kinematics.rotate: this runs per joint and frame.
-            c, s = math.cos(turn), math.sin(turn)
-            offset = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
+    turn = None if g < 0 else bone_turn(P[t - 1, p] - P[t - 1, g], P[t, p] - P[t, g])
+    if turn is not None:
+        # Turned by hand, not with kinematics.rotate: this runs per joint and frame.
+        c, s = math.cos(turn), math.sin(turn)
+        offset = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
     return P[t, p] + offset
+
+
+def bone_turn(before: Points, after: Points) -> float | None:
+    """The signed angle (radians) from one bone vector ``(2,)`` to another, as :func:`turns` takes
+    it for each bone; None if either is no longer than ``MIN_BONE_LENGTH``.
+
+    >>> round(bone_turn(np.array([10.0, 0.0]), np.array([0.0, 10.0])), 6), bone_turn(np.zeros(2), np.ones(2))
+    (1.570796, None)
+    """
+    if not (np.hypot(*before) > MIN_BONE_LENGTH and np.hypot(*after) > MIN_BONE_LENGTH):
+        return None
+    return math.atan2(before[0] * after[1] - before[1] * after[0], float(before @ after))
 
 
 def is_held(image: NDArray[np.uint8], previous: NDArray[np.uint8], *,

@@ -60,8 +60,7 @@ from toonmotion.capture.template_match import (
     search_round,
 )
 from toonmotion.capture.track_figure import FigureMasks, onto_figure
-from toonmotion.capture.track_prediction import hidden_at, turns
-from toonmotion.rig.skeleton import MIN_BONE_LENGTH
+from toonmotion.capture.track_prediction import bone_turn, hidden_at, turns
 
 # A hidden joint's window widens by WIDEN_STEP of its search radius for every drawing it stays
 # hidden, up to MAX_WIDEN times the radius.
@@ -374,10 +373,9 @@ class FrameSearch:
         g = self.plans.parents[m]
         if not self._textured[m] or g < 0 or not seen[g]:
             return None
-        before, after = self.P[t - 1, m] - self.P[t - 1, g], found.xy - self.P[t, g]
-        if min(math.hypot(*before), math.hypot(*after)) <= MIN_BONE_LENGTH:
+        turn = bone_turn(self.P[t - 1, m] - self.P[t - 1, g], found.xy - self.P[t, g])
+        if turn is None:
             return None
-        turn = math.atan2(before[0] * after[1] - before[1] * after[0], float(before @ after))
         angle = float(self.angles[t - 1, m]) + turn
         return angle if abs(math.remainder(angle - found.angle, 2 * math.pi)) > REFIT_TURN else None
 
