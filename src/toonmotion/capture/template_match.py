@@ -380,7 +380,7 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
         ``image`` after ``cv2.pyrDown``, for the coarse turns; made here when not given.
     turn_ranks : list of float, optional
         The coarse confidences of the plan's turns round ``predicted``, if already worked out
-        (:func:`coarse_turns` with the same arguments and ``joint.turns``).
+        (:func:`rank_turns` with the same arguments and ``joint.turns``).
 
     Returns
     -------
@@ -393,8 +393,7 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     coarse = turn_ranks
     if coarse is None:
         half: NDArray[np.uint8] = np.asarray(cv2.pyrDown(image) if small is None else small, np.uint8)
-        coarse = coarse_turns(half, templates, predicted, angle, joint, max(joint.radius, 1), bone, figure,
-                              joint.turns)[1]
+        coarse = rank_turns(half, templates, predicted, angle, joint, bone, figure, joint.turns)
     for k in np.argsort(coarse)[::-1][:FINE_TURNS]:
         if found.confidence >= TURN_CONFIDENCE:
             break
@@ -424,7 +423,7 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
     angle : float
         The rectangle's angle there, radians.
     """
-    places, confidences, angles = coarse_turns(small, templates, centre, angle, joint, radius, bone, figure,
+    places, confidences, angles = _coarse_turns(small, templates, centre, angle, joint, radius, bone, figure,
                                                turns)
     best = int(np.argmax(confidences))
     if not confidences[best] > 0.0:
@@ -432,7 +431,7 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
     return places[best], confidences[best], angles[best]
 
 
-def coarse_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.float64], angle: float,
+def _coarse_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.float64], angle: float,
                  joint: JointPlan, radius: float, bone: BoneRule | None, figure: NDArray[np.uint8] | None,
                  turns: tuple[float, ...]) -> tuple[list[NDArray[np.float64]], list[float], list[float]]:
     """:func:`locate` at each of ``turns`` apart: per turn, the best place (full-resolution (x, y)),
@@ -471,6 +470,14 @@ def coarse_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArray
         places.append(centre + [c * dx - s * dy, s * dx + c * dy])
         confidences.append(confidence(float(turn_ssd[i, j]), (tw, th)))
     return places, confidences, angles
+
+
+def rank_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.float64], angle: float,
+               joint: JointPlan, bone: BoneRule | None, figure: NDArray[np.uint8] | None,
+               turns: tuple[float, ...]) -> list[float]:
+    """The coarse confidence of the rectangle turned by each of ``turns`` more, in the joint's own
+    window round ``centre`` (:func:`_coarse_turns`): how :func:`match` ranks its extra turns."""
+    return _coarse_turns(small, templates, centre, angle, joint, max(joint.radius, 1), bone, figure, turns)[1]
 
 
 @functools.lru_cache(maxsize=64)

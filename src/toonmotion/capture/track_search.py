@@ -51,11 +51,11 @@ from toonmotion.capture.template_match import (
     JointPlan,
     Match,
     Templates,
-    coarse_turns,
     is_textured,
     locate,
     match,
     plan_joint,
+    rank_turns,
     sample,
     search_round,
 )
@@ -317,8 +317,8 @@ class FrameSearch:
         its plan's turns, as :func:`~toonmotion.capture.template_match.match` ranks them."""
         joint = self._plan(m)
         bone = self._bone_rule(t, m, seen, bounded=True)
-        return coarse_turns(small, self.templates[m], centre, angle, joint, max(joint.radius, 1), bone,
-                            self._figure(m), (0.0, *joint.turns))[1]
+        return rank_turns(small, self.templates[m], centre, angle, joint, bone, self._figure(m),
+                          (0.0, *joint.turns))
 
     def _try(self, image, t, m, joint, centre, angle, needed, seen, agree, *, bounded=False, turn=True,
              expected=None, turn_ranks=None):
