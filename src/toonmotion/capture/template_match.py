@@ -424,7 +424,7 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
         The rectangle's angle there, radians.
     """
     places, confidences, angles = _coarse_turns(small, templates, centre, angle, joint, radius, bone, figure,
-                                               turns)
+                                                turns)
     best = int(np.argmax(confidences))
     if not confidences[best] > 0.0:
         return np.asarray(centre, dtype=float), 0.0, angle
@@ -432,8 +432,8 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
 
 
 def _coarse_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.float64], angle: float,
-                 joint: JointPlan, radius: float, bone: BoneRule | None, figure: NDArray[np.uint8] | None,
-                 turns: tuple[float, ...]) -> tuple[list[NDArray[np.float64]], list[float], list[float]]:
+                  joint: JointPlan, radius: float, bone: BoneRule | None, figure: NDArray[np.uint8] | None,
+                  turns: tuple[float, ...]) -> tuple[list[NDArray[np.float64]], list[float], list[float]]:
     """:func:`locate` at each of ``turns`` apart: per turn, the best place (full-resolution (x, y)),
     its coarse confidence (0 where no cell could be taken) and the rectangle's angle, as lists.
     The turns' windows are costed together (the ranking of a joint's turns runs for a third of
