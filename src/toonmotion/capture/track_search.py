@@ -215,7 +215,6 @@ class FrameSearch:
         self.held_to_figure = np.ones(len(plans), bool) if on_figure is None else np.asarray(on_figure, bool)
         self._near: NDArray[np.uint8] | None = None
         self._textured = [is_textured(t.anchor) for t in templates]
-        self._colour = [TEXTURED_COLOUR_WEIGHT if textured else 1.0 for textured in self._textured]
         self._half: NDArray[np.uint8] | None = None
         self._pace = 1.0
         # Per joint, this frame: the places alike to its match (template_match.Match), and the match
@@ -405,7 +404,7 @@ class FrameSearch:
     def _plan(self, m, pace=1.0):
         """Joint ``m``'s plan to match it by at this frame's ``pace``: with a texture of its own, its
         colour weighs :data:`TEXTURED_COLOUR_WEIGHT` times as much."""
-        return self.plans(m, pace, self._colour[m])
+        return self.plans(m, pace, TEXTURED_COLOUR_WEIGHT if self._textured[m] else 1.0)
 
     def _figure(self, m):
         """This frame's figure (``near`` mask) if joint ``m`` is held to it, else None."""
