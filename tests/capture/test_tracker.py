@@ -205,10 +205,11 @@ def test_a_limb_that_sets_off_turning_is_found_by_trying_turns():
     assert errors.max() <= 1.0, f"worst error {errors.max():.3f} px at frame {errors.argmax() // 2}"
 
 
-@pytest.mark.parametrize("speed, hidden_frames", [(3.0, 5), (1.0, 14)])
+@pytest.mark.parametrize("speed, hidden_frames", [(3.0, 5), (1.0, 14), (0.75, 19), (0.5, 29)])
 def test_a_joint_hidden_behind_an_occluder_is_recovered_when_it_re_emerges(speed, hidden_frames):
-    # At 1 px/frame the rectangle is partly covered for 20 frames each side: its template must not
-    # learn the occluder, or it sticks to it.
+    # At 1 px/frame the rectangle is partly covered for 20 frames each side, at 0.5 px/frame 40: its
+    # template must not learn the occluder, or it sticks to it. (Slowly covered, each frame's latest
+    # template matched the next at 0.8 or better, and it did, until the anchor alone decided.)
     frames, truth, (left, right) = _occlusion(speed)
     tracking = track(frames, _setup([("dot", None)], truth[0]))
     x = truth[:, 0, 0]

@@ -303,9 +303,8 @@ class Match:
     confidence : float in [0, 1]
     agree : bool
         Whether the latest template may be re-cut at the match: the anchor's match lies within
-        :data:`DRIFT_TOLERANCE` of the latest's and is at least :data:`VISIBLE_CONFIDENCE`
-        confident, or the anchor matches plainly (:data:`UPDATE_CONFIDENCE`), or there is no
-        latest apart from the anchor.
+        :data:`DRIFT_TOLERANCE` of the latest's, or the anchor matches plainly
+        (:data:`UPDATE_CONFIDENCE`), or there is no latest apart from the anchor.
     alike : (n, 2) float
         The whole-pixel places of the search, joined to the match's, that match as well as it
         (:data:`ALIKE_LEVEL`), (x, y) pixels: where the texture cannot tell the joint apart.
@@ -321,6 +320,9 @@ class Match:
         The search window's centre, (x, y) pixels.
     angle : float
         The window's turn, radians.
+    anchor : float in [0, 1]
+        The anchor's own confidence at its best place in the window (``confidence`` may be the
+        latest's): how plainly the template that never learns sees the joint there.
     """
 
     xy: NDArray[np.float64]
@@ -329,6 +331,7 @@ class Match:
     cells: _Cells | None
     centre: NDArray[np.float64]
     angle: float
+    anchor: float
 
     @cached_property
     def alike(self) -> NDArray[np.float64]:
@@ -586,7 +589,7 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
         prior = np.where(figure_cells(figure, predicted, angle, R), prior, np.inf)
     allowed = np.isfinite(prior)
     if not allowed.any():  # the bone cannot reach the window, or it is off the figure: nothing is found
-        return Match(predicted.copy(), 0.0, True, None, predicted, angle)
+        return Match(predicted.copy(), 0.0, True, None, predicted, angle, 0.0)
     window = sample(image, predicted, angle, (tw + 2 * R, th + 2 * R))
     anchor = _best(window, templates.anchor, joint, prior, allowed, exact=True)
     (offset, confidence, cells), agree = anchor, True
@@ -607,7 +610,7 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     # The offset, in the window's frame, turned into the image's (a per-joint hot path: by hand).
     c, s = math.cos(angle), math.sin(angle)
     xy = predicted + [c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]]
-    return Match(xy, confidence, agree, cells, predicted, angle)
+    return Match(xy, confidence, agree, cells, predicted, angle, float(anchor[1]))
 
 
 def _bone_cost(predicted, angle, R, bone, step=1.0):

@@ -121,6 +121,15 @@ AMBIGUOUS_SPREAD = 0.125
 # but for near-ties); a flat-coloured joint's colour cost is flat along its fills, and the prior
 # decides there.
 TEXTURED_COLOUR_WEIGHT = 16.0
+# A joint with a texture of its own re-cuts its latest template where its anchor, which never
+# learns, matches at least this confidently and the two agree; a flat-coloured one where it is
+# found plainly (UPDATE_CONFIDENCE), which may be the latest's own confidence. A textured joint's
+# looks change as its limb bends and turns, and a latest kept from a plain match lost it
+# (textured renders, ones and twos at seeds 0 and 2: 75.86 -> 73.31 px summed); the anchor's
+# own match is what keeps a slow occluder out: re-cut at 0.8 of either template, a square passing
+# behind one at 0.5-0.75 px a frame was lost to it, the latest having learnt it, and at 0.4 of
+# the anchor still was. A flat joint's anchor agrees with its latest anywhere along a fill.
+ANCHOR_RECUT_CONFIDENCE = 0.5
 # The kinematic term's weight per squared pixel of bone-length change, relative to w_beta (of the
 # window widened after a held drawing: over a double step a bone changes twice as much).
 BONE_WEIGHT = 1.0
@@ -267,8 +276,9 @@ class FrameSearch:
                 P[t, j] = onto_figure(self._near, P[t, j], reach[j])
         self.lost = np.where(seen, 0, self.lost + 1)
         self.angles[t] = self.angles[t - 1] + turns(P[t - 1], P[t], plans.parents, True)
-        for j in np.flatnonzero(seen & agree & (self.C[t] >= UPDATE_CONFIDENCE)):
-            self.templates[j].latest = sample(image, P[t, j], self.angles[t, j], plans(int(j)).size)
+        for j in np.flatnonzero(seen & agree):
+            if self._learns(t, int(j)):
+                self.templates[j].latest = sample(image, P[t, j], self.angles[t, j], plans(int(j)).size)
         lengthen(self.longest, P[t], self.C[t], plans.hangs_from)
 
     def _settle(self, t, coast, seen):
@@ -363,6 +373,15 @@ class FrameSearch:
         self._alike[m] = found.alike
         self.taken[m] = found
         return True
+
+    def _learns(self, t, m):
+        """Whether joint ``m``, found at ``t`` where its two templates agree, re-cuts its latest
+        there: with a texture of its own, where its anchor matches at least
+        :data:`ANCHOR_RECUT_CONFIDENCE`; else where it is found plainly (``UPDATE_CONFIDENCE``)."""
+        taken = self.taken[m]
+        if self._textured[m]:
+            return taken is not None and taken.anchor >= ANCHOR_RECUT_CONFIDENCE
+        return bool(self.C[t, m] >= UPDATE_CONFIDENCE)
 
     def _refit_turn(self, t, m, found, seen):
         """For a textured joint ``m`` whose parent was found at ``t`` (``seen``): its rectangle's
