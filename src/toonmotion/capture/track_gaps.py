@@ -10,9 +10,12 @@ turn and scale that take the guesses, carried on one frame each way as they went
 found before and after the span, when they meet both within a tenth of the bone
 (:data:`TRUSTED`): guesses that were right (a hand carried by an elbow that turned) stay as they
 were. Guesses that miss are dropped: the bone found before the span turns and stretches steadily
-into the bone found after it (exact for a limb turning steadily about a still joint). A root's
-guesses are corrected by the mismatch at the span's end, growing linearly across the span (the
-correction of a smoother with a random-walk model). Spans at the end of the clip, where the joint
+into the bone found after it (exact for a limb turning steadily about a still joint). A root
+with children found at every drawing of its span is put where they hold it: each one's bone to
+the root turns and stretches steadily from the bone found before the span into the one found
+after it (a hidden pelvis between hip joints that show); the mean of those places. Otherwise a
+root's guesses are corrected by the mismatch at the span's end, growing linearly across the span
+(the correction of a smoother with a random-walk model). Spans at the end of the clip, where the joint
 is never found again, keep their guesses, and joints keep their confidence (below
 ``VISIBLE_CONFIDENCE``): they are still guesses, only better ones.
 
@@ -73,8 +76,15 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
                 continue
             s = ((inside - before) / (after - before))[:, None]
             g = parents[m]
-            if g < 0:
+            held_by = [] if g >= 0 else _found_throughout(out, C, drawings[a:b + 1], m, parents)
+            if held_by:
+                out[inside, m] = np.mean([out[inside, c] + as_points(_blend(start, 1.0, end / start, s[:, 0]))
+                                          for c, start, end in held_by], axis=0)
+            elif g < 0:
                 # The guesses, bent to meet the found end: the mismatch there grows across the span.
+                # (Where the frame-by-frame guesses were right until the span's last drawings, this
+                # spreads their late error over all of it: a root's children found throughout
+                # carry it instead, above.)
                 last = out[inside[-1], m]
                 step = last - out[inside[-2], m] if len(inside) > 1 else 0.0
                 out[inside, m] += s * (out[after, m] - (last + step))
@@ -98,19 +108,35 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
                     # turns and stretches steadily into the bone found after it.
                     guess = np.full(len(inside), start)
                     first, last = 1.0, end / start
-                t = s[:, 0]
-                scale = (1 - t) * abs(first) + t * abs(last)
-                # The two turns within half a turn of each other, so the blend goes the short way.
-                start_turn = np.angle(first)
-                end_turn = start_turn + np.angle(last / first)
-                turn = (1 - t) * start_turn + t * end_turn
-                bone = guess * scale * np.exp(1j * turn)
-                out[inside, m] = out[inside, g] + as_points(bone)
+                out[inside, m] = out[inside, g] + as_points(_blend(guess, first, last, s[:, 0]))
     out[:since] = P[:since]
     held_frames = np.flatnonzero(held[since:]) + since
     for t in held_frames:  # in order, so a drawing held three frames passes its place on
         out[t] = out[t - 1]
     return out
+
+
+def _blend(guess, first, last, t):
+    """The bones ``guess`` (complex, one per ``t``) turned and scaled by a blend, linear in ``t``
+    from 0 to 1, of the turn-and-scales ``first`` and ``last`` (complex, non-zero)."""
+    scale = (1 - t) * abs(first) + t * abs(last)
+    # The two turns within half a turn of each other, so the blend goes the short way.
+    start_turn = np.angle(first)
+    end_turn = start_turn + np.angle(last / first)
+    return guess * scale * np.exp(1j * ((1 - t) * start_turn + t * end_turn))
+
+
+def _found_throughout(P, C, span, m, parents):
+    """The children of root ``m`` found at every frame of ``span`` (its ends included), each with
+    its bone to ``m`` (complex, child to root) at the span's first and last frames; none whose
+    bone is zero at either."""
+    held_by = []
+    for c in np.flatnonzero(parents == m):
+        if (C[span, c] >= VISIBLE_CONFIDENCE).all():
+            start, end = (complex(as_complex(P[f, m] - P[f, c])) for f in (span[0], span[-1]))
+            if start != 0 and end != 0:
+                held_by.append((int(c), start, end))
+    return held_by
 
 
 def _spans(found):
