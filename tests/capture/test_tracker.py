@@ -76,17 +76,18 @@ def _translation(seed=1):
     return _film(rng, canvases), truth[:, None]
 
 
-def _wander(seed=7, T=150):
-    """A square wandering on two sines for T frames, never still: frames, truth (T, 1, 2)."""
+def _wander(seed=7, T=150, light=lambda canvas, t: canvas):
+    """A square wandering on two sines for T frames, never still, each frame lit by ``light``
+    (canvas, frame number -> canvas): frames, truth (T, 1, 2)."""
     rng = np.random.default_rng(seed)
     background, sprite = _texture(rng, 160, 200, blur=1.5), _texture(rng, SPRITE, SPRITE)
     t = np.arange(T)[:, None]
     truth = [100.0, 80.0] + np.hstack([45 * np.sin(2 * np.pi * t / 97), 35 * np.sin(2 * np.pi * t / 61 + 1)])
     canvases = []
-    for xy in truth:
+    for i, xy in enumerate(truth):
         canvas = background.copy()
         _paint(canvas, sprite, xy)
-        canvases.append(canvas)
+        canvases.append(np.clip(light(canvas, i), 0, 255))
     return _film(rng, canvases), truth[:, None]
 
 
@@ -181,6 +182,17 @@ def test_a_long_track_does_not_drift():
     frames, truth = _wander()
     errors = _errors(track(frames, _setup([("dot", None)], truth[0])), truth)
     assert errors.max() <= 0.2, f"worst error {errors.max():.3f} px at frame {errors.argmax()}"
+
+
+@pytest.mark.parametrize("light", [lambda canvas, t: canvas - 0.7 * t,
+                                   lambda canvas, t: canvas * (1 - 0.005 * t)], ids=["darker", "duller"])
+def test_a_long_track_keeps_its_joint_as_the_light_fades(light):
+    # The picture 105 grey levels darker by the end, or of 75% less contrast: the anchor, cut in
+    # the first light, soon matches poorly, and the latest template must go on learning the
+    # joint's looks (asked for the anchor's confidence, it stopped and lost the joint).
+    frames, truth = _wander(light=light)
+    errors = _errors(track(frames, _setup([("dot", None)], truth[0])), truth)
+    assert errors.max() <= 1.0, f"worst error {errors.max():.3f} px at frame {errors.argmax()}"
 
 
 def test_a_limb_turning_8_degrees_a_frame_is_tracked_within_a_pixel_only_with_rotation():

@@ -320,9 +320,6 @@ class Match:
         The search window's centre, (x, y) pixels.
     angle : float
         The window's turn, radians.
-    anchor : float in [0, 1]
-        The anchor's own confidence at its best place in the window (``confidence`` may be the
-        latest's): how plainly the template that never learns sees the joint there.
     """
 
     xy: NDArray[np.float64]
@@ -331,7 +328,6 @@ class Match:
     cells: _Cells | None
     centre: NDArray[np.float64]
     angle: float
-    anchor: float
 
     @cached_property
     def alike(self) -> NDArray[np.float64]:
@@ -589,7 +585,7 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
         prior = np.where(figure_cells(figure, predicted, angle, R), prior, np.inf)
     allowed = np.isfinite(prior)
     if not allowed.any():  # the bone cannot reach the window, or it is off the figure: nothing is found
-        return Match(predicted.copy(), 0.0, True, None, predicted, angle, 0.0)
+        return Match(predicted.copy(), 0.0, True, None, predicted, angle)
     window = sample(image, predicted, angle, (tw + 2 * R, th + 2 * R))
     anchor = _best(window, templates.anchor, joint, prior, allowed, exact=True)
     (offset, confidence, cells), agree = anchor, True
@@ -610,7 +606,7 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     # The offset, in the window's frame, turned into the image's (a per-joint hot path: by hand).
     c, s = math.cos(angle), math.sin(angle)
     xy = predicted + [c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]]
-    return Match(xy, confidence, agree, cells, predicted, angle, float(anchor[1]))
+    return Match(xy, confidence, agree, cells, predicted, angle)
 
 
 def _bone_cost(predicted, angle, R, bone, step=1.0):
@@ -684,6 +680,21 @@ def confidence(ssd: float, size: tuple[int, int]) -> float:
     0.8
     """
     return math.exp(-ssd / (size[0] * size[1] * 3) / (2 * CONFIDENCE_SCALE**2))
+
+
+def likeness(template: Patch, patch: Patch) -> float:
+    """How alike two patches of one size look, whatever the light: their normalized cross-correlation
+    with each channel's mean taken off (1 alike, 0 unrelated, -1 a negative; 0 if either is flat).
+    A patch made brighter or darker, or of more or less contrast, is as alike as it was.
+
+    >>> patch = np.arange(12, dtype=np.float32).reshape(2, 2, 3)
+    >>> round(likeness(patch, 0.5 * patch + 40), 6), round(likeness(patch, -patch), 6)
+    (1.0, -1.0)
+    """
+    a = template - template.mean(axis=(0, 1))
+    b = patch - patch.mean(axis=(0, 1))
+    scale = math.sqrt(float((a * a).sum()) * float((b * b).sum()))
+    return float((a * b).sum()) / scale if scale > 0 else 0.0
 
 
 def ssd_at(confidence: float, size: tuple[int, int]) -> float:

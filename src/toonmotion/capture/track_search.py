@@ -52,6 +52,7 @@ from toonmotion.capture.template_match import (
     Match,
     Templates,
     is_textured,
+    likeness,
     locate,
     match,
     plan_joint,
@@ -121,15 +122,17 @@ AMBIGUOUS_SPREAD = 0.125
 # but for near-ties); a flat-coloured joint's colour cost is flat along its fills, and the prior
 # decides there.
 TEXTURED_COLOUR_WEIGHT = 16.0
-# A joint with a texture of its own re-cuts its latest template where its anchor, which never
-# learns, matches at least this confidently and the two agree; a flat-coloured one where it is
-# found plainly (UPDATE_CONFIDENCE), which may be the latest's own confidence. A textured joint's
-# looks change as its limb bends and turns, and a latest kept from a plain match lost it
-# (textured renders, ones and twos at seeds 0 and 2: 75.86 -> 73.31 px summed); the anchor's
-# own match is what keeps a slow occluder out: re-cut at 0.8 of either template, a square passing
-# behind one at 0.5-0.75 px a frame was lost to it, the latest having learnt it, and at 0.4 of
-# the anchor still was. A flat joint's anchor agrees with its latest anywhere along a fill.
-ANCHOR_RECUT_CONFIDENCE = 0.5
+# A joint with a texture of its own re-cuts its latest template where the two agree and the place
+# looks like its anchor, which never learns, with a likeness of at least this, whatever the light
+# (template_match.likeness); a flat-coloured one where it is found plainly (UPDATE_CONFIDENCE, the
+# higher of the two templates' confidences). At 0.8 of either confidence, a textured square passing
+# behind an occluder at 0.5-0.75 px a frame was lost to it, each frame's latest (a little more
+# occluder) matching the next at 0.8 or better; at 0.6 of likeness still. Asked for 0.5 of the
+# anchor's confidence instead, a picture darkening by 0.7 grey levels a frame lost its joint. A textured
+# joint whose looks change as its limb bends keeps a latest that follows them (textured renders,
+# ones and twos at seeds 0 and 2: 75.78 -> 72.15 px summed, 9 clips better, 8 worse). A flat
+# joint's anchor is alike anywhere along its fill.
+ANCHOR_LIKENESS = 0.8
 # The kinematic term's weight per squared pixel of bone-length change, relative to w_beta (of the
 # window widened after a held drawing: over a double step a bone changes twice as much).
 BONE_WEIGHT = 1.0
@@ -277,8 +280,7 @@ class FrameSearch:
         self.lost = np.where(seen, 0, self.lost + 1)
         self.angles[t] = self.angles[t - 1] + turns(P[t - 1], P[t], plans.parents, True)
         for j in np.flatnonzero(seen & agree):
-            if self._learns(t, int(j)):
-                self.templates[j].latest = sample(image, P[t, j], self.angles[t, j], plans(int(j)).size)
+            self._learn(image, t, int(j))
         lengthen(self.longest, P[t], self.C[t], plans.hangs_from)
 
     def _settle(self, t, coast, seen):
@@ -374,14 +376,17 @@ class FrameSearch:
         self.taken[m] = found
         return True
 
-    def _learns(self, t, m):
-        """Whether joint ``m``, found at ``t`` where its two templates agree, re-cuts its latest
-        there: with a texture of its own, where its anchor matches at least
-        :data:`ANCHOR_RECUT_CONFIDENCE`; else where it is found plainly (``UPDATE_CONFIDENCE``)."""
-        taken = self.taken[m]
-        if self._textured[m]:
-            return taken is not None and taken.anchor >= ANCHOR_RECUT_CONFIDENCE
-        return bool(self.C[t, m] >= UPDATE_CONFIDENCE)
+    def _learn(self, image, t, m):
+        """Re-cut joint ``m``'s latest template where it was found at ``t``, its two templates
+        agreeing: with a texture of its own, if the patch there looks like its anchor at least
+        :data:`ANCHOR_LIKENESS` (:func:`~toonmotion.capture.template_match.likeness`); else if it
+        was found plainly (``UPDATE_CONFIDENCE``)."""
+        textured = self._textured[m]
+        if not textured and self.C[t, m] < UPDATE_CONFIDENCE:
+            return
+        patch = sample(image, self.P[t, m], self.angles[t, m], self.plans(m).size)
+        if not textured or likeness(self.templates[m].anchor, patch) >= ANCHOR_LIKENESS:
+            self.templates[m].latest = patch
 
     def _refit_turn(self, t, m, found, seen):
         """For a textured joint ``m`` whose parent was found at ``t`` (``seen``): its rectangle's
