@@ -47,6 +47,7 @@ from toonmotion.capture.track_checks import (
 )
 from toonmotion.capture.track_figure import FigureMasks, put_on_figure
 from toonmotion.capture.track_gaps import fill_hidden_spans
+from toonmotion.capture.track_light import Relit
 from toonmotion.capture.track_path import best_paths
 from toonmotion.capture.track_prediction import COAST_STEPS, is_held, predict, turns
 from toonmotion.capture.track_search import MAX_WIDEN, FrameSearch, Plans, hidden_for, longest_bones
@@ -142,6 +143,11 @@ class TrackSettings:
         (:mod:`~toonmotion.capture.track_figure`). Read by
         :func:`~toonmotion.capture.footage.capture_motion`, which finds the figure's masks and
         gives them to :func:`track`.
+    relight : bool
+        See every frame in the light of the frame tracking started from: where a frame's
+        brightness or contrast has changed (a camera's exposure, a flickering lamp), its colours
+        are mapped back before its joints are looked for (:mod:`~toonmotion.capture.track_light`).
+        Frames in the same light are left as they are.
     """
 
     search: float | None = None
@@ -152,6 +158,7 @@ class TrackSettings:
     best_path: bool = True
     both_ways: bool = False
     figure: bool = True
+    relight: bool = True
 
     def __post_init__(self) -> None:
         if self.search is not None:
@@ -160,7 +167,7 @@ class TrackSettings:
         object.__setattr__(self, "w_alpha", check_number(self.w_alpha, "w_alpha", 0.0, "> 0", strict=True))
         if self.w_beta is not None:
             object.__setattr__(self, "w_beta", check_number(self.w_beta, "w_beta", 0.0, ">= 0"))
-        for name in ("rotate", "fill_gaps", "best_path", "both_ways", "figure"):
+        for name in ("rotate", "fill_gaps", "best_path", "both_ways", "figure", "relight"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
@@ -269,6 +276,8 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     start = check_index(start, "start", 0, count - 1, count)
     stop = count if stop is None else check_index(stop, "stop", start + 1, count, count)
     first = read_frame(frames, start, None)
+    if settings.relight:
+        frames = Relit(frames, first)
     k = len(setup.skeleton)
     initial = setup.skeleton.positions if initial is None else check_initial(initial, k)
     check_inside(setup.skeleton, setup.sizes, initial, np.zeros(k), first, start, range(k))
@@ -341,6 +350,8 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     begin = _run_start(tracking.tracked, frame)
     stop = frame + 1 + int(np.argmin(np.append(tracking.tracked[frame + 1:], False)))
 
+    if settings.relight:  # in the light of the frame the run started from, as track saw them
+        frames = Relit(frames, read_frame(frames, begin, None))
     out = _Arrays.copy(tracking)
     out.clear(frame + 1, stop)
     for m, xy in fixed.items():

@@ -47,6 +47,10 @@ def track(
     both_ways: Annotated[bool, typer.Option(
         "--both-ways", help="Also track backwards from the last frame, and choose each joint's path "
         "between the two ways: fewer joints lost for a stretch, in about twice the time.")] = False,
+    steady_light: Annotated[bool, typer.Option(
+        "--steady-light", help="Take the frames as they are: do not map each frame's brightness and "
+        "contrast back to those of the frame tracking starts from (for exposure changes and "
+        "flicker).")] = False,
     fps: Annotated[float | None, typer.Option(
         "--fps", help="Frame rate \\[default: the video's, else 24].")] = None,
     resume: Annotated[Path | None, typer.Option(
@@ -89,7 +93,7 @@ def track(
             start=start,
             fps=rate,
             settings=api.TrackSettings(search=search, figure=not free, best_path=not frame_by_frame,
-                                       both_ways=both_ways),
+                                       both_ways=both_ways, relight=not steady_light),
             background=flat,
             earlier=None if resume is None else load_motion(resume),
             corrections=dict(options.named_point(c, "--set") for c in corrections or ()),

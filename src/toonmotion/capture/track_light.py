@@ -1,0 +1,101 @@
+"""Frames seen in one light: each frame's brightness and contrast matched to a reference frame's
+before the tracker looks at it.
+
+The tracker compares colours by their squared differences (thesis eq. 4.1), and a camera's
+exposure or a flickering light moves every colour at once: a joint's anchor, cut in the first
+light, stops matching and the joint is taken to be hidden. Each colour channel of a frame is
+mapped by a gain and an offset that take its quartiles and median to the reference frame's,
+read off a band round the picture's border (:data:`BORDER`), where the figure seldom is, so they
+are the background's and do not move with the figure. A frame whose mapping would move no colour
+between its quartiles by more than :data:`LIGHT_TOLERANCE` grey levels is left exactly as it is,
+so footage in steady light is tracked as it always was. A plain border (paper: quartiles closer
+than :data:`MIN_SPREAD`) cannot tell gain from offset; its colours are taken to be scaled, as
+exposure scales them. The camera must be still enough that the border shows the same background.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from toonmotion.capture.track_checks import Frames
+
+# A frame is relit only where its mapping moves a colour between its quartiles by more than this
+# many grey levels.
+LIGHT_TOLERANCE = 6.0
+# A channel whose quartiles lie closer than this (grey levels) in the frame or the reference has
+# no contrast to match: it is scaled to the reference's median.
+MIN_SPREAD = 8.0
+# Levels are read off every STEP-th pixel of every STEP-th row in a band round the border, this
+# fraction of the shorter side wide. (Read off the whole frame, they moved with a drawing swung
+# large across it, and two clips of the drawings' footage went from 2.0 and 1.3 px to 42 and 35.)
+STEP = 4
+BORDER = 0.15
+
+
+def light_levels(image: NDArray[np.uint8]) -> NDArray[np.float64]:
+    """Each channel's lower quartile, median and upper quartile, ``(3, 3)`` grey levels (rows are
+    channels), from every :data:`STEP`-th pixel of a band :data:`BORDER` wide round the border.
+
+    >>> image = np.zeros((8, 8, 3), np.uint8); image[:, 4:] = 100
+    >>> light_levels(image)[0].tolist()
+    [0.0, 0.0, 100.0]
+    """
+    h, w = image.shape[:2]
+    band = max(1, int(BORDER * min(h, w)))
+    strips = (image[:band:STEP, ::STEP], image[h - band::STEP, ::STEP],
+              image[band:h - band:STEP, :band:STEP], image[band:h - band:STEP, w - band::STEP])
+    sample = np.concatenate([strip.reshape(-1, 3) for strip in strips])[None]
+    levels = np.empty((3, 3))
+    for c in range(3):
+        counts = cv2.calcHist([sample], [c], None, [256], [0, 256]).ravel()
+        below = np.cumsum(counts) / counts.sum()
+        levels[c] = np.searchsorted(below, [0.25, 0.5, 0.75])
+    return levels
+
+
+def relight(image: NDArray[np.uint8], reference: NDArray[np.float64]) -> NDArray[np.uint8]:
+    """``image`` with each channel mapped so that its quartiles and median (:func:`light_levels`)
+    fall on ``reference``'s, or ``image`` itself where that changes too little to matter (module
+    docstring).
+
+    >>> dark = np.tile(np.arange(20, 120, dtype=np.uint8), (8, 1)).repeat(3).reshape(8, 100, 3)
+    >>> bright = relight(dark, light_levels(2 * dark))
+    >>> int(abs(bright.astype(int) - 2 * dark).max()) <= 2, relight(dark, light_levels(dark)) is dark
+    (True, True)
+    """
+    levels = light_levels(image)
+    spread, wanted = levels[:, 2] - levels[:, 0], reference[:, 2] - reference[:, 0]
+    # Where the border is plain (paper), its one colour cannot tell gain from offset: light is
+    # taken to scale colours, as exposure does.
+    contrast = (spread >= MIN_SPREAD) & (wanted >= MIN_SPREAD)
+    gain = np.where(contrast, wanted / np.maximum(spread, 1.0),
+                    reference[:, 1] / np.maximum(levels[:, 1], 1.0))
+    offset = np.where(contrast, reference[:, 1] - gain * levels[:, 1], 0.0)
+    moved = np.abs(gain[:, None] * levels + offset[:, None] - levels)
+    if moved.max() <= LIGHT_TOLERANCE:
+        return image
+    values = np.arange(256, dtype=float)
+    table = np.clip(np.rint(gain[None, :] * values[:, None] + offset[None, :]), 0, 255).astype(np.uint8)
+    return np.asarray(cv2.LUT(image, table.reshape(1, 256, 3)), dtype=np.uint8)
+
+
+class Relit(Sequence):
+    """``frames`` each seen in the light of ``reference`` (a frame of them): :func:`relight` as
+    each is read. Items that are not ``(h, w, 3)`` uint8 arrays pass through unchanged, for the
+    tracker's own checks to report."""
+
+    def __init__(self, frames: Frames, reference: NDArray[np.uint8]) -> None:
+        self._frames, self._levels = frames, light_levels(reference)
+
+    def __len__(self) -> int:
+        return len(self._frames)
+
+    def __getitem__(self, t):
+        image = np.asarray(self._frames[t])
+        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8 or 0 in image.shape:
+            return image
+        return relight(np.ascontiguousarray(image), self._levels)
