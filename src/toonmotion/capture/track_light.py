@@ -29,16 +29,18 @@ LIGHT_TOLERANCE = 6.0
 # A channel whose quartiles lie closer than this (grey levels) in the frame or the reference has
 # no contrast to match: it is scaled to the reference's median.
 MIN_SPREAD = 8.0
-# Levels are read off every STEP-th pixel of every STEP-th row in a band round the border, this
-# fraction of the shorter side wide. (Read off the whole frame, they moved with a drawing swung
-# large across it, and two clips of the drawings' footage went from 2.0 and 1.3 px to 42 and 35.)
-STEP = 4
+# Levels are read off a band round the border, this fraction of the shorter side wide, at about
+# SAMPLES pixels (every fourth pixel of every fourth row at 640x480; every pixel of a small
+# picture, whose levels would otherwise shake with what passes the border). Read off the whole
+# frame, they moved with a drawing swung large across it, and two clips of the drawings' footage
+# went from 2.0 and 1.3 px to 42 and 35.
 BORDER = 0.15
+SAMPLES = 8000
 
 
 def light_levels(image: NDArray[np.uint8]) -> NDArray[np.float64]:
     """Each channel's lower quartile, median and upper quartile, ``(3, 3)`` grey levels (rows are
-    channels), from every :data:`STEP`-th pixel of a band :data:`BORDER` wide round the border.
+    channels), from about :data:`SAMPLES` pixels of a band :data:`BORDER` wide round the border.
 
     >>> image = np.zeros((8, 8, 3), np.uint8); image[:, 4:] = 100
     >>> light_levels(image)[0].tolist()
@@ -46,8 +48,10 @@ def light_levels(image: NDArray[np.uint8]) -> NDArray[np.float64]:
     """
     h, w = image.shape[:2]
     band = max(1, int(BORDER * min(h, w)))
-    strips = (image[:band:STEP, ::STEP], image[h - band::STEP, ::STEP],
-              image[band:h - band:STEP, :band:STEP], image[band:h - band:STEP, w - band::STEP])
+    # Every pixel of a small picture's band, every step-th of a large one's: about SAMPLES.
+    step = max(1, int((2 * band * (h + w) / SAMPLES) ** 0.5))
+    strips = (image[:band:step, ::step], image[h - band::step, ::step],
+              image[band:h - band:step, :band:step], image[band:h - band:step, w - band::step])
     sample = np.concatenate([strip.reshape(-1, 3) for strip in strips])[None]
     levels = np.empty((3, 3))
     for c in range(3):
