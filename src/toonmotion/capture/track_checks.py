@@ -38,10 +38,15 @@ def check_count(frames: Frames) -> int:
     return count
 
 
+def is_rgb_frame(image: NDArray[Any]) -> bool:
+    """Whether ``image`` is an (h, w, 3) uint8 array with pixels: a frame the tracker can read."""
+    return image.ndim == 3 and image.shape[2] == 3 and image.dtype == np.uint8 and 0 not in image.shape
+
+
 def read_frame(frames: Frames, t: int, shape: tuple[int, ...] | None) -> NDArray[np.uint8]:
     """Frame ``t`` as a contiguous (h, w, 3) uint8 array, checked; ``shape`` that of the first read."""
     image = np.asarray(frames[t])
-    if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8 or 0 in image.shape:
+    if not is_rgb_frame(image):
         raise TrackingError(
             f"frame {t} is a {image.dtype} array of shape {image.shape}; give (h, w, 3) uint8 RGB frames"
         )

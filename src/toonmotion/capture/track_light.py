@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.track_checks import Frames
+from toonmotion.capture.track_checks import Frames, is_rgb_frame
 
 # A frame is relit only where its mapping moves a colour between its quartiles by more than this
 # many grey levels.
@@ -100,6 +100,6 @@ class Relit(Sequence):
 
     def __getitem__(self, t):
         image = np.asarray(self._frames[t])
-        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8 or 0 in image.shape:
+        if not is_rgb_frame(image):
             return image
         return relight(np.ascontiguousarray(image), self._levels)
