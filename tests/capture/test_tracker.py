@@ -508,6 +508,42 @@ def test_a_hand_hidden_while_its_forearm_swings_is_found_again_round_its_elbow()
     assert guessed[30, 2] > 40
 
 
+def _arm_under_covers(seed=14, T=60):
+    """A still shoulder and an arm sliding right at 1 px a frame: a cover hides the elbow from
+    frame 10 on, another the hand for frames 10-24 only. Frames, truth (T, 3, 2)."""
+    rng = np.random.default_rng(seed)
+    background = _texture(rng, 140, 280, blur=1.5)
+    shoulder_sprite, elbow_sprite, hand_sprite = (_texture(rng, SPRITE, SPRITE) for _ in range(3))
+    cover = _texture(rng, 40, 40)
+    shoulder, canvases, truth = np.array([40.0, 70.0]), [], []
+    for t in range(T):
+        elbow = np.array([100.0 + t, 70.0])
+        hand = elbow + (50.0, 0.0)
+        canvas = background.copy()
+        for sprite, xy in ((shoulder_sprite, shoulder), (elbow_sprite, elbow), (hand_sprite, hand)):
+            _paint(canvas, sprite, xy)
+        if t >= 10:
+            _paint(canvas, cover, elbow)
+        if 10 <= t < 25:
+            _paint(canvas, cover[::-1], hand)
+        canvases.append(canvas)
+        truth.append([shoulder, elbow, hand])
+    return _film(rng, canvases), np.array(truth)
+
+
+def test_a_hidden_joint_whose_parent_is_hidden_too_is_found_again_when_it_re_emerges():
+    """The hand re-emerges at frame 25, 15 px from where it hid, while its elbow stays covered. It is
+    looked for near where the elbow, carried by the shoulder, carries it, in a window that has widened
+    while it hid, and found; it does not wait for its elbow to be found."""
+    frames, truth = _arm_under_covers()
+    setup = _setup([("shoulder", None), ("elbow", "shoulder"), ("hand", "elbow")], truth[0])
+    tracking = track(frames, setup)
+    errors = _errors(tracking, truth)
+    assert (tracking.confidence[12:, 1] < 0.5).all()  # the elbow stays hidden
+    assert (tracking.confidence[12:24, 2] < 0.5).all()
+    assert errors[27:, 2].max() < 1.0, f"hand errors after it re-emerged: {np.round(errors[25:, 2], 1)}"
+
+
 def _on_twos(frames, truth, rng):
     """Each drawing held two frames, with fresh camera noise on the repeat."""
     held = np.arange(len(frames)) // 2 * 2

@@ -10,8 +10,9 @@ A frame is searched in four passes over the skeleton:
    A *hidden* joint is looked for afresh: round its parent, if that was found, at every place its
    bone can reach in directions widening from where it was last (:data:`SPAN_STEP` a drawing),
    its rectangle turned with its bone there (:func:`~toonmotion.capture.template_match.search_round`);
-   else near where its parent carries it, in a window that widens for every drawing it stays
-   hidden (:func:`~toonmotion.capture.template_match.locate`). The best places are then matched
+   else near where its parent carries it (a parent hidden too is first put where its own parent
+   carries it), in a window that widens for every drawing it stays hidden
+   (:func:`~toonmotion.capture.template_match.locate`). The best places are then matched
    finely, and the joint is taken as found again only by a match at least
    :data:`REACQUIRE_CONFIDENCE` confident, within :data:`REACH_SLACK` times the longest its bone
    has been seen. A joint with a texture of its own
@@ -250,15 +251,19 @@ class FrameSearch:
         self.taken = [None] * k
         self.C[t] = 0.0
         for m in range(k):  # down
+            carried = hidden_at(P, t, m, coast[m], plans.hangs_from)
             if not self.lost[m]:
                 self._try(image, t, m, self._plan(m, pace), predicted[m], angle[m], VISIBLE_CONFIDENCE, seen,
                           agree)
-                continue
-            carried = hidden_at(P, t, m, coast[m], plans.hangs_from)
-            for centre, turned in self._places_to_look(self._small(image), t, m, carried, angle[m], seen):
-                if self._try(image, t, m, self._plan(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen,
-                             agree, bounded=True, turn=False, expected=carried):
-                    break
+            else:
+                for centre, turned in self._places_to_look(self._small(image), t, m, carried, angle[m], seen):
+                    if self._try(image, t, m, self._plan(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen,
+                                 agree, bounded=True, turn=False, expected=carried):
+                        break
+            if not seen[m]:
+                # Where its parent carries it for now (placed for good below): a hidden joint
+                # hanging from it is looked for near there.
+                P[t, m] = carried
         moves = moves_below(P, t, seen, plans.hangs_from)
         for m in range(k - 1, -1, -1):  # up
             if not seen[m] and np.isfinite(moves[m]).all():
