@@ -508,6 +508,39 @@ def test_a_hand_hidden_while_its_forearm_swings_is_found_again_round_its_elbow()
     assert guessed[30, 2] > 40
 
 
+def _swing_and_back(seed=15, T=30):
+    """A still shoulder and elbow and a forearm swinging 10 degrees a frame about the elbow, which
+    turns back at frame 15 (the hand 9.6 px a frame): frames, truth (T, 3, 2)."""
+    rng = np.random.default_rng(seed)
+    background = _texture(rng, 200, 240, blur=1.5)
+    shoulder_sprite, elbow_sprite, hand_sprite = (_texture(rng, SPRITE, SPRITE) for _ in range(3))
+    shoulder, elbow, reach = np.array([60.0, 100.0]), np.array([120.0, 100.0]), 55.0
+    canvases, truth = [], []
+    for t in range(T):
+        theta = math.radians(-70 + 10 * (15 - abs(t - 15)))
+        hand = elbow + reach * np.array([math.cos(theta), math.sin(theta)])
+        canvas = background.copy()
+        _paint(canvas, shoulder_sprite, shoulder)
+        _paint(canvas, elbow_sprite, elbow)
+        _paint(canvas, hand_sprite, hand, theta)
+        canvases.append(canvas)
+        truth.append([shoulder, elbow, hand])
+    return _film(rng, canvases), np.array(truth)
+
+
+def test_a_textured_joint_missed_round_its_prediction_is_looked_for_at_once_round_its_parent():
+    """Where the forearm turns back, the hand's prediction runs on 19 px past it, out of its search
+    window. A joint with a texture of its own is then looked for in the same frame round its
+    parent, as a hidden joint is, and found there: not lost for a frame, left 9.6 px behind (the
+    whole-sequence passes, left out here, would mend the place but not the confidence)."""
+    frames, truth = _swing_and_back()
+    setup = _setup([("shoulder", None), ("elbow", "shoulder"), ("hand", "elbow")], truth[0])
+    tracking = track(frames, setup, settings=TrackSettings(best_path=False, fill_gaps=False))
+    errors = _errors(tracking, truth)
+    assert (tracking.confidence[:, 2] >= 0.5).all(), np.round(tracking.confidence[:, 2], 2)
+    assert errors.max() < 1.0, f"hand errors: {np.round(errors[:, 2], 1)}"
+
+
 def _arm_under_covers(seed=14, T=60):
     """A still shoulder and an arm sliding right at 1 px a frame: a cover hides the elbow from
     frame 10 on, another the hand for frames 10-24 only. Frames, truth (T, 3, 2)."""

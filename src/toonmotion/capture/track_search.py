@@ -12,7 +12,8 @@ A frame is searched in four passes over the skeleton:
    its rectangle turned with its bone there (:func:`~toonmotion.capture.template_match.search_round`);
    else near where its parent carries it (a parent hidden too is first put where its own parent
    carries it), in a window that widens for every drawing it stays hidden
-   (:func:`~toonmotion.capture.template_match.locate`). The best places are then matched
+   (:func:`~toonmotion.capture.template_match.locate`). A joint with a texture of its own not
+   found round its prediction is looked for at once in the same way. The best places are then matched
    finely, and the joint is taken as found again only by a match at least
    :data:`REACQUIRE_CONFIDENCE` confident, within :data:`REACH_SLACK` times the longest its bone
    has been seen. A joint with a texture of its own
@@ -255,8 +256,11 @@ class FrameSearch:
             if not self.lost[m]:
                 self._try(image, t, m, self._plan(m, pace), predicted[m], angle[m], VISIBLE_CONFIDENCE, seen,
                           agree)
-            else:
-                for centre, turned in self._places_to_look(self._small(image), t, m, carried, angle[m], seen):
+            if not seen[m] and (self.lost[m] or self._textured[m]):
+                # A textured joint not found round its prediction is looked for at once as if hidden.
+                hidden = max(int(self.lost[m]), 1)
+                for centre, turned in self._places_to_look(self._small(image), t, m, carried, angle[m], seen,
+                                                           hidden):
                     if self._try(image, t, m, self._plan(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen,
                                  agree, bounded=True, turn=False, expected=carried):
                         break
@@ -308,22 +312,23 @@ class FrameSearch:
             nearest = int(np.argmin(distance))
             P[t, m] = guess if distance[nearest] <= 1.0 else self._alike[m][nearest]
 
-    def _places_to_look(self, small, t, m, carried, angle, seen):
-        """Where to look for hidden joint ``m`` at full resolution, with its rectangle's angle
-        there: round its parent if that was found, else near ``carried``, where its parent carries
-        it or it coasts (module docstring). Places whose coarse match is hopeless are left out."""
+    def _places_to_look(self, small, t, m, carried, angle, seen, hidden):
+        """Where to look for joint ``m``, hidden for ``hidden`` drawings, at full resolution, with
+        its rectangle's angle there: round its parent if that was found, else near ``carried``,
+        where its parent carries it or it coasts (module docstring). Places whose coarse match is
+        hopeless are left out."""
         P, plans = self.P, self.plans
         joint = self._plan(m)
         bone = self._bone_rule(t, m, seen, bounded=True)
         if bone is not None and math.isfinite(bone.longest):
             g = plans.hangs_from[m]
             start = math.atan2(*(P[t - 1, m] - P[t - 1, g])[::-1])
-            span = min(math.pi, SPAN_STEP * self.lost[m])
+            span = min(math.pi, SPAN_STEP * hidden)
             turned = float(self.angles[t - 1, m])
             found = search_round(small, self.templates[m], joint, bone, start, span, turned, count=PLACES,
                                  figure=self._figure(m), by_look=self._textured[m])
             return [(xy, turned) for xy, coarse, turned in found if coarse >= COARSE_CONFIDENCE]
-        radius = joint.radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
+        radius = joint.radius * min(1.0 + WIDEN_STEP * hidden, MAX_WIDEN)
         xy, coarse, turned = locate(small, self.templates[m], carried, angle, joint, radius, bone,
                                     self._figure(m))
         return [(xy, turned)] if coarse >= COARSE_CONFIDENCE else []
