@@ -24,7 +24,7 @@ A frame is searched in four passes over the skeleton:
    to where its bone and its guessed place put it.
 2. **Up** (children before parents). A joint still not found is looked for where the joints
    hanging from it that were found put it (each moved as its child moved), if its coarse match
-   there is not hopeless.
+   there is at least :data:`UP_COARSE_CONFIDENCE`.
 3. **Settle** (parents first). A joint found on a flat fill, where places along the fill match as
    well as its match (:data:`AMBIGUOUS_SPREAD`), is put among them where its parent and its
    children found plainly carry it.
@@ -72,16 +72,22 @@ MAX_WIDEN = 3.0
 # A hidden joint whose parent is found is looked for round it, in directions up to this many
 # radians from where it was last for every drawing it has been hidden (all round at most).
 SPAN_STEP = math.radians(45)
-# Places whose coarse match is less confident than this are not looked at closely (in the up pass,
-# at the joint's angle and at every turn its plan tries: that leaves out 78% of its tries on the
-# seed-0 flat renders, and 8 of its 45 finds, all on the zombie walk; it made a fifth of all
-# matches and found a joint in about 1% of its tries); of the others,
+# Places whose coarse match is less confident than this are not looked at closely; of the others,
 # a rectangle apart, the PLACES best are matched finely, best first, until one is found. The coarse
 # match only ranks places (a quarter-rectangle grid misses a fine texture by up to an eighth of a
 # rectangle): refining the best 2 instead of the best 64 lost joints on 4 of the 14 rendered
 # clips (e.g. the flat walk's mean error 5.7 -> 7.7 px) at no gain in speed.
 COARSE_CONFIDENCE = 0.1
 PLACES = 64
+# The up pass looks closely only where the coarse match, at the joint's angle or a turn, is at
+# least this. At COARSE_CONFIDENCE it made a fifth of all matches and found a joint in about 4% of
+# its tries; on the seed-0 renders 40 of the 43 textured joints it found (all within 0.4 px)
+# matched at least 0.3 coarse, as did 64 of the 75 flat ones found within 3 px (and 51 of the 68
+# found farther off), in a quarter of its tries. The textured zombie walk went from 78 to 100
+# frames/s; the textured renders from 48.5 to 49.1 px summed (whole clips, ones and twos at seeds
+# 0 and 2; the zombie walk on twos 2.6 -> 3.0), the cel renders from 260.0 to 263.3, at seed 5
+# (used for nothing else) 23.0 -> 23.4 and 257.4 -> 204.5; the drawings' footage did not move.
+UP_COARSE_CONFIDENCE = 0.3
 # A hidden joint is found again only by a match at least this confident, no farther from its
 # parent than REACH_SLACK times the longest its bone has been seen. The anchor may have been cut
 # with a neighbour overlapping the joint; 0.6 still tells a joint from a different texture (0.1
@@ -273,7 +279,7 @@ class FrameSearch:
             if not seen[m] and np.isfinite(moves[m]).all():
                 centre = P[t - 1, m] + moves[m]
                 ranks = self._coarse_ranks(self._small(image), t, m, centre, angle[m], seen)
-                if max(ranks) >= COARSE_CONFIDENCE:
+                if max(ranks) >= UP_COARSE_CONFIDENCE:
                     self._try(image, t, m, self._plan(m), centre, angle[m], REACQUIRE_CONFIDENCE, seen, agree,
                               bounded=True, turn_ranks=ranks[1:])
         self._settle(t, coast, seen)
