@@ -541,16 +541,16 @@ def test_a_textured_joint_missed_round_its_prediction_is_looked_for_at_once_roun
     assert errors.max() < 1.0, f"hand errors: {np.round(errors[:, 2], 1)}"
 
 
-def _arm_under_covers(seed=14, T=60):
-    """A still shoulder and an arm sliding right at 1 px a frame: a cover hides the elbow from
-    frame 10 on, another the hand for frames 10-24 only. Frames, truth (T, 3, 2)."""
+def _arm_under_covers(seed=14, T=60, speed=1.0):
+    """A still shoulder and an arm sliding right at ``speed`` px a frame: a cover hides the elbow
+    from frame 10 on, another the hand for frames 10-24 only. Frames, truth (T, 3, 2)."""
     rng = np.random.default_rng(seed)
     background = _texture(rng, 140, 280, blur=1.5)
     shoulder_sprite, elbow_sprite, hand_sprite = (_texture(rng, SPRITE, SPRITE) for _ in range(3))
     cover = _texture(rng, 40, 40)
     shoulder, canvases, truth = np.array([40.0, 70.0]), [], []
     for t in range(T):
-        elbow = np.array([100.0 + t, 70.0])
+        elbow = np.array([100.0 + speed * t, 70.0])
         hand = elbow + (50.0, 0.0)
         canvas = background.copy()
         for sprite, xy in ((shoulder_sprite, shoulder), (elbow_sprite, elbow), (hand_sprite, hand)):
@@ -575,6 +575,19 @@ def test_a_hidden_joint_whose_parent_is_hidden_too_is_found_again_when_it_re_eme
     assert (tracking.confidence[12:, 1] < 0.5).all()  # the elbow stays hidden
     assert (tracking.confidence[12:24, 2] < 0.5).all()
     assert errors[27:, 2].max() < 1.0, f"hand errors after it re-emerged: {np.round(errors[25:, 2], 1)}"
+
+
+def test_on_twos_a_hidden_joint_is_looked_for_in_windows_twice_as_wide():
+    """On twos the same scene, at 2.4 px a frame: the hand re-emerges 38 px from where it hid, 8
+    drawings later, beyond the widest window on ones (3 times the radius, 30 px) but within that
+    window twice as wide, as every window is after a held drawing."""
+    frames, truth = _arm_under_covers(speed=2.4, T=50)
+    frames, truth = _on_twos(frames, truth, np.random.default_rng(8))
+    setup = _setup([("shoulder", None), ("elbow", "shoulder"), ("hand", "elbow")], truth[0])
+    tracking = track(frames, setup)
+    errors = _errors(tracking, truth)
+    assert tracking.held.tolist() == [t % 2 == 1 for t in range(len(frames))]
+    assert errors[28:, 2].max() < 1.0, f"hand errors after it re-emerged: {np.round(errors[24:, 2], 1)}"
 
 
 def _on_twos(frames, truth, rng):

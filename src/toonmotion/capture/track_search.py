@@ -12,7 +12,8 @@ A frame is searched in four passes over the skeleton:
    its rectangle turned with its bone there (:func:`~toonmotion.capture.template_match.search_round`);
    else near where its parent carries it (a parent hidden too is first put where its own parent
    carries it), in a window that widens for every drawing it stays hidden
-   (:func:`~toonmotion.capture.template_match.locate`). A joint with a texture of its own not
+   (:func:`~toonmotion.capture.template_match.locate`); after a held drawing, as every window,
+   as many times as wide as the frames it was held. A joint with a texture of its own not
    found round its prediction is looked for at once in the same way. The best places are then matched
    finely, and the joint is taken as found again only by a match at least
    :data:`REACQUIRE_CONFIDENCE` confident, within :data:`REACH_SLACK` times the longest its bone
@@ -321,10 +322,10 @@ class FrameSearch:
     def _places_to_look(self, small, t, m, carried, angle, seen, hidden):
         """Where to look for joint ``m``, hidden for ``hidden`` drawings, at full resolution, with
         its rectangle's angle there: round its parent if that was found, else near ``carried``,
-        where its parent carries it or it coasts (module docstring). Places whose coarse match is
-        hopeless are left out."""
+        where its parent carries it or it coasts, in a window as wide as this frame's pace makes
+        it (module docstring). Places whose coarse match is hopeless are left out."""
         P, plans = self.P, self.plans
-        joint = self._plan(m)
+        joint = self._plan(m, self._pace)
         bone = self._bone_rule(t, m, seen, bounded=True)
         if bone is not None and math.isfinite(bone.longest):
             g = plans.hangs_from[m]
