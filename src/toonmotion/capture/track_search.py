@@ -246,8 +246,11 @@ class FrameSearch:
     def frame(self, image: NDArray[np.uint8], t: int, predicted: NDArray[np.float64],
               coast: NDArray[np.float64], *, pace: float = 1.0) -> None:
         """Track frame ``t`` (``image``; frame ``t - 1`` is tracked) from the joints' predicted
-        centres and where hidden roots coast to (``(k, 2)`` each); every window is ``pace`` times
-        as wide (the frames since the last drawing). Writes ``P[t]``, ``C[t]``, ``angles[t]``."""
+        centres and where hidden roots coast to (``(k, 2)`` each); every window round a prediction
+        or a guess is ``pace`` times as wide (the frames since the last drawing), not the up pass's
+        round where the joints below put a joint (widened too, the rendered clips on twos summed 4 px
+        worse).
+        Writes ``P[t]``, ``C[t]``, ``angles[t]``."""
         P, plans = self.P, self.plans
         k = len(plans)
         self._near = None if self.figure is None else self.figure.near(t)
