@@ -84,10 +84,11 @@ PLACES = 64
 # least this. At COARSE_CONFIDENCE it made a fifth of all matches and found a joint in about 4% of
 # its tries; on the seed-0 renders 40 of the 43 textured joints it found (all within 0.4 px)
 # matched at least 0.3 coarse, as did 64 of the 75 flat ones found within 3 px (and 51 of the 68
-# found farther off), in a quarter of its tries. The textured zombie walk went from 78 to 100
-# frames/s; the textured renders from 48.5 to 49.1 px summed (whole clips, ones and twos at seeds
-# 0 and 2; the zombie walk on twos 2.6 -> 3.0), the cel renders from 260.0 to 263.3, at seed 5
-# (used for nothing else) 23.0 -> 23.4 and 257.4 -> 204.5; the drawings' footage did not move.
+# found farther off), in a quarter of its tries. The textured zombie walk went from 68 to 84
+# frames/s, the flat walk from 85 to 92 (the benchmark's first 120 frames); the textured renders
+# from 48.5 to 49.1 px summed (whole clips, ones and twos at seeds 0 and 2; the zombie walk on twos
+# 2.6 -> 3.0), the cel renders from 260.0 to 263.3, at seed 5 (used for nothing else) 23.0 -> 23.4
+# and 257.4 -> 204.5; the drawings' footage did not move.
 UP_COARSE_CONFIDENCE = 0.3
 # A hidden joint is found again only by a match at least this confident, no farther from its
 # parent than REACH_SLACK times the longest its bone has been seen. The anchor may have been cut
