@@ -263,11 +263,13 @@ class FrameSearch:
         self.taken = [None] * k
         self.C[t] = 0.0
         for m in range(k):  # down
-            carried = hidden_at(P, t, m, coast[m], plans.hangs_from)
             if not self.lost[m]:
                 self._try(image, t, m, self._plan(m, pace), predicted[m], angle[m], VISIBLE_CONFIDENCE, seen,
                           agree)
-            if not seen[m] and (self.lost[m] or self._textured[m]):
+                if seen[m]:
+                    continue
+            carried = hidden_at(P, t, m, coast[m], plans.hangs_from)
+            if self.lost[m] or self._textured[m]:
                 # A textured joint not found round its prediction is looked for at once as if hidden.
                 hidden = max(int(self.lost[m]), 1)
                 for centre, turned in self._places_to_look(self._small(image), t, m, carried, angle[m], seen,
