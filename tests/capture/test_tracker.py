@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.capture.track_search import REACQUIRE_CONFIDENCE
 from toonmotion.capture.tracker import (
     Tracking,
     TrackSettings,
@@ -541,9 +542,10 @@ def test_a_textured_joint_missed_round_its_prediction_is_looked_for_at_once_roun
     assert errors.max() < 1.0, f"hand errors: {np.round(errors[:, 2], 1)}"
 
 
-def _arm_under_covers(seed=14, T=60, speed=1.0):
+def _arm_under_covers(seed=14, T=60, speed=1.0, turn=0.0):
     """A still shoulder and an arm sliding right at ``speed`` px a frame: a cover hides the elbow
-    from frame 10 on, another the hand for frames 10-24 only. Frames, truth (T, 3, 2)."""
+    from frame 10 on, another the hand for frames 10-24 only, which re-emerges turned by ``turn``
+    radians. Frames, truth (T, 3, 2)."""
     rng = np.random.default_rng(seed)
     background = _texture(rng, 140, 280, blur=1.5)
     shoulder_sprite, elbow_sprite, hand_sprite = (_texture(rng, SPRITE, SPRITE) for _ in range(3))
@@ -553,8 +555,9 @@ def _arm_under_covers(seed=14, T=60, speed=1.0):
         elbow = np.array([100.0 + speed * t, 70.0])
         hand = elbow + (50.0, 0.0)
         canvas = background.copy()
-        for sprite, xy in ((shoulder_sprite, shoulder), (elbow_sprite, elbow), (hand_sprite, hand)):
+        for sprite, xy in ((shoulder_sprite, shoulder), (elbow_sprite, elbow)):
             _paint(canvas, sprite, xy)
+        _paint(canvas, hand_sprite, hand, turn if t >= 25 else 0.0)
         if t >= 10:
             _paint(canvas, cover, elbow)
         if 10 <= t < 25:
@@ -574,6 +577,22 @@ def test_a_hidden_joint_whose_parent_is_hidden_too_is_found_again_when_it_re_eme
     errors = _errors(tracking, truth)
     assert (tracking.confidence[12:, 1] < 0.5).all()  # the elbow stays hidden
     assert (tracking.confidence[12:24, 2] < 0.5).all()
+    assert errors[27:, 2].max() < 1.0, f"hand errors after it re-emerged: {np.round(errors[25:, 2], 1)}"
+
+
+def test_a_hidden_joint_whose_parent_is_hidden_too_is_looked_for_at_turns_all_round():
+    """The same scene, the hand re-emerging turned 170 degrees (its forearm flipped over while
+    hidden, as an arm swinging overhead does). With its elbow hidden there is no bone to tell the
+    hand's angle by: it is looked for at turns all round, 20 degrees apart, and found again (at
+    0.49, matched 10 degrees off). Looked for at its last angle and 25 degrees either way, it
+    matched at 0.14 at best and was never found again."""
+    frames, truth = _arm_under_covers(turn=math.radians(170))
+    setup = _setup([("shoulder", None), ("elbow", "shoulder"), ("hand", "elbow")], truth[0])
+    tracking = track(frames, setup)
+    errors = _errors(tracking, truth)
+    assert (tracking.confidence[12:, 1] < 0.5).all()  # the elbow stays hidden
+    found_again = tracking.confidence[27:, 2] >= REACQUIRE_CONFIDENCE
+    assert found_again.all(), np.round(tracking.confidence[25:, 2], 2)
     assert errors[27:, 2].max() < 1.0, f"hand errors after it re-emerged: {np.round(errors[25:, 2], 1)}"
 
 

@@ -449,7 +449,7 @@ def _coarse_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArra
     size = (tw + 2 * R, th + 2 * R)
     windows = [sample(small, middle, a, size) for a in angles]
     ssd = np.stack([cv2.matchTemplate(window, template, cv2.TM_SQDIFF) for window in windows])
-    cost = w_alpha * ssd + _coarse_geometric(R, radius)
+    cost = w_alpha * ssd + coarse_geometric(R, radius)
     if bone is not None:
         cost += _bone_cost(centre, angles, R, bone, step=2.0)
     if figure is not None:
@@ -480,8 +480,13 @@ def rank_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArray[n
 
 
 @functools.lru_cache(maxsize=64)
-def _coarse_geometric(R, radius):
-    """The coarse search's geometric term: cells 2 px apart, ``w_beta = 1 / radius^2``."""
+def coarse_geometric(R: int, radius: float) -> NDArray[np.float64]:
+    """The coarse search's geometric term over ``(2R+1, 2R+1)`` cells 2 px apart round a window's
+    centre: the squared distance from it (full-resolution pixels) times ``w_beta = 1 / radius^2``.
+
+    >>> coarse_geometric(1, 2.0).tolist()
+    [[2.0, 1.0, 2.0], [1.0, 0.0, 1.0], [2.0, 1.0, 2.0]]
+    """
     offsets = (2.0 * np.arange(-R, R + 1)) ** 2
     return (offsets[:, None] + offsets[None, :]) / radius**2
 
@@ -725,7 +730,7 @@ def _vertex(before, centre, after, tie):
     return min(limit, max(-limit, (float(before) - float(after)) / (2.0 * k)))
 
 
-def sample(image: NDArray[np.uint8], centre: NDArray[np.float64], angle: float,
+def sample(image: NDArray[np.uint8] | Patch, centre: NDArray[np.float64], angle: float,
            size: tuple[int, int]) -> Patch:
     """``(h, w, 3)`` float32 patch of ``size = (w, h)`` centred on ``centre``, turned by ``angle``.
 

@@ -63,6 +63,7 @@ from toonmotion.capture.template_match import (
     sample,
     search_round,
 )
+from toonmotion.capture.template_spin import TurnedDiscs, locate_all_round
 from toonmotion.capture.track_figure import FigureMasks, onto_figure
 from toonmotion.capture.track_prediction import bone_turn, hidden_at, turns
 
@@ -237,6 +238,7 @@ class FrameSearch:
         self.held_to_figure = np.ones(len(plans), bool) if on_figure is None else np.asarray(on_figure, bool)
         self._near: NDArray[np.uint8] | None = None
         self._textured = [is_textured(t.anchor) for t in templates]
+        self._turned: list[TurnedDiscs | None] = [None] * len(plans)
         self._half: NDArray[np.uint8] | None = None
         self._pace = 1.0
         # Per joint, this frame: the places alike to its match (template_match.Match), and the match
@@ -342,9 +344,21 @@ class FrameSearch:
                                  figure=self._figure(m), by_look=self._textured[m])
             return [(xy, turned) for xy, coarse, turned in found if coarse >= COARSE_CONFIDENCE]
         radius = joint.radius * min(1.0 + WIDEN_STEP * hidden, MAX_WIDEN)
-        xy, coarse, turned = locate(small, self.templates[m], carried, angle, joint, radius, bone,
-                                    self._figure(m))
+        if bone is None and plans.parents[m] >= 0:
+            # Its parent not found, its bone gives no angle to go by: it is looked for at turns all round.
+            xy, coarse, turned = locate_all_round(small, self._discs(m), carried, joint, radius,
+                                                  figure=self._figure(m))
+        else:
+            xy, coarse, turned = locate(small, self.templates[m], carried, angle, joint, radius, bone,
+                                        self._figure(m))
         return [(xy, turned)] if coarse >= COARSE_CONFIDENCE else []
+
+    def _discs(self, m):
+        """Joint ``m``'s anchor's coarse disc turned all round (made when first asked for)."""
+        coarse = self.templates[m].coarse
+        if self._turned[m] is None or self._turned[m].coarse is not coarse:
+            self._turned[m] = TurnedDiscs(coarse)
+        return self._turned[m]
 
     def _coarse_ranks(self, small, t, m, centre, angle, seen):
         """Hidden joint ``m``'s coarse confidences round ``centre`` at ``angle`` and turned by each of
