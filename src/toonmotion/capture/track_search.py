@@ -12,8 +12,9 @@ A frame is searched in four passes over the skeleton:
    its rectangle turned with its bone there (:func:`~toonmotion.capture.template_match.search_round`);
    else near where its parent carries it (a parent hidden too is first put where its own parent
    carries it), in a window that widens for every drawing it stays hidden
-   (:func:`~toonmotion.capture.template_match.locate`); after a held drawing, as every window,
-   as many times as wide as the frames it was held. A joint with a texture of its own not
+   (:func:`~toonmotion.capture.template_match.locate`; with no bone to give its angle, at turns
+   all round, :func:`~toonmotion.capture.template_spin.locate_all_round`); after a held drawing,
+   as every window, as many times as wide as the frames it was held. A joint with a texture of its own not
    found round its prediction is looked for at once in the same way. The best places are then matched
    finely, and the joint is taken as found again only by a match at least
    :data:`REACQUIRE_CONFIDENCE` confident, within :data:`REACH_SLACK` times the longest its bone
