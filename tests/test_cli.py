@@ -811,6 +811,28 @@ def test_track_says_how_many_frames_repeat_a_drawing(footage, tmp_path, capsys):
     assert np.hypot(*(load_motion(out).positions - truth[held]).reshape(-1, 2).T).max() < 2.0
 
 
+def test_track_names_the_joints_that_matched_poorly_and_where(footage, tmp_path, capsys):
+    """A hand covered in frames 6-9 is named, with where its longest poorly matched stretch starts,
+    and how to put it right; with every joint seen, nothing is named."""
+    folder, truth = footage
+    covered = tmp_path / "covered"
+    covered.mkdir()
+    for t, name in enumerate(sorted((folder / "frames").iterdir())):
+        frame = np.array(Image.open(name))
+        if 6 <= t <= 9:
+            x, y = np.round(truth[t, 2]).astype(int)
+            frame[y - 20:y + 21, x - 20:x + 21, :3] = 255  # white paper over the hand
+        Image.fromarray(frame).save(covered / name.name)
+    out = tmp_path / "m.json"
+    assert _run("track", covered, "--joints", folder / "joints.json", "-o", out) == 0
+    said = capsys.readouterr().out.splitlines()
+    named = "matched poorly most: right_hand in 33% of frames (longest from frame 6, 4 frames)"
+    assert said[1].startswith(named)
+    assert f"--resume {out} --at FRAME --set NAME=X,Y" in said[1]
+    assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", out) == 0
+    assert len(capsys.readouterr().out.splitlines()) == 1
+
+
 def test_track_corrections_resume_from_a_frame(footage, tmp_path):
     from toonmotion.io.motion_json import load_motion
 

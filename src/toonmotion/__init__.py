@@ -19,7 +19,8 @@ __version__ = "0.1.0"
 
 _API = (
     "Animation", "Balloon", "Balls", "Capture", "Character", "ContourCapture", "DeformSettings",
-    "Exported", "FilterSettings", "KeyShapeSpace", "LiftReport", "Markers", "Motion", "PosedFrame", "Proxy",
+    "Exported", "FilterSettings", "KeyShapeSpace", "LiftReport", "Markers", "Motion", "PoorlyMatched",
+    "PosedFrame", "Proxy",
     "RigSettings", "SameDepthOverlap", "SceneMotion", "SketchMatch", "TrackSettings", "VideoCapture",
     "animate_character", "animate_drawing", "animation_frames", "border_colour", "capture_contours",
     "capture_parts",

@@ -503,6 +503,38 @@ def test_rig_move_a_joint_and_rig_again(page, editor):
     assert page.locator("#error").is_hidden()
 
 
+def test_capture_names_the_joints_that_matched_poorly_and_goes_to_where(page, editor, tmp_path):
+    """After tracking, the joints that matched poorly most are named, each a button to the frame
+    where its longest such stretch starts; a new footage clears them."""
+    from toonmotion.samples import sample_character_on
+
+    picture, skeleton = sample_character_on("white", scale=0.5)
+    head = np.round(skeleton.positions[skeleton.index("head")]).astype(int)
+    frames = []
+    for t in range(6):
+        frame = np.roll(picture, 2 * t, axis=1)
+        if t >= 3:  # white paper over the head from frame 3 on
+            x, y = head + (2 * t, 0)
+            frame[y - 14:y + 15, x - 14:x + 15] = 255
+        frames.append(Image.fromarray(frame))
+    frames[0].save(tmp_path / "walk.gif", save_all=True, append_images=frames[1:], duration=80)
+    page.click("nav button[data-panel=capture]")
+    page.set_input_files("#capture-file", str(tmp_path / "walk.gif"))
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('place the joints')")
+    assert page.locator("#capture-poor").is_hidden()
+    page.click("#capture-track")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
+    named = page.locator("#capture-poor button")
+    assert named.first.text_content() == "head: 50%, from frame 3"
+    named.first.click()
+    assert page.evaluate("document.getElementById('capture-scrub').value") == "3"
+    page.screenshot(path=str(tmp_path / "poorly.png"))
+    frames[0].save(tmp_path / "still.png")
+    page.set_input_files("#capture-file", str(tmp_path / "still.png"))
+    page.wait_for_function("document.getElementById('capture-info').textContent.startsWith('1 frames')")
+    assert page.locator("#capture-poor").is_hidden() and page.locator("#error").is_hidden()
+
+
 def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor, tmp_path, monkeypatch):
     from toonmotion.io.motion_json import load_motion
     from toonmotion.samples import sample_character_on

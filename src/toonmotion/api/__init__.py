@@ -63,7 +63,7 @@ from toonmotion.api.scene3d import (
     scene_passes,
     simulate_scene,
 )
-from toonmotion.capture.footage import Capture, suggest_joints
+from toonmotion.capture.footage import Capture, PoorlyMatched, suggest_joints
 from toonmotion.capture.foreground import border_colour
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
@@ -86,6 +86,7 @@ __all__ = [
     "Balloon",
     "Balls",
     "Capture",
+    "PoorlyMatched",
     "Character",
     "ContourCapture",
     "DeformSettings",

@@ -34,6 +34,31 @@ from toonmotion.errors import SettingsError
 from toonmotion.progress import Progress
 from toonmotion.rig.skeleton import Skeleton
 
+# A joint matched less confidently than this at a frame matched poorly there (hidden, or its look
+# changed): where a user may want to look, and correct it.
+POOR_MATCH = 0.5
+
+
+@dataclass(frozen=True)
+class PoorlyMatched:
+    """A joint that matched poorly (:data:`POOR_MATCH`) in some frames of a capture.
+
+    Attributes
+    ----------
+    name : str
+    fraction : float
+        Of the frames tracked, those where it matched poorly.
+    start : int
+        The footage frame its longest stretch of such frames starts at.
+    length : int
+        That stretch's frames.
+    """
+
+    name: str
+    fraction: float
+    start: int
+    length: int
+
 
 @dataclass(frozen=True)
 class Capture:
@@ -55,6 +80,35 @@ class Capture:
     first: int
     angles: NDArray[np.float64]
     held: NDArray[np.bool_]
+
+    @property
+    def poor_fraction(self) -> float:
+        """Of all joint-frames, those that matched poorly (:data:`POOR_MATCH`); 0 without confidence."""
+        confidence = self.motion.confidence
+        return 0.0 if confidence is None else float((confidence < POOR_MATCH).mean())
+
+    def poorly_matched(self, count: int = 3) -> list[PoorlyMatched]:
+        """Up to ``count`` joints that matched poorly (:data:`POOR_MATCH`) in any frame, in the
+        most frames first (ties: in skeleton order), each with its longest stretch of such frames:
+        where to look in the footage and correct it.
+
+        >>> from toonmotion.rig.skeleton import Skeleton
+        >>> skeleton = Skeleton.from_joints([("hip", None, (0.0, 0.0)), ("hand", "hip", (9.0, 0.0))])
+        >>> sure = np.ones((6, 2)); sure[[1, 3, 4], 1] = 0.1
+        >>> motion = Motion(skeleton, np.zeros((6, 2, 2)), fps=12, confidence=sure)
+        >>> Capture(motion, first=10, angles=np.zeros((6, 2)), held=np.zeros(6, bool)).poorly_matched()
+        [PoorlyMatched(name='hand', fraction=0.5, start=13, length=2)]
+        """
+        confidence = self.motion.confidence
+        if confidence is None:
+            return []
+        poor = confidence < POOR_MATCH
+        found = []
+        for m in np.flatnonzero(poor.any(axis=0)):
+            start, length = _longest_run(poor[:, m])
+            found.append(PoorlyMatched(self.motion.skeleton.names[m], float(poor[:, m].mean()),
+                                       self.first + start, length))
+        return sorted(found, key=lambda joint: -joint.fraction)[:count]
 
 
 def suggest_joints(
@@ -211,3 +265,11 @@ def _capture(result: Tracking, skeleton: Skeleton, fps: float) -> Capture:
     assert result.held is not None  # a Tracking fills it in
     return Capture(motion=motion, first=first, angles=np.array(result.angles[first:last]),
                    held=np.array(result.held[first:last]))
+
+
+def _longest_run(flags: NDArray[np.bool_]) -> tuple[int, int]:
+    """The start and length of the longest run of True in ``flags`` (the first, of equals)."""
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    longest = int(np.argmax(stops - starts))
+    return int(starts[longest]), int(stops[longest] - starts[longest])

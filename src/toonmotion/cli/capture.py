@@ -108,13 +108,19 @@ def track(
         save_animation(
             overlay, _tracking_pictures(frames, captured, sizes), fps=rate, background=(255, 255, 255)
         )
-    unsure = float((motion.confidence < 0.5).mean()) if motion.confidence is not None else 0.0
     held = int(captured.held.sum())
     repeats = f"{held} frames repeat the frame before (drawn on twos or threes); " if held else ""
+    poorly = f"{captured.poor_fraction:.0%} of joint-frames matched poorly (hidden or changed)"
     typer.echo(
         f"tracked {len(skeleton)} joints through {motion.frame_count} frames (from frame {captured.first}); "
-        f"{repeats}{unsure:.0%} of joint-frames matched poorly (hidden or changed) -> {output}"
+        f"{repeats}{poorly} -> {output}"
     )
+    poor = captured.poorly_matched()
+    if poor:
+        said = ", ".join(f"{joint.name} in {joint.fraction:.0%} of frames (longest from frame {joint.start}, "
+                         f"{joint.length} frames)" for joint in poor)
+        typer.echo(f"matched poorly most: {said}; where one is lost, put it right with "
+                   f"--resume {output} --at FRAME --set NAME=X,Y")
 
 
 def _figure_said(frame, flat):

@@ -533,7 +533,9 @@ def track(editing: Editing, message: dict[str, Any],
     assert confidence is not None  # tracking always says how sure it is
     return {"type": "tracked", "first": capture.first, "names": list(skeleton.names),
             "positions": np.round(capture.motion.positions, 2).tolist(),
-            "confidence": np.round(confidence, 3).tolist()}
+            "confidence": np.round(confidence, 3).tolist(),
+            "poorly": [{"name": joint.name, "fraction": round(joint.fraction, 3), "start": joint.start,
+                        "length": joint.length} for joint in capture.poorly_matched()]}
 
 
 @_off_loop("suggest the joints")

@@ -32,6 +32,7 @@ export function mount(ctx) {
       <button id="capture-play" disabled>Retarget and play</button></p>
     <p><progress id="capture-progress" max="1" value="0" hidden></progress>
       <button id="capture-cancel" hidden>Cancel</button></p>
+    <p id="capture-poor" hidden></p>
     <p>Drag the joints onto the figure in the first frame (they snap to the orange suggestions),
     drag a rectangle's corner to size it, then track.</p>`;
 
@@ -151,6 +152,7 @@ export function mount(ctx) {
     footage = body;
     images = [];
     tracked = null;
+    showPoorly([]);
     // The character's joints, scaled onto the footage: names that retarget by themselves; their
     // rectangles start at the suggested joints' typical size.
     const sx = footage.width / project.width, sy = footage.height / project.height;
@@ -184,6 +186,7 @@ export function mount(ctx) {
       joints = tracked.names.map((n) => joints.find((j) => j.name === n));
       corrected = {};
       document.getElementById("capture-play").disabled = false;
+      showPoorly(tracked.poorly);
       status("tracked: scrub to check it, then retarget");
       showError("");
       show(frame);
@@ -199,6 +202,25 @@ export function mount(ctx) {
       bar.hidden = true;
       cancel.hidden = true;
     }
+  }
+  // The joints that matched poorly most (hidden, or their looks changed), each a button to the
+  // frame where its longest such stretch starts: where to drag it right and track again from.
+  function showPoorly(poorly) {
+    const line = document.getElementById("capture-poor");
+    line.replaceChildren();
+    line.hidden = !poorly.length;
+    if (!poorly.length) return;
+    line.append("Matched poorly most (drag one right where it is lost, then track again from there): ");
+    poorly.forEach(({ name, fraction, start, length }, i) => {
+      const go = document.createElement("button");
+      go.textContent = `${name}: ${Math.round(100 * fraction)}%, from frame ${start}`;
+      go.title = `${name} matched poorly in ${Math.round(100 * fraction)}% of the frames; its longest stretch, ${length} frames, starts at frame ${start}`;
+      go.onclick = () => {
+        document.getElementById("capture-scrub").value = String(start);
+        show(start);
+      };
+      line.append(i ? " " : "", go);
+    });
   }
   const paper = () => {
     if (!document.getElementById("capture-paper").checked) return null;
