@@ -118,7 +118,7 @@ def track(
     poor = captured.poorly_matched()
     if poor:
         said = ", ".join(f"{joint.name} in {joint.fraction:.0%} of frames (longest from frame {joint.start}, "
-                         f"{joint.length} frames)" for joint in poor)
+                         f"{joint.length} frame{'s' if joint.length > 1 else ''})" for joint in poor)
         typer.echo(f"matched poorly most: {said}; where one is lost, put it right with "
                    f"--resume {output} --at FRAME --set NAME=X,Y")
 

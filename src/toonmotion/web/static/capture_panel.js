@@ -214,7 +214,7 @@ export function mount(ctx) {
     poorly.forEach(({ name, fraction, start, length }, i) => {
       const go = document.createElement("button");
       go.textContent = `${name}: ${Math.round(100 * fraction)}%, from frame ${start}`;
-      go.title = `${name} matched poorly in ${Math.round(100 * fraction)}% of the frames; its longest stretch, ${length} frames, starts at frame ${start}`;
+      go.title = `${name} matched poorly in ${Math.round(100 * fraction)}% of the frames; its longest stretch, ${length} frame${length > 1 ? "s" : ""}, starts at frame ${start}`;
       go.onclick = () => {
         document.getElementById("capture-scrub").value = String(start);
         show(start);
