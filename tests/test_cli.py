@@ -828,7 +828,7 @@ def test_track_names_the_joints_that_matched_poorly_and_where(footage, tmp_path,
     said = capsys.readouterr().out.splitlines()
     named = "matched poorly most: right_hand in 33% of frames (longest from frame 6, 4 frames)"
     assert said[1].startswith(named)
-    assert f"--resume {out} --at FRAME --set NAME=X,Y" in said[1]
+    assert f"--joints {folder / 'joints.json'} --resume {out} --at FRAME --set NAME=X,Y" in said[1]
     assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", out) == 0
     assert len(capsys.readouterr().out.splitlines()) == 1
 

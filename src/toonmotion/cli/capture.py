@@ -82,10 +82,10 @@ def track(
         skeleton, sizes, start = load_joints(joints)
     else:
         skeleton, sizes = api.suggest_joints(frames, colour=flat)
-        suggested = output.with_name(output.stem + ".joints.json")
-        save_joints(suggested, skeleton, sizes)
+        joints = output.with_name(output.stem + ".joints.json")
+        save_joints(joints, skeleton, sizes)
         options.warn(f"suggested {len(skeleton)} joints from frame 0 on {_figure_said(frames[0], flat)} "
-                      f"-> {suggested} (edit it, pass --joints)")
+                      f"-> {joints} (edit it, pass --joints)")
     with options.progress("tracking") as report:
         captured = api.track_footage(
             frames,
@@ -120,7 +120,7 @@ def track(
         said = ", ".join(f"{joint.name} in {joint.fraction:.0%} of frames (longest from frame {joint.start}, "
                          f"{joint.length} frame{'s' if joint.length > 1 else ''})" for joint in poor)
         typer.echo(f"matched poorly most: {said}; where one is lost, put it right with "
-                   f"--resume {output} --at FRAME --set NAME=X,Y")
+                   f"--joints {joints} --resume {output} --at FRAME --set NAME=X,Y -o FIXED.json")
 
 
 def _figure_said(frame, flat):
