@@ -57,6 +57,8 @@ class TurnedDiscs:
         The turned templates, 0 off the disc.
     mask : (side, side) float32
         1 on the disc, 0 off it.
+    area : float
+        The disc's pixels.
     squares : (n,) float
         Each turned disc's sum of squares.
     """
@@ -68,6 +70,7 @@ class TurnedDiscs:
         y, x = np.mgrid[:side, :side]
         self.coarse, self.turns, self.side = coarse, tuple(turns), side
         self.mask = ((x - r) ** 2 + (y - r) ** 2 <= (side / 2) ** 2).astype(np.float32)
+        self.area = float(self.mask.sum())
         middle = np.array([(w - 1) / 2, (h - 1) / 2])
         # Template pixel (x, y) turned by a shows the rectangle's pixel rotation(-a) (x, y): the
         # window, not turned, then matches the template as a window turned by a would.
@@ -136,7 +139,7 @@ def locate_all_round(small: NDArray[np.uint8], discs: TurnedDiscs, centre: NDArr
     ssd += energy
     ssd += discs.squares[:, None, None]
     np.maximum(ssd, 0.0, out=ssd)
-    area = float(discs.mask.sum())
+    area = discs.area
     prior = coarse_geometric(R, radius)
     if figure is not None:
         prior = np.where(figure_cells(figure, centre, 0.0, R, step=2.0), prior, np.inf)
