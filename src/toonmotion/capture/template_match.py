@@ -19,12 +19,16 @@ import functools
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.track_figure import figure_cells, on_figure
+
+if TYPE_CHECKING:  # template_context imports this module
+    from toonmotion.capture.template_context import Context
 
 # Confidence is exp(-d^2 / (2 CONFIDENCE_SCALE^2)), d the RMS difference per channel (grey levels).
 CONFIDENCE_SCALE = 30.0
@@ -161,12 +165,14 @@ class Templates:
 
     Both ``(th, tw, 3)`` float32, in the rectangle's own frame (see :func:`sample`); the same
     array while the latest has not been re-cut. ``coarse`` is the anchor at half resolution
-    (``cv2.pyrDown``), for :func:`locate`.
+    (``cv2.pyrDown``), for :func:`locate`. ``context``, the wider view cut with the anchor
+    (:mod:`~toonmotion.capture.template_context`), if one was.
     """
 
     anchor: Patch
     latest: Patch
     coarse: Patch
+    context: Context | None = None
 
     @classmethod
     def cut(cls, image: NDArray[np.uint8], centre: NDArray[np.float64], angle: float,

@@ -42,10 +42,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.capture.template_context import CONTEXT_CONFIDENCE, Pyramid, place_by_context
 from toonmotion.capture.template_match import (
     SPIN_TURNS,
     TURN_CONFIDENCE,
@@ -240,7 +240,7 @@ class FrameSearch:
         self._near: NDArray[np.uint8] | None = None
         self._textured = [is_textured(t.anchor) for t in templates]
         self._turned: list[TurnedDiscs | None] = [None] * len(plans)
-        self._half: NDArray[np.uint8] | None = None
+        self._pyramid: Pyramid | None = None
         self._pace = 1.0
         # Per joint, this frame: the places alike to its match (template_match.Match), and the match
         # taken (None: not found), whose other places the whole-sequence pass may ask for.
@@ -258,7 +258,7 @@ class FrameSearch:
         P, plans = self.P, self.plans
         k = len(plans)
         self._near = None if self.figure is None else self.figure.near(t)
-        self._half = None
+        self._pyramid = Pyramid(image)
         self._pace = pace
         angle = self.angles[t - 1] + turns(P[t - 1], predicted, plans.parents, True)
         seen, agree = np.zeros(k, dtype=bool), np.zeros(k, dtype=bool)
@@ -275,7 +275,7 @@ class FrameSearch:
             if self.lost[m] or self._textured[m]:
                 # A textured joint not found round its prediction is looked for at once as if hidden.
                 hidden = max(int(self.lost[m]), 1)
-                for centre, turned in self._places_to_look(self._small(image), t, m, carried, angle[m], seen,
+                for centre, turned in self._places_to_look(self._small(), t, m, carried, angle[m], seen,
                                                            hidden):
                     if self._try(image, t, m, self._plan(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen,
                                  agree, bounded=True, turn=False, expected=carried):
@@ -288,7 +288,7 @@ class FrameSearch:
         for m in range(k - 1, -1, -1):  # up
             if not seen[m] and np.isfinite(moves[m]).all():
                 centre = P[t - 1, m] + moves[m]
-                ranks = self._coarse_ranks(self._small(image), t, m, centre, angle[m], seen)
+                ranks = self._coarse_ranks(self._small(), t, m, centre, angle[m], seen)
                 if max(ranks) >= UP_COARSE_CONFIDENCE:
                     self._try(image, t, m, self._plan(m), centre, angle[m], REACQUIRE_CONFIDENCE, seen, agree,
                               bounded=True, turn_ranks=ranks[1:])
@@ -313,7 +313,9 @@ class FrameSearch:
         :data:`AMBIGUOUS_SPREAD` of its rectangle from its match), parents first, among those places
         where its parent and its children found unambiguously carry it, as a hidden joint is placed
         (:func:`_place_hidden`): at that place itself if it lies within a pixel of one, else at the
-        nearest. A root with no such child keeps its match."""
+        nearest. Where its wider view (:mod:`~toonmotion.capture.template_context`) matches plainly
+        enough, it places the joint instead: neighbours inside the same fill drift with it. A root
+        with neither keeps its match."""
         P, hangs_from = self.P, self.plans.hangs_from
         ambiguous = np.zeros(len(seen), bool)
         for m in np.flatnonzero(seen):
@@ -321,12 +323,31 @@ class FrameSearch:
             ambiguous[m] = spread > AMBIGUOUS_SPREAD * max(self.plans(m).size)
         firm_moves = moves_below(P, t, seen & ~ambiguous, hangs_from, direct=True)
         for m in np.flatnonzero(ambiguous):
-            guess = _carried(P, t, m, coast, hangs_from, firm_moves[m])
+            guess = self._placed_by_context(t, m)
+            if guess is None:
+                guess = _carried(P, t, m, coast, hangs_from, firm_moves[m])
             if guess is None:
                 continue
             distance = np.hypot(*(self._alike[m] - guess).T)
             nearest = int(np.argmin(distance))
             P[t, m] = guess if distance[nearest] <= 1.0 else self._alike[m][nearest]
+
+    def _placed_by_context(self, t, m):
+        """Where ambiguous joint ``m``'s context places it at ``t``, looked for within twice its
+        window of its match (the match may lie anywhere along the fill in its window, the joint as
+        far beyond), if it matches at least :data:`CONTEXT_CONFIDENCE` within
+        :data:`AMBIGUOUS_SPREAD` of the rectangle from a place alike to the match; else None (also
+        with no context)."""
+        context = self.templates[m].context
+        if context is None:
+            return None
+        assert self._pyramid is not None  # set by frame()
+        radius, angle = 2 * self.plans(m, self._pace).radius, float(self.angles[t - 1, m])
+        xy, sure = place_by_context(self._pyramid, context, self.P[t, m], angle, radius)
+        # It chooses among the places alike to the joint's match: where it points elsewhere
+        # (an elbow's context, the arm raised, found on the head), the two disagree.
+        near = float(np.hypot(*(self._alike[m] - xy).T).min()) <= AMBIGUOUS_SPREAD * max(self.plans(m).size)
+        return xy if sure >= CONTEXT_CONFIDENCE and near else None
 
     def _places_to_look(self, small, t, m, carried, angle, seen, hidden):
         """Where to look for joint ``m``, hidden for ``hidden`` drawings, at full resolution, with
@@ -383,7 +404,7 @@ class FrameSearch:
         bone = self._bone_rule(t, m, seen, bounded=bounded, hold_length=not by_look)
         figure = self._figure(m)
         found = match(image, self.templates[m], centre, angle, joint, bone, turn=turn, figure=figure,
-                      small=self._small(image), turn_ranks=turn_ranks)
+                      small=self._small(), turn_ranks=turn_ranks)
         refit = self._refit_turn(t, m, found, seen) if turn and found.confidence < TURN_CONFIDENCE else None
         if refit is not None:
             other = match(image, self.templates[m], found.xy, refit, joint, bone, turn=False, figure=figure)
@@ -391,7 +412,7 @@ class FrameSearch:
                 found = other
         if found.confidence < TURN_CONFIDENCE and turn and self._end_on(t, m):
             # A bone seen end-on gives no angle: the rectangle is looked for at turns all round.
-            place, coarse, turned = locate(self._small(image), self.templates[m], centre, angle, joint,
+            place, coarse, turned = locate(self._small(), self.templates[m], centre, angle, joint,
                                            joint.radius, bone, figure, turns=SPIN_TURNS)
             if coarse >= COARSE_CONFIDENCE:
                 other = match(image, self.templates[m], place, turned, joint, bone, turn=False, figure=figure)
@@ -452,11 +473,10 @@ class FrameSearch:
         near = np.hypot(*(others[showing] - xy).T) < apart * max(self.plans(m).size)
         return bool(near.any())
 
-    def _small(self, image):
+    def _small(self):
         """This frame at half resolution (``cv2.pyrDown``), made once a frame when first asked for."""
-        if self._half is None:
-            self._half = cv2.pyrDown(image)
-        return self._half
+        assert self._pyramid is not None  # set by frame()
+        return self._pyramid.level(1)
 
     def _end_on(self, t, m):
         """Whether joint ``m``'s bone was shorter than its rectangle at ``t - 1`` (seen end-on)."""

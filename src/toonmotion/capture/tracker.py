@@ -23,11 +23,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.capture.template_context import Pyramid, cut_templates
 from toonmotion.capture.template_match import (
     OTHERS,
     UPDATE_CONFIDENCE,
@@ -287,7 +288,8 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     out.confidence[start] = 1.0
     out.tracked[start] = True
     plan = _plans(setup, settings, first, initial)
-    templates = [Templates.cut(first, initial[m], 0.0, plan(m).size) for m in range(k)]
+    pyramid = Pyramid(first)
+    templates = [cut_templates(pyramid, initial[m], 0.0, plan(m).size) for m in range(k)]
     figure = None if masks is None else FigureMasks(masks, count, first.shape)
     on_figure = None if figure is None else figure.holds(start, initial)
     if progress:
@@ -369,7 +371,8 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     for m in range(k):
         cut = _anchor_frame(out.confidence[:, m], begin, frame, m in fixed)
         image = current if cut == frame else read_frame(frames, cut, current.shape)
-        templates.append(Templates.cut(image, out.positions[cut, m], out.angles[cut, m], plan(m).size))
+        centre, angle = out.positions[cut, m], out.angles[cut, m]
+        templates.append(cut_templates(Pyramid(image), centre, angle, plan(m).size))
     history = np.where(np.isin(np.arange(k), list(fixed)), frame, begin)
     figure = None if masks is None else FigureMasks(masks, count, current.shape)
     on_figure = None if figure is None else figure.holds(frame, out.positions[frame])
@@ -505,7 +508,7 @@ def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figur
     back.positions[0], back.angles[0] = out.positions[stop - 1], out.angles[stop - 1]
     back.confidence[0], back.tracked[0] = out.confidence[stop - 1], True
     figure = None if masks is None else FigureMasks(_Backwards(masks, start, stop), count, shape)
-    anchors = [Templates(t.anchor, t.anchor, t.coarse) for t in templates]
+    anchors = [replace(t, latest=t.anchor) for t in templates]
     _run(_Backwards(frames, start, stop), shape, plans, anchors, back, np.zeros(k, int), 1, count - 1, None,
          figure, on_figure, options=False)
     for i in range(1, count - 1):
