@@ -26,7 +26,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.template_match import Patch, Templates, confidence, distinct_size, sample
+from toonmotion.capture.template_match import Patch, Templates, confidence, distinct_size, is_distinct, sample
 
 # The context's side, times the rectangle's larger side. Over the drawings' footage (43 clips,
 # 287.2 px summed without a context), 2 placed the joints 236.0 px off summed, 2.5 241.7, 3
@@ -84,12 +84,16 @@ class Context:
 
     @classmethod
     def cut(cls, pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int]
-            ) -> Context:
-        """The context of a ``size`` rectangle at ``centre`` turned by ``angle`` radians: grown
-        further where it is not distinct (:func:`~toonmotion.capture.template_match.distinct_size`;
-        all inside a fill, it would match anywhere in it)."""
+            ) -> Context | None:
+        """The context of a ``size`` rectangle at ``centre`` turned by ``angle`` radians, grown
+        further where it is not distinct (:func:`~toonmotion.capture.template_match.distinct_size`);
+        None where it is not distinct even so (all inside a fill, it would match anywhere in it).
+        """
+        centre = np.asarray(centre, dtype=float)
         grown = round(CONTEXT_GROWTH * max(size))
-        side = max(distinct_size(pyramid.level(0), np.asarray(centre, dtype=float), (grown, grown)))
+        side = max(distinct_size(pyramid.level(0), centre, (grown, grown)))
+        if not is_distinct(pyramid.level(0), centre, (side, side)):
+            return None
         level = max(0, math.ceil(math.log2(side / CONTEXT_SIDE)))
         s = max(1, round(side / 2**level))
         return cls(sample(pyramid.level(level), at_level(centre, level), angle, (s, s)), level)
@@ -97,7 +101,8 @@ class Context:
 
 def cut_templates(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int]
                   ) -> Templates:
-    """A joint's templates cut from the frame ``pyramid`` holds, with its :class:`Context`."""
+    """A joint's templates cut from the frame ``pyramid`` holds, with its :class:`Context` (if it
+    has one)."""
     return replace(Templates.cut(pyramid.level(0), centre, angle, size),
                    context=Context.cut(pyramid, centre, angle, size))
 
@@ -127,6 +132,11 @@ def place_by_context(pyramid: Pyramid, context: Context, centre: NDArray[np.floa
     >>> xy, sure = place_by_context(Pyramid(later), context, np.array([104.0, 100.0]), 0.0, 24.0)
     >>> bool(np.hypot(*(xy - [109.0, 100.0])) < 2.0), sure > CONTEXT_CONFIDENCE
     (True, True)
+
+    On the plain ground alone, however large, no context is distinct: none is cut.
+
+    >>> Context.cut(Pyramid(ground), np.array([100.0, 100.0]), 0.0, (16, 16)) is None
+    True
     """
     n, patch = context.level, context.patch
     s = patch.shape[0]

@@ -227,13 +227,26 @@ def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: t
     w0, h0 = size
     for growth in (1.0, 1.5, 2.25, MAX_GROWTH):
         grown = (max(1, int(round(w0 * growth))), max(1, int(round(h0 * growth))))
-        patch = sample(image, centre, 0.0, grown)
-        change = [float(np.mean((sample(image, centre + DISTINCT_SHIFT * np.array([math.cos(a), math.sin(a)]),
-                                        0.0, grown) - patch) ** 2))
-                  for a in np.arange(8) * math.pi / 4]
-        if min(change) >= max(DISTINCT_RATIO * max(change), DISTINCT_LEVEL**2):
+        if is_distinct(image, centre, grown):
             break
     return grown
+
+
+def is_distinct(image: NDArray[np.uint8], centre: NDArray[np.float64], size: tuple[int, int]) -> bool:
+    """Whether a ``size`` patch of ``image`` at ``centre`` looks unlike itself moved
+    :data:`DISTINCT_SHIFT` pixels every way (:func:`distinct_size`).
+
+    >>> image = np.full((80, 80, 3), 200, np.uint8); image[:, 40:] = 40  # a straight edge
+    >>> image[60:, :] = 120  # a corner 20 px below
+    >>> on_edge, at_corner = np.array([40.0, 40.0]), np.array([40.0, 60.0])
+    >>> is_distinct(image, on_edge, (12, 12)), is_distinct(image, at_corner, (12, 12))
+    (False, True)
+    """
+    patch = sample(image, centre, 0.0, size)
+    change = [float(np.mean((sample(image, centre + DISTINCT_SHIFT * np.array([math.cos(a), math.sin(a)]),
+                                    0.0, size) - patch) ** 2))
+              for a in np.arange(8) * math.pi / 4]
+    return min(change) >= max(DISTINCT_RATIO * max(change), DISTINCT_LEVEL**2)
 
 
 def is_textured(patch: Patch) -> bool:
