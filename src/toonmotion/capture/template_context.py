@@ -30,11 +30,11 @@ from toonmotion.capture.template_match import Patch, Templates, confidence, dist
 
 # The context's side, times the rectangle's larger side. Over the drawings' footage (43 clips,
 # 287.2 px summed without a context), 2 placed the joints 236.0 px off summed, 2.5 241.7, 3
-# 259.1 and 4 265.3; at 1.5 the demo's knees, on flat trousers, went 28 px off (1.8 at 2.5).
+# 259.1 and 4 265.3; at 1.5 the demo went 28.2 px off (1.9 at 2.5).
 # 2.5 keeps away from that.
 CONTEXT_GROWTH = 2.5
 # The context is matched at the first pyramid level where it is at most this wide (pixels); at
-# 32 the demo went 3.4 px off.
+# 32 (with contexts 3 rectangles wide) the demo went 3.4 px off.
 CONTEXT_SIDE = 48
 # Turns of the rectangle's angle the context is also matched at, radians. At the rectangle's
 # angle alone, a flat body leaning 14 degrees lost its joints (the tests: 30-36 px off).
