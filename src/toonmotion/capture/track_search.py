@@ -314,8 +314,8 @@ class FrameSearch:
         where its parent and its children found unambiguously carry it, as a hidden joint is placed
         (:func:`_place_hidden`): at that place itself if it lies within a pixel of one, else at the
         nearest. Where its wider view (:mod:`~toonmotion.capture.template_context`) matches plainly
-        enough, it places the joint instead: neighbours inside the same fill drift with it. A root
-        with neither keeps its match."""
+        enough, that places the joint instead (neighbours inside the same fill drift as it does). A
+        root with neither keeps its match."""
         P, hangs_from = self.P, self.plans.hangs_from
         ambiguous = np.zeros(len(seen), bool)
         for m in np.flatnonzero(seen):
