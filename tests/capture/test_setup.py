@@ -86,7 +86,7 @@ def test_check_setup_rejects_sizes_that_are_not_positive_and_finite(bad):
 def test_check_setup_rejects_a_rectangle_outside_the_frame():
     sizes = np.array([[8.0, 8.0], [8.0, 12.0]])  # knee's spans y 29 to 41
     check_setup(_two_joints(), sizes, (40, 42))
-    message = r"joint 'knee'.s rectangle \(16, 29\) to \(24, 41\) is not inside the 40x40 frame"
+    message = r"the rectangle of joint 'knee', \(16, 29\) to \(24, 41\), is not inside the 40x40 frame"
     with pytest.raises(TrackingError, match=message):
         check_setup(_two_joints(), sizes, (40, 40))
     with pytest.raises(TrackingError, match="joint 'hip'"):

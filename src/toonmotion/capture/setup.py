@@ -136,7 +136,7 @@ def check_setup(skeleton: Skeleton, sizes: ArrayLike, frame_size: Sequence[int])
         x0, y0, x1, y1 = x - sw / 2, y - sh / 2, x + sw / 2, y + sh / 2
         if x0 < -0.5 - _EPS or y0 < -0.5 - _EPS or x1 > w - 0.5 + _EPS or y1 > h - 0.5 + _EPS:
             raise TrackingError(
-                f"joint {name!r}'s rectangle ({x0:g}, {y0:g}) to ({x1:g}, {y1:g}) is not inside the "
+                f"the rectangle of joint {name!r}, ({x0:g}, {y0:g}) to ({x1:g}, {y1:g}), is not inside the "
                 f"{w:g}x{h:g} frame (which spans -0.5 to {w - 0.5:g}, -0.5 to {h - 0.5:g}); "
                 "move the joint inwards or make its rectangle smaller"
             )
