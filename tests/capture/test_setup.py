@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from toonmotion.capture.setup import SIZE_RANGE, check_setup, suggest_setup
+from toonmotion.capture.setup import FRAME_SIDE, SIZE_RANGE, check_setup, rectangle_sizes, suggest_setup
 from toonmotion.errors import TrackingError
 from toonmotion.rig.skeleton import Skeleton
 
@@ -96,3 +96,16 @@ def test_check_setup_rejects_a_rectangle_outside_the_frame():
 def test_check_setup_rejects_sizes_of_the_wrong_shape():
     with pytest.raises(TrackingError, match="each of the 2 joints"):
         check_setup(_two_joints(), np.ones((3, 2)), (40, 40))
+
+
+def test_rectangles_on_a_frame_twice_as_large_may_be_twice_as_large():
+    # A thick body on a frame up to FRAME_SIDE gets the range's largest square; the same body on a
+    # frame twice the size (its thickness twice too) gets one twice as large, so its window is
+    # in proportion to the figure and its motion.
+    small = np.zeros((500, 800), bool)
+    small[100:400, 200:600] = True
+    large = np.repeat(np.repeat(small, 2, axis=0), 2, axis=1)
+    at = np.array([[400.0, 250.0]])
+    assert max(small.shape) <= FRAME_SIDE < max(large.shape)
+    np.testing.assert_array_equal(rectangle_sizes(small, at), [[SIZE_RANGE[1]] * 2])
+    np.testing.assert_array_equal(rectangle_sizes(large, 2 * at + 0.5), [[2 * SIZE_RANGE[1]] * 2])

@@ -31,6 +31,12 @@ from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
 from toonmotion.rig.skeleton import Skeleton
 
 SIZE_RANGE = (8.0, 48.0)
+# The range's upper end is for frames at most FRAME_SIDE pixels on their larger side; it doubles
+# each time the frame does beyond that (size_scale). A joint's window is half its rectangle, so
+# on footage twice the size capped rectangles left windows too small for the motion: the drawings'
+# footage doubled (5 clips) was tracked 102.5 px off summed, against 32.8 at its own size; with
+# the cap doubled, 66.6, twice 33.3.
+FRAME_SIDE = 1000
 # How far from a joint (pixels) the figure's thickness is looked for.
 THICKNESS_REACH = 3
 
@@ -78,12 +84,22 @@ def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64]) -> 
     """The tracking rectangle :func:`suggest_setup` gives a joint at each of ``positions``
     ``(k, 2)`` on the figure ``mask`` ``(h, w)``: a square twice the figure's local thickness (the
     largest distance to its outline within :data:`THICKNESS_REACH` px), within
-    :data:`SIZE_RANGE`, shrunk about the joint to lie inside the frame. ``(k, 2)`` widths and
-    heights, pixels.
+    :data:`SIZE_RANGE` (its upper end times :func:`size_scale` of the frame), shrunk about the
+    joint to lie inside the frame. ``(k, 2)`` widths and heights, pixels.
 
     >>> mask = np.zeros((40, 120), bool); mask[14:26, 0:110] = True
     >>> rectangle_sizes(mask, np.array([[54.0, 19.5]])).tolist()
     [[12.0, 12.0]]
+
+    A body 200 px thick gets the range's largest square, twice as large on a frame twice as
+    large as :data:`FRAME_SIDE`:
+
+    >>> body = np.zeros((600, 800), bool); body[200:400, 100:700] = True
+    >>> large = np.zeros((1200, 1600), bool); large[400:800, 200:1400] = True
+    >>> rectangle_sizes(body, np.array([[400.0, 300.0]])).tolist()
+    [[48.0, 48.0]]
+    >>> rectangle_sizes(large, np.array([[800.0, 600.0]])).tolist()
+    [[96.0, 96.0]]
     """
     mask = np.asarray(mask, dtype=bool)
     positions = np.asarray(positions, dtype=float)
@@ -93,11 +109,25 @@ def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64]) -> 
     radius = ndi.maximum_filter(ndi.distance_transform_edt(mask), size=reach, mode="constant")
     cols = np.clip(np.rint(positions[:, 0]).astype(int), 0, w - 1)
     rows = np.clip(np.rint(positions[:, 1]).astype(int), 0, h - 1)
-    side = np.clip(2.0 * radius[rows, cols], *SIZE_RANGE)
+    side = np.clip(2.0 * radius[rows, cols], SIZE_RANGE[0], SIZE_RANGE[1] * size_scale((w, h)))
     sizes = np.stack([side, side], axis=1)
     # Shrink about the joint until the rectangle is inside the frame.
     room = 2.0 * np.minimum(positions + 0.5, np.array([w, h]) - 0.5 - positions)
     return np.minimum(sizes, np.maximum(room, 0.0))
+
+
+def size_scale(frame_size: tuple[float, float]) -> float:
+    """How many times :data:`SIZE_RANGE`'s upper end a suggested rectangle may be on a frame of
+    ``frame_size`` ``(width, height)``: 1 up to :data:`FRAME_SIDE` pixels on its larger side,
+    doubling each time the frame does beyond that.
+
+    >>> [size_scale(size) for size in ((640, 480), (1280, 960), (1920, 1080), (3840, 2160))]
+    [1.0, 2.0, 2.0, 4.0]
+    """
+    scale, side = 1.0, max(frame_size)
+    while side > FRAME_SIDE:
+        scale, side = 2 * scale, side / 2
+    return scale
 
 
 def check_setup(skeleton: Skeleton, sizes: ArrayLike, frame_size: Sequence[int]) -> None:
