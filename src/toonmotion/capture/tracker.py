@@ -368,11 +368,13 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     check_inside(setup.skeleton, setup.sizes, out.positions[frame], out.angles[frame], current, frame, fixed)
     plan = _plans(setup, settings, current, out.positions[frame])
     templates = []
+    pyramids = {frame: Pyramid(current)}  # one per frame cut from, read and reduced once
     for m in range(k):
         cut = _anchor_frame(out.confidence[:, m], begin, frame, m in fixed)
-        image = current if cut == frame else read_frame(frames, cut, current.shape)
+        if cut not in pyramids:
+            pyramids[cut] = Pyramid(read_frame(frames, cut, current.shape))
         centre, angle = out.positions[cut, m], out.angles[cut, m]
-        templates.append(cut_templates(Pyramid(image), centre, angle, plan(m).size))
+        templates.append(cut_templates(pyramids[cut], centre, angle, plan(m).size))
     history = np.where(np.isin(np.arange(k), list(fixed)), frame, begin)
     figure = None if masks is None else FigureMasks(masks, count, current.shape)
     on_figure = None if figure is None else figure.holds(frame, out.positions[frame])
