@@ -3,10 +3,11 @@
     python benchmarks/track.py [CLIP.bvh ...] [--frames N] [--trackers toonmotion,MIL,CSRT,KCF]
                                [--style textured|flat ...] [--twos] [--noise SIGMA] [--seed N]
                                [--frame-by-frame | --both-ways] [--repeat N]
+                               [--size WxH] [--full-resolution]
 
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
 usual naming conventions (CMU, FAIR, Mixamo, Rokoko), projected orthographically from the front,
-fitted into 640x480, resampled to about 30 fps (a leading T-pose frame the motion jumps away
+fitted into 640x480 (``--size``), resampled to about 30 fps (a leading T-pose frame the motion jumps away
 from is dropped), and rendered as a limb figure drawn far to near so limbs cross and hide each
 other (``toonmotion.testing.mocap_tracking``, which also scores): ``--style textured`` (the
 default) a textured figure over a textured background, ``--style flat`` a cel cartoon, flat
@@ -16,16 +17,21 @@ to every frame (default 1.5 on twos, so held frames differ a little, as scanned 
 and none on ones: compare twos with ``--noise 1.5`` on ones); ``--seed`` draws the
 figure with other textures or colours; ``--frame-by-frame`` leaves out toonmotion's choice of each
 joint's path over the whole clip (``TrackSettings.best_path``), ``--both-ways`` also tracks
-backwards and chooses between the two ways (``TrackSettings.both_ways``). Every tracker starts
-from the true frame-1 rectangles (a square of the joint disc's diameter, ~30 px) and runs on
+backwards and chooses between the two ways (``TrackSettings.both_ways``). On frames larger than
+1000 px (``--size 1280x960``) toonmotion tracks them halved (``TrackSettings.working_side``);
+``--full-resolution`` tracks them at their own size. Every tracker starts from the true frame-1
+rectangles (a square of the joint disc's diameter, ~30 px at 640x480) and runs on
 one core. toonmotion tracks each clip ``--repeat`` times (default 3), as ``timeit`` does, and its
 speed is that of the fastest run (a shared machine only ever slows a run down; the runs give the
 same joints); OpenCV's trackers, at a few frames a second, run once.
 
 Keys, one line per clip, style and tracker:
   clip, style, twos, noise, seed, tracker, joints, frames
+  size                 the frames' width x height
   best_path, both_ways whether toonmotion chose the paths over the whole clip, and between
                        the two ways (its lines only)
+  working_side         toonmotion's TrackSettings.working_side, null at full resolution (its lines
+                       only)
   mean_px, median_px   error of the tracked joint centres against the true ones, over every
                        joint and frame after the first
   pck5                 fraction of joint-frames within 5 px
@@ -45,6 +51,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import json  # noqa: E402
 import time  # noqa: E402
+from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import cv2  # noqa: E402
@@ -79,13 +86,15 @@ def run_opencv(kind, images, start_points, side):
 
 
 def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, best_path=True,
-          both_ways=False, noise=None, repeat=1):
-    clip = render_bvh_clip(path, frames=frames, style=style, twos=twos, seed=seed, noise=noise)
+          both_ways=False, noise=None, repeat=1, size=(640, 480), full_resolution=False):
+    clip = render_bvh_clip(path, frames=frames, style=style, twos=twos, seed=seed, noise=noise, size=size)
     images = clip.images
     lines, ours = [], None
     for name in trackers:
         if name == "toonmotion":
             settings = TrackSettings(best_path=best_path, both_ways=both_ways)
+            if full_resolution:
+                settings = replace(settings, working_side=None)
             found, seconds = track_from_truth(clip, settings=settings)
             for _ in range(repeat - 1):
                 again, more = track_from_truth(clip, settings=settings)
@@ -95,11 +104,12 @@ def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, bes
         else:
             found, seconds = run_opencv(name, images, clip.truth[0], clip.side)
         line = {"clip": Path(path).stem, "style": style, "twos": twos, "noise": clip.noise, "seed": seed,
-                "tracker": name,
+                "tracker": name, "size": f"{size[0]}x{size[1]}",
                 "joints": len(clip.skeleton), "frames": len(images),
                 **tracking_scores(found, clip.truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
         if name == "toonmotion":
             ours, line["best_path"], line["both_ways"] = line["mean_px"], best_path, both_ways
+            line["working_side"] = settings.working_side
         elif ours:
             line["ratio_mean_px"] = round(line["mean_px"] / ours, 2)
         lines.append(line)
@@ -123,6 +133,16 @@ def _runs(text):
     return value
 
 
+def _size(text):
+    try:
+        width, height = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        width = height = 0
+    if width < 64 or height < 64:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a frame size WxH of at least 64x64 pixels")
+    return width, height
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("clips", nargs="*", type=Path)
@@ -142,13 +162,18 @@ def main():
                       help="toonmotion also tracks backwards and chooses between the two ways")
     parser.add_argument("--repeat", type=_runs, default=3, metavar="N",
                         help="toonmotion's runs per clip; its fps is the fastest's (default 3)")
+    parser.add_argument("--size", type=_size, default=(640, 480), metavar="WxH",
+                        help="the frames' size in pixels (default 640x480)")
+    parser.add_argument("--full-resolution", action="store_true",
+                        help="toonmotion tracks frames larger than 1000 px at their own size, not halved")
     args = parser.parse_args()
     clips = args.clips or sorted(DEFAULT_DIR.glob("*.bvh"))
     for clip in clips:
         for style in args.style:
             lines = bench(clip, args.trackers.split(","), frames=args.frames, style=style, twos=args.twos,
                           seed=args.seed, best_path=not args.frame_by_frame, both_ways=args.both_ways,
-                          noise=args.noise, repeat=args.repeat)
+                          noise=args.noise, repeat=args.repeat, size=args.size,
+                          full_resolution=args.full_resolution)
             for line in lines:
                 print(json.dumps(line), flush=True)
 

@@ -776,8 +776,9 @@ def test_track_follows_a_cartoon_on_plain_paper(footage, tmp_path, options):
     assert np.hypot(*(load_motion(out).positions - truth).reshape(-1, 2).T).max() < 2.0
 
 
-def test_track_frame_by_frame_and_both_ways_set_the_whole_sequence_pass(footage, tmp_path, monkeypatch):
+def test_track_flags_set_the_whole_sequence_pass_and_the_working_resolution(footage, tmp_path, monkeypatch):
     from toonmotion import api
+    from toonmotion.capture.track_scale import WORKING_SIDE
 
     folder, _ = footage
     real, settings = api.track_footage, []
@@ -787,11 +788,14 @@ def test_track_frame_by_frame_and_both_ways_set_the_whole_sequence_pass(footage,
         return real(*args, **kwargs)
 
     monkeypatch.setattr(api, "track_footage", spy)
-    for flag in ([], ["--frame-by-frame"], ["--both-ways"]):
+    for flag in ([], ["--frame-by-frame"], ["--both-ways"], ["--full-resolution"]):
         assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", tmp_path / "m.json",
                     *flag) == 0
-    assert [(s.best_path, s.both_ways) for s in settings] == [(True, False), (False, False), (True, True)]
-    assert [s.fill_gaps for s in settings] == [True, True, True]
+    assert [(s.best_path, s.both_ways) for s in settings] == [(True, False), (False, False), (True, True),
+                                                              (True, False)]
+    assert [s.fill_gaps for s in settings] == [True, True, True, True]
+    # Large footage is halved to track by default; --full-resolution tracks it at its own size.
+    assert [s.working_side for s in settings] == [WORKING_SIDE] * 3 + [None]
 
 
 def test_track_says_how_many_frames_repeat_a_drawing(footage, tmp_path, capsys):

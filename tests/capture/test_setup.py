@@ -98,14 +98,16 @@ def test_check_setup_rejects_sizes_of_the_wrong_shape():
         check_setup(_two_joints(), np.ones((3, 2)), (40, 40))
 
 
-def test_rectangles_on_a_frame_twice_as_large_may_be_twice_as_large():
-    # A thick body on a frame up to FRAME_SIDE gets the range's largest square; the same body on a
-    # frame twice the size (its thickness twice too) gets one twice as large, so its window is
-    # in proportion to the figure and its motion.
+def test_rectangles_on_a_frame_twice_as_large_are_within_a_range_twice_as_large():
+    # A thick body on a frame up to FRAME_SIDE gets the range's largest square, and a thin arm its
+    # smallest; the same figure on a frame twice the size (twice as thick) gets squares twice as
+    # large: the tracker halves that frame, and sees the rectangles of the range again.
     small = np.zeros((500, 800), bool)
     small[100:400, 200:600] = True
+    small[249:251, 600:780] = True
     large = np.repeat(np.repeat(small, 2, axis=0), 2, axis=1)
-    at = np.array([[400.0, 250.0]])
+    at = np.array([[400.0, 250.0], [700.0, 249.5]])
     assert max(small.shape) <= FRAME_SIDE < max(large.shape)
-    np.testing.assert_array_equal(rectangle_sizes(small, at), [[SIZE_RANGE[1]] * 2])
-    np.testing.assert_array_equal(rectangle_sizes(large, 2 * at + 0.5), [[2 * SIZE_RANGE[1]] * 2])
+    np.testing.assert_array_equal(rectangle_sizes(small, at), [[SIZE_RANGE[1]] * 2, [SIZE_RANGE[0]] * 2])
+    np.testing.assert_array_equal(rectangle_sizes(large, 2 * at + 0.5),
+                                  [[2 * SIZE_RANGE[1]] * 2, [2 * SIZE_RANGE[0]] * 2])

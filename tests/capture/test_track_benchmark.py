@@ -205,3 +205,17 @@ def test_a_textured_hand_found_plainly_beside_another_joint_is_taken(waving_on_t
     _, errors = waving_on_twos
     worst = errors[120:124].max(axis=0)
     assert worst.max() < 1.0, f"worst error per joint over frames 120-123: {np.round(worst, 2)}"
+
+
+def test_jumping_jacks_twice_the_size_are_tracked_halved_as_closely(jumping_jacks):
+    """Frames of 1280x960 are tracked at 640x480 (TrackSettings.working_side), every rectangle
+    halved with them; the joints come back in the frames' pixels, as close in proportion as the
+    same clip rendered at 640x480 is tracked, to a tenth of a pixel."""
+    clip = _require(SHARED_DATA / "mocap") / "cmu_jumping_jacks.bvh"
+    large = render_bvh_clip(clip, frames=FRAMES, size=(1280, 960))
+    assert large.side == pytest.approx(2 * jumping_jacks.side, rel=0.01)
+    found, _ = track_from_truth(large)
+    figures = tracking_scores(found, large.truth)
+    small = tracking_scores(track_from_truth(jumping_jacks)[0], jumping_jacks.truth)
+    print(figures, small)
+    assert figures["mean_px"] <= 2 * small["mean_px"] + 0.1 and figures["lost"] == 0

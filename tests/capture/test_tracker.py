@@ -9,7 +9,9 @@ import cv2
 import numpy as np
 import pytest
 
+from toonmotion.capture import track_search
 from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.capture.track_scale import WORKING_SIDE
 from toonmotion.capture.track_search import REACQUIRE_CONFIDENCE
 from toonmotion.capture.tracker import (
     Tracking,
@@ -311,6 +313,85 @@ def test_retrack_tracks_as_far_as_the_tracking_went():
     assert calls == [("tracking", t, 25) for t in range(12, 25)]
 
 
+
+# --- large footage -------------------------------------------------------------------------------------
+
+
+def _large_limb(seed=31, T=25):
+    """A limb swinging 6 degrees a frame about a shoulder that walks right, on 1200x400 frames (a
+    working resolution's worth of pixels: larger than WORKING_SIDE): frames, truth (T, 2, 2), setup."""
+    rng = np.random.default_rng(seed)
+    background = _texture(rng, 400, 1200, blur=3.0)
+    bar, shoulder = _texture(rng, 2 * SPRITE, 150, blur=2.0), _texture(rng, 2 * SPRITE, 2 * SPRITE, blur=2.0)
+    canvases, truth = [], []
+    for t in range(T):
+        pivot = np.array([500.0 + 3.3 * t, 200.0 - 1.1 * t])
+        theta = math.radians(30) * math.sin(2 * math.pi * t / 30)
+        along = np.array([math.cos(theta), math.sin(theta)])
+        _paint(canvas := background.copy(), bar, pivot + along * (150 / 2 - 20), theta)
+        _paint(canvas, shoulder, pivot)
+        canvases.append(canvas)
+        truth.append([pivot, pivot + 90 * along])
+    truth = np.array(truth)
+    setup = _setup([("shoulder", None), ("hand", "shoulder")], truth[0], size=2 * RECT)
+    return _film(rng, canvases), truth, setup
+
+
+@pytest.fixture(scope="module")
+def large_limb():
+    return _large_limb()
+
+
+def test_frames_larger_than_the_working_side_are_tracked_halved_in_their_own_pixels(large_limb, monkeypatch):
+    frames, truth, setup = large_limb
+    assert max(frames.shape[1:3]) > WORKING_SIDE
+    seen = set()
+    search = track_search.FrameSearch.frame
+    monkeypatch.setattr(track_search.FrameSearch, "frame",
+                        lambda self, image, *a, **k: seen.add(image.shape) or search(self, image, *a, **k))
+    halved = track(frames, setup)
+    assert seen == {(200, 600, 3)}
+    # Within 0.3 px in the frames' pixels: a place taken half a pixel off in the halving (a
+    # pixel's centre or its corner) would be 0.5 px off.
+    errors = _errors(halved, truth)
+    assert errors.max() <= 0.3, f"worst error per joint {np.round(errors.max(axis=0), 3)}"
+    assert np.array_equal(halved.positions[0], truth[0])
+    seen.clear()
+    full = track(frames, setup, settings=TrackSettings(working_side=None))
+    assert seen == {(400, 1200, 3)}
+    assert _errors(full, truth).max() <= 0.3
+
+
+def test_retrack_on_large_frames_takes_and_keeps_the_frames_own_pixels(large_limb):
+    frames, truth, setup = large_limb
+    good = track(frames, setup)
+    wrong = truth[10, 1] + [15.0, -9.0]
+    bad = retrack(good, frames, setup, 10, {"hand": wrong})
+    assert np.array_equal(bad.positions[:10], good.positions[:10])
+    assert np.array_equal(bad.positions[10, 1], wrong)
+    fixed = retrack(bad, frames, setup, 10, {"hand": truth[10, 1]})
+    assert np.array_equal(fixed.positions[:10], good.positions[:10])
+    assert np.array_equal(fixed.positions[10, 1], truth[10, 1])
+    assert _errors(fixed, truth)[10:].max() <= 0.3
+
+
+def test_on_large_frames_bad_input_is_named_in_the_frames_own_pixels(large_limb):
+    frames, truth, setup = large_limb
+    frames = frames[:4]
+    odd = list(frames[:3]) + [np.zeros((400, 1202, 3), np.uint8)]
+    with pytest.raises(TrackingError, match=r"frame 3 is 1202x400 but the first frame read is 1200x400"):
+        track(odd, setup)
+    masks = np.ones((4, 400, 1200), bool)
+    track(frames, setup, masks=masks)  # masks of the frames' size are halved with them
+    with pytest.raises(TrackingError, match=r"the figure mask of frame 1 has shape \(200, 600\) but the "
+                                            r"frames are 1200x400"):
+        track(frames, setup, masks=[masks[0], masks[1, ::2, ::2]] + list(masks[2:]))
+    outside = (r"joint 'hand' has its 40x40 rectangle at \(1190, 200\), spanning x 1170\.\.1210, "
+               r"y 180\.\.220, not inside frame 0 \(1200x400")
+    with pytest.raises(TrackingError, match=outside):
+        track(frames, setup, initial=[truth[0, 0], (1190.0, 200.0)])
+
+
 # --- bad input --------------------------------------------------------------------------------------
 
 
@@ -411,6 +492,8 @@ def test_bad_tracking_options_are_an_error(small, kwargs, message):
         ({"fill_gaps": 1}, r"fill_gaps must be True or False, got 1"),
         ({"both_ways": "no"}, r"both_ways must be True or False, got 'no'"),
         ({"both_ways": True, "best_path": False}, r"both_ways needs best_path"),
+        ({"working_side": 0}, r"the working side \(px\) must be a finite number >= 1, got 0\.0"),
+        ({"working_side": "1000"}, r"the working side \(px\) must be a number >= 1, got '1000'"),
     ],
 )
 def test_bad_settings_are_an_error(kwargs, message):

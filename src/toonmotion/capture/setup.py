@@ -26,17 +26,18 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
 
 from toonmotion.capture.foreground import guide_skeleton
+from toonmotion.capture.track_scale import WORKING_SIDE, halvings
 from toonmotion.errors import TrackingError
 from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
 from toonmotion.rig.skeleton import Skeleton
 
 SIZE_RANGE = (8.0, 48.0)
-# The range's upper end is for frames at most FRAME_SIDE pixels on their larger side; it doubles
-# each time the frame does beyond that (size_scale). A joint's window is half its rectangle, so
-# on footage twice the size capped rectangles left windows too small for the motion: the drawings'
-# footage doubled (5 clips) was tracked 102.5 px off summed, against 32.8 at its own size; with
-# the cap doubled, 66.6, twice 33.3.
-FRAME_SIDE = 1000
+# The range is for frames at most FRAME_SIDE pixels on their larger side; it doubles each time the
+# frame does beyond that (size_scale), as the tracker halves such frames to track them
+# (track_scale): there the rectangles are within the range again. (A joint's window is half its
+# rectangle: before the tracker halved large frames, the drawings' footage doubled, 5 clips, was
+# tracked 102.5 px off summed with the range's cap at 48, against 32.8 at its own size.)
+FRAME_SIDE = WORKING_SIDE
 # How far from a joint (pixels) the figure's thickness is looked for.
 THICKNESS_REACH = 3
 
@@ -84,7 +85,7 @@ def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64]) -> 
     """The tracking rectangle :func:`suggest_setup` gives a joint at each of ``positions``
     ``(k, 2)`` on the figure ``mask`` ``(h, w)``: a square twice the figure's local thickness (the
     largest distance to its outline within :data:`THICKNESS_REACH` px), within
-    :data:`SIZE_RANGE` (its upper end times :func:`size_scale` of the frame), shrunk about the
+    :data:`SIZE_RANGE` (times :func:`size_scale` of the frame), shrunk about the
     joint to lie inside the frame. ``(k, 2)`` widths and heights, pixels.
 
     >>> mask = np.zeros((40, 120), bool); mask[14:26, 0:110] = True
@@ -109,7 +110,8 @@ def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64]) -> 
     radius = ndi.maximum_filter(ndi.distance_transform_edt(mask), size=reach, mode="constant")
     cols = np.clip(np.rint(positions[:, 0]).astype(int), 0, w - 1)
     rows = np.clip(np.rint(positions[:, 1]).astype(int), 0, h - 1)
-    side = np.clip(2.0 * radius[rows, cols], SIZE_RANGE[0], SIZE_RANGE[1] * size_scale((w, h)))
+    scale = size_scale((w, h))
+    side = np.clip(2.0 * radius[rows, cols], SIZE_RANGE[0] * scale, SIZE_RANGE[1] * scale)
     sizes = np.stack([side, side], axis=1)
     # Shrink about the joint until the rectangle is inside the frame.
     room = 2.0 * np.minimum(positions + 0.5, np.array([w, h]) - 0.5 - positions)
@@ -117,17 +119,15 @@ def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64]) -> 
 
 
 def size_scale(frame_size: tuple[float, float]) -> float:
-    """How many times :data:`SIZE_RANGE`'s upper end a suggested rectangle may be on a frame of
+    """How many times :data:`SIZE_RANGE` a suggested rectangle's size is on a frame of
     ``frame_size`` ``(width, height)``: 1 up to :data:`FRAME_SIDE` pixels on its larger side,
-    doubling each time the frame does beyond that.
+    doubling each time the frame does beyond that (the tracker halves the frame as many times,
+    :func:`~toonmotion.capture.track_scale.halvings`).
 
     >>> [size_scale(size) for size in ((640, 480), (1280, 960), (1920, 1080), (3840, 2160))]
     [1.0, 2.0, 2.0, 4.0]
     """
-    scale, side = 1.0, max(frame_size)
-    while side > FRAME_SIDE:
-        scale, side = 2 * scale, side / 2
-    return scale
+    return 2.0 ** halvings(frame_size, FRAME_SIDE)
 
 
 def check_setup(skeleton: Skeleton, sizes: ArrayLike, frame_size: Sequence[int]) -> None:

@@ -19,6 +19,7 @@ figure) are not held to it at all.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import cv2
 import numpy as np
@@ -54,12 +55,7 @@ class FigureMasks:
     def near(self, t: int) -> NDArray[np.uint8]:
         """``(h, w)`` uint8, non-zero where frame ``t``'s figure is within :data:`FIGURE_SLACK` px."""
         if self._cache is None or self._cache[0] != t:
-            mask = np.asarray(self._masks[t])
-            if mask.shape != self._shape:
-                raise TrackingError(
-                    f"the figure mask of frame {t} has shape {mask.shape} but the frames are "
-                    f"{self._shape[1]}x{self._shape[0]}; give (h, w) masks of the frames' size"
-                )
+            mask = check_mask(np.asarray(self._masks[t]), t, self._shape)
             # A bool mask is dilated as the 0s and 1s it holds, uncopied.
             ones = np.ascontiguousarray(mask if mask.dtype == bool else mask != 0).view(np.uint8)
             near = np.asarray(cv2.dilate(ones, self._kernel), dtype=np.uint8)
@@ -69,6 +65,17 @@ class FigureMasks:
     def holds(self, t: int, points: NDArray[np.float64]) -> NDArray[np.bool_]:
         """Whether each of ``points`` ``(k, 2)`` lies on frame ``t``'s figure."""
         return on_figure(self.near(t), points)
+
+
+def check_mask(mask: NDArray[Any], t: int, shape: tuple[int, ...]) -> NDArray[Any]:
+    """``mask``, frame ``t``'s figure, if it is of the frames' size ``shape`` ``(h, w, ...)``; else
+    raise :class:`TrackingError`."""
+    if mask.shape != tuple(shape[:2]):
+        raise TrackingError(
+            f"the figure mask of frame {t} has shape {mask.shape} but the frames are "
+            f"{shape[1]}x{shape[0]}; give (h, w) masks of the frames' size"
+        )
+    return mask
 
 
 def on_figure(near: NDArray[np.uint8], points: NDArray[np.float64]) -> NDArray[np.bool_]:

@@ -51,6 +51,15 @@ from toonmotion.capture.track_gaps import fill_hidden_spans
 from toonmotion.capture.track_light import Relit
 from toonmotion.capture.track_path import best_paths
 from toonmotion.capture.track_prediction import COAST_STEPS, is_held, predict, turns
+from toonmotion.capture.track_scale import (
+    WORKING_SIDE,
+    ReducedFrames,
+    ReducedMasks,
+    from_working,
+    halvings,
+    to_working,
+    working_weight,
+)
 from toonmotion.capture.track_search import MAX_WIDEN, FrameSearch, Plans, hidden_for, longest_bones
 from toonmotion.errors import TrackingError
 from toonmotion.progress import Progress
@@ -149,6 +158,12 @@ class TrackSettings:
         brightness or contrast has changed (a camera's exposure, a flickering lamp), its colours
         are mapped back before its joints are looked for (:mod:`~toonmotion.capture.track_light`).
         Frames in the same light are left as they are.
+    working_side : float or None
+        Frames larger than this on their larger side (pixels) are tracked halved, as many times as
+        it takes to fit (a 1920 x 1080 video at 960 x 540), every rectangle, window and
+        ``search`` with them: about four times fewer pixels to match per halving
+        (:mod:`~toonmotion.capture.track_scale`). Positions, rectangles and corrections are
+        given and returned in the frames' own pixels all the same. None: at full resolution.
     """
 
     search: float | None = None
@@ -160,6 +175,7 @@ class TrackSettings:
     both_ways: bool = False
     figure: bool = True
     relight: bool = True
+    working_side: float | None = WORKING_SIDE
 
     def __post_init__(self) -> None:
         if self.search is not None:
@@ -168,6 +184,9 @@ class TrackSettings:
         object.__setattr__(self, "w_alpha", check_number(self.w_alpha, "w_alpha", 0.0, "> 0", strict=True))
         if self.w_beta is not None:
             object.__setattr__(self, "w_beta", check_number(self.w_beta, "w_beta", 0.0, ">= 0"))
+        if self.working_side is not None:
+            side = check_number(self.working_side, "the working side (px)", 1.0, ">= 1")
+            object.__setattr__(self, "working_side", side)
         for name in ("rotate", "fill_gaps", "best_path", "both_ways", "figure", "relight"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
@@ -277,11 +296,15 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     start = check_index(start, "start", 0, count - 1, count)
     stop = count if stop is None else check_index(stop, "stop", start + 1, count, count)
     first = read_frame(frames, start, None)
-    if settings.relight:
-        frames = Relit(frames, first)
     k = len(setup.skeleton)
     initial = setup.skeleton.positions if initial is None else check_initial(initial, k)
     check_inside(setup.skeleton, setup.sizes, initial, np.zeros(k), first, start, range(k))
+    n = halvings((first.shape[1], first.shape[0]), settings.working_side)
+    if n:
+        frames, masks, setup, settings = _at_working(frames, masks, setup, settings, first.shape, n)
+        first, initial = read_frame(frames, start, None), to_working(initial, n)
+    if settings.relight:
+        frames = Relit(frames, first)
     out = _Arrays.empty(count, k)
     out.positions[start] = initial
     out.angles[start] = 0.0
@@ -298,7 +321,7 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
          figure, on_figure, settings.best_path)
     if settings.both_ways:
         _run_back(frames, masks, first.shape, plan, templates, out, start, stop, on_figure)
-    return _filled(out, plan, settings, figure, on_figure).freeze()
+    return _in_frame_pixels(_filled(out, plan, settings, figure, on_figure).freeze(), n)
 
 
 def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
@@ -352,8 +375,6 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     begin = _run_start(tracking.tracked, frame)
     stop = frame + 1 + int(np.argmin(np.append(tracking.tracked[frame + 1:], False)))
 
-    if settings.relight:  # in the light of the frame the run started from, as track saw them
-        frames = Relit(frames, read_frame(frames, begin, None))
     out = _Arrays.copy(tracking)
     out.clear(frame + 1, stop)
     for m, xy in fixed.items():
@@ -366,6 +387,13 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
         )
     current = read_frame(frames, frame, None)
     check_inside(setup.skeleton, setup.sizes, out.positions[frame], out.angles[frame], current, frame, fixed)
+    n = halvings((current.shape[1], current.shape[0]), settings.working_side)
+    if n:
+        frames, masks, setup, settings = _at_working(frames, masks, setup, settings, current.shape, n)
+        out.positions = to_working(out.positions, n)
+    if settings.relight:  # in the light of the frame the run started from, as track saw them
+        frames = Relit(frames, read_frame(frames, begin, None))
+    current = read_frame(frames, frame, None)
     plan = _plans(setup, settings, current, out.positions[frame])
     templates = []
     pyramids = {frame: Pyramid(current)}  # one per frame cut from, read and reduced once
@@ -384,7 +412,24 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
          settings.best_path)
     if settings.both_ways:
         _run_back(frames, masks, current.shape, plan, templates, out, frame, stop, on_figure)
-    return _filled(out, plan, settings, figure, on_figure, since=frame).freeze()
+    return _in_frame_pixels(_filled(out, plan, settings, figure, on_figure, since=frame).freeze(), n)
+
+
+def _at_working(frames, masks, setup, settings, shape, n):
+    """The frames, masks, setup and settings halved ``n`` times (:mod:`~toonmotion.capture.track_scale`),
+    for frames of ``shape``; a frame or mask of another size is named in the frames' own pixels."""
+    frames = ReducedFrames(frames, n, shape)
+    masks = None if masks is None else ReducedMasks(masks, n, shape)
+    setup = TrackSetup(skeleton=setup.skeleton, sizes=to_working(setup.sizes, n))
+    search = None if settings.search is None else float(to_working(settings.search, n))
+    settings = replace(settings, search=max(search, 1.0) if search is not None else None,
+                       w_beta=working_weight(settings.w_beta, n))
+    return frames, masks, setup, settings
+
+
+def _in_frame_pixels(tracking, n):
+    """``tracking`` made after ``n`` halvings, its positions in the frames' own pixels."""
+    return replace(tracking, positions=from_working(tracking.positions, n)) if n else tracking
 
 
 # --- the tracking loop -----------------------------------------------------------------------------
