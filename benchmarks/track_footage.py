@@ -1,7 +1,7 @@
 """Joint tracking on footage whose true joints are known: a video and its frame motion; JSON lines.
 
     python benchmarks/track_footage.py [VIDEO MOTION.json ...] [--drawings FOLDER ...] [--seeds N ...]
-                                       [--free] [--frame-by-frame | --both-ways]
+                                       [--free] [--frame-by-frame | --both-ways] [--full-resolution]
 
 Each VIDEO is read as ``toonmotion track`` reads it, and MOTION.json holds its true joints in the
 video's pixels, frame by frame (what ``toonmotion animate ... --save-frame-motion`` writes beside
@@ -15,13 +15,17 @@ animated into footage by key-frames that swing its bones, one clip per ``--seeds
 (``toonmotion.testing.swinging_keys``; 49 frames at 12 fps, bones turning up to 8-30 degrees
 about their parents). ``--free`` does not hold joints to the figure; ``--frame-by-frame`` leaves
 out the choice of each joint's path over the whole clip (``TrackSettings.best_path``);
-``--both-ways`` also tracks backwards and chooses between the two ways (``TrackSettings.both_ways``).
+``--both-ways`` also tracks backwards and chooses between the two ways (``TrackSettings.both_ways``);
+``--full-resolution`` tracks footage larger than 1000 px at its own size, not halved
+(``TrackSettings.working_side``).
 
 Keys, one line per video:
   video, joints, frames            (drawings: video is FOLDER:seed)
   mean_px, median_px, pck5, lost   as in benchmarks/track.py, frame 0 left out
   worst_joint, worst_mean_px       the joint with the largest mean error
   fps                              frames tracked per second (reading the video not counted)
+  figure, best_path, both_ways     the settings the line was measured with
+  working_side                     TrackSettings.working_side, null at full resolution
 Goal: mean error at most 3 px on the demo.
 """
 
@@ -36,6 +40,7 @@ import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
+from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import cv2  # noqa: E402
@@ -90,7 +95,7 @@ def make_swinging(drawing, seeds, folder):
     return clips
 
 
-def bench(video, truth_file, figure=True, best_path=True, both_ways=False):
+def bench(video, truth_file, figure=True, best_path=True, both_ways=False, full_resolution=False):
     frames, fps = load_frames(video)
     truth = load_motion(truth_file)
     skeleton = truth.skeleton
@@ -102,6 +107,8 @@ def bench(video, truth_file, figure=True, best_path=True, both_ways=False):
     placed = Skeleton.from_joints([(n, p, tuple(xy)) for (n, p, _), xy in zip(skeleton.joints(), positions[0],
                                                                               strict=True)])
     settings = TrackSettings(figure=figure, best_path=best_path, both_ways=both_ways)
+    if full_resolution:
+        settings = replace(settings, working_side=None)
     captured = capture_motion(frames, placed, sizes, fps=fps or 24.0, settings=settings)
     seconds = time.perf_counter() - start
     found = captured.motion.positions
@@ -111,7 +118,7 @@ def bench(video, truth_file, figure=True, best_path=True, both_ways=False):
     return {"video": str(video), "joints": len(skeleton), "frames": count, **scores,
             "worst_joint": skeleton.names[worst], "worst_mean_px": round(float(per_joint[worst]), 3),
             "fps": round((count - 1) / max(seconds, 1e-9), 1), "figure": figure, "best_path": best_path,
-            "both_ways": both_ways}
+            "both_ways": both_ways, "working_side": settings.working_side}
 
 
 def main():
@@ -126,8 +133,11 @@ def main():
                       help="leave out the choice of each joint's path over the whole clip")
     ways.add_argument("--both-ways", action="store_true",
                       help="also track backwards, and choose each joint's path between the two ways")
+    parser.add_argument("--full-resolution", action="store_true",
+                        help="track footage larger than 1000 px at its own size, not halved")
     args = parser.parse_args()
-    how = {"figure": not args.free, "best_path": not args.frame_by_frame, "both_ways": args.both_ways}
+    how = {"figure": not args.free, "best_path": not args.frame_by_frame, "both_ways": args.both_ways,
+           "full_resolution": args.full_resolution}
     if len(args.pairs) % 2:
         parser.error("give each video with its true motion: VIDEO MOTION.json [VIDEO MOTION.json ...]")
     pairs = list(zip(args.pairs[::2], args.pairs[1::2], strict=True))
