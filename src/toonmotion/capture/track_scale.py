@@ -6,8 +6,8 @@ slack round the figure) were chosen on frames up to 640 x 480, and the cost of a
 the square of its rectangle's side. A 1920 x 1080 video is tracked at 960 x 540, every rectangle
 and window halved with it: four times fewer pixels to match, the rectangles of the sizes the
 tracker was made for, and the joints' places given back in the frames' own pixels. On the
-rendered clips at 1280 x 960 this tracked 2.2 times as fast, as close to the truth (docs/capture.md,
-"Large footage").
+rendered clips at 1280 x 960 this tracked 2.0-3.2 times as fast, as close to the truth
+(docs/capture.md, "Large footage").
 
 A frame is reduced by ``cv2.pyrDown`` (a Gaussian blur, then every other pixel) once per halving,
 so a reduced pixel ``i`` is centred on pixel ``2i`` of the frame above (as
