@@ -53,8 +53,8 @@ def track(
         "contrast back to those of the frame tracking starts from (for exposure changes and "
         "flicker).")] = False,
     full_resolution: Annotated[bool, typer.Option(
-        "--full-resolution", help="Track footage larger than 1000 px at its own size: it is halved "
-        "until it fits by default, about four times as fast per halving.")] = False,
+        "--full-resolution", help="Track footage larger than 1000 px at its own size: by default it "
+        "is halved until it fits, two to three times as fast.")] = False,
     fps: Annotated[float | None, typer.Option(
         "--fps", help="Frame rate \\[default: the video's, else 24].")] = None,
     resume: Annotated[Path | None, typer.Option(
