@@ -102,8 +102,8 @@ REACH_SLACK = 1.2
 # ... but a joint with a texture of its own matched within its window of where it is carried (or,
 # in the up pass, of where the joints below put it) needs only VISIBLE_CONFIDENCE, as when it
 # showed: a texture of its own is not found on another part there. An elbow half behind the body
-# matched at 0.25-0.30 where it was; on twos, the noise put it at 0.245 one drawing, and, needing
-# 0.35 to be found again, it was carried 18 px off for 20 frames (the walk on twos). On the
+# matched at 0.25-0.30 where it was; on twos it matched at 0.245 one drawing, and, needing 0.35
+# to be found again, it was carried 18 px off for 20 frames (the walk on twos). On the
 # textured renders (whole clips, ones and twos at seeds 0 and 2) 45.75 -> 43.18 px summed, 10 clips
 # better by more than 3% and none worse; at seed 5, used for nothing else, 21.81 -> 20.39; the
 # cel renders and the drawings' footage did not move. Anywhere its search reached (not only
