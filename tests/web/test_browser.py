@@ -557,7 +557,8 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     held, original = [], api.track_footage  # whether each tracking holds joints to the figure, chooses paths
 
     def tracking(*args, **kwargs):
-        held.append((kwargs["settings"].figure, kwargs["settings"].best_path, kwargs["settings"].both_ways,
+        settings = kwargs["settings"]
+        held.append((settings.figure, settings.best_path, settings.both_ways, settings.working_side,
                      kwargs["background"]))
         return original(*args, **kwargs)
 
@@ -591,7 +592,8 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     page.mouse.down()
     page.mouse.move(x + 30, y, steps=4)
     page.mouse.up()
-    page.check("#capture-free")  # and this time, joints free of the figure, tracked both ways
+    page.check("#capture-free")  # and this time, joints free of the figure, at full size, tracked both ways
+    page.check("#capture-full-resolution")
     page.check("#capture-frame-by-frame")
     page.check("#capture-both-ways")  # which unticks each frame's own choice
     assert not page.is_checked("#capture-frame-by-frame")
@@ -599,7 +601,7 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     assert page.is_checked("#capture-paper")
     page.click("#capture-retrack")  # track again from frame 2 with the head moved
     page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
-    assert held == [(True, True, False, None), (False, True, True, (250, 250, 240))]
+    assert held == [(True, True, False, 1000, None), (False, True, True, None, (250, 250, 240))]
     corrected = load_motion(folder / "motions" / "captured.json")
     head = corrected.skeleton.index("head")
     np.testing.assert_allclose(corrected.positions[:2], motion.positions[:2])  # kept before frame 2

@@ -844,14 +844,16 @@ def test_a_correction_tracks_again_from_its_frame_and_keeps_the_frames_before(ed
     assert bad["type"] == "error" and "'set' must give" in bad["message"]
 
 
-def test_tracking_holds_joints_to_the_figure_and_chooses_paths_unless_told_not_to(editable, monkeypatch):
+def test_tracking_holds_joints_to_the_figure_chooses_paths_and_halves_large_footage_unless_told_not_to(
+        editable, monkeypatch):
     folder, client = editable
     assert client.put(f"/api/footage?suffix=gif&token={TOKEN}", content=_walking_gif()).status_code == 200
     joints = [{**j, "size": [16, 16]} for j in _joints(api.load_project(folder))]
     held, colours, original = [], [], api.track_footage
 
     def tracking(*args, **kwargs):
-        held.append((kwargs["settings"].figure, kwargs["settings"].best_path, kwargs["settings"].both_ways))
+        settings = kwargs["settings"]
+        held.append((settings.figure, settings.best_path, settings.both_ways, settings.working_side))
         colours.append(kwargs["background"])
         return original(*args, **kwargs)
 
@@ -859,21 +861,23 @@ def test_tracking_holds_joints_to_the_figure_and_chooses_paths_unless_told_not_t
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         replies = []
         for how in ({}, {"free": True}, {"frame_by_frame": True},
-                    {"both_ways": True, "background": [250, 240, 220]}, {"free": "yes"},
-                    {"frame_by_frame": 1}, {"both_ways": True, "frame_by_frame": True},
-                    {"background": "white"}):
+                    {"both_ways": True, "background": [250, 240, 220]}, {"full_resolution": True},
+                    {"free": "yes"}, {"frame_by_frame": 1}, {"both_ways": True, "frame_by_frame": True},
+                    {"background": "white"}, {"full_resolution": "no"}):
             socket.send_text(json.dumps({"type": "track", "joints": joints, **how}))
             reply = socket.receive_json()
             while reply["type"] == "progress":
                 reply = socket.receive_json()
             replies.append(reply)
-    assert [r["type"] for r in replies] == ["tracked"] * 4 + ["error"] * 4
-    assert held == [(True, True, False), (False, True, False), (True, False, False), (True, True, True)]
-    assert "'free' must be true or false, got 'yes'" in replies[4]["message"]
-    assert "'frame_by_frame' must be true or false, got 1" in replies[5]["message"]
-    assert "both_ways needs best_path" in replies[6]["message"]
-    assert "'background' must be null or [r, g, b]" in replies[7]["message"]
-    assert colours == [None, None, None, (250, 240, 220)]
+    assert [r["type"] for r in replies] == ["tracked"] * 5 + ["error"] * 5
+    assert held == [(True, True, False, 1000), (False, True, False, 1000), (True, False, False, 1000),
+                    (True, True, True, 1000), (True, True, False, None)]
+    assert "'free' must be true or false, got 'yes'" in replies[5]["message"]
+    assert "'frame_by_frame' must be true or false, got 1" in replies[6]["message"]
+    assert "both_ways needs best_path" in replies[7]["message"]
+    assert "'background' must be null or [r, g, b]" in replies[8]["message"]
+    assert "'full_resolution' must be true or false, got 'no'" in replies[9]["message"]
+    assert colours == [None, None, None, (250, 240, 220), None]
 
 
 def test_joints_are_suggested_again_on_the_colour_the_footage_is_drawn_on(editable):

@@ -42,6 +42,8 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   to the figure on a plain background (``toonmotion track --free``); with ``"frame_by_frame":
   true`` each frame's own choice is kept (``toonmotion track --frame-by-frame``); with
   ``"both_ways": true`` the footage is tracked backwards too (``toonmotion track --both-ways``);
+  with ``"full_resolution": true`` footage larger than 1000 px is tracked at its own size, not
+  halved (``toonmotion track --full-resolution``);
   with ``"background": [r, g, b]`` the joints are held to the figure drawn on that colour
   (``toonmotion track --background``; default null, the border's colour when flat). Reply
   ``{"type": "tracked", "first": n, "names": [...], "positions": [...], "confidence": [...]}``,
@@ -87,7 +89,7 @@ import logging
 import re
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -516,12 +518,15 @@ def track(editing: Editing, message: dict[str, Any],
         if not isinstance(moved, dict) or not moved:
             raise TrackingError("'set' must give the corrected joints, name to [x, y]")
         corrections = {str(name): _point(xy, f"joint {name!r}") for name, xy in moved.items()}
-    how = {name: message.get(name, False) for name in ("free", "frame_by_frame", "both_ways")}
+    flags = ("free", "frame_by_frame", "both_ways", "full_resolution")
+    how = {name: message.get(name, False) for name in flags}
     for name, value in how.items():
         if not isinstance(value, bool):
             raise TrackingError(f"'{name}' must be true or false, got {value!r}")
     settings = api.TrackSettings(figure=not how["free"], best_path=not how["frame_by_frame"],
                                  both_ways=how["both_ways"])
+    if how["full_resolution"]:
+        settings = replace(settings, working_side=None)
     background = _colour(message.get("background"), TrackingError)
     capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
                                 corrections=corrections, at=at, settings=settings, background=background,

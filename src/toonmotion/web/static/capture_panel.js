@@ -27,6 +27,7 @@ export function mount(ctx) {
     <p><label title="On a plain background the joints are matched only on the figure, and a hidden joint is put on it"><input id="capture-free" type="checkbox"> Leave the joints free of the figure</label><br>
       <label title="Once the clip is tracked, each joint's path is chosen again over the whole clip among the places its searches found; tick to keep each frame's own choice"><input id="capture-frame-by-frame" type="checkbox"> Keep each frame's own choice (no whole-clip pass)</label><br>
       <label title="Also track backwards from the last frame and choose each joint's path between the two ways: fewer joints lost for a stretch, in about twice the time"><input id="capture-both-ways" type="checkbox"> Track both ways (slower)</label><br>
+      <label title="Footage larger than 1000 px is tracked halved until it fits, two to three times as fast, the joints given back in its own pixels; tick to track it at its own size"><input id="capture-full-resolution" type="checkbox"> Track large footage at full size (slower)</label><br>
       <label title="The flat colour the footage is drawn on, when its border does not show it: the joints are suggested on, and held to, the figure that differs from it"><input id="capture-paper" type="checkbox"> Drawn on</label> <input id="capture-paper-colour" type="color" value="#ffffff" aria-label="the colour the footage is drawn on"></p>
     <p><button id="capture-track" disabled>Track</button> <button id="capture-retrack" disabled>Track again from here</button>
       <button id="capture-play" disabled>Retarget and play</button></p>
@@ -249,7 +250,8 @@ export function mount(ctx) {
   document.getElementById("capture-paper").addEventListener("change", suggestAgain);
   const how = () => ({ free: document.getElementById("capture-free").checked,
     frame_by_frame: document.getElementById("capture-frame-by-frame").checked,
-    both_ways: document.getElementById("capture-both-ways").checked, background: paper() });
+    both_ways: document.getElementById("capture-both-ways").checked,
+    full_resolution: document.getElementById("capture-full-resolution").checked, background: paper() });
   // Both ways is a choice of paths over the whole clip: it and "each frame's own choice" exclude each other.
   for (const [id, other] of [["capture-both-ways", "capture-frame-by-frame"], ["capture-frame-by-frame", "capture-both-ways"]]) {
     document.getElementById(id).addEventListener("change", (event) => {
