@@ -9,10 +9,11 @@ tracker was made for, and the joints' places given back in the frames' own pixel
 rendered clips at 1280 x 960 this tracked 2.0-3.2 times as fast, as close to the truth
 (docs/capture.md, "Large footage").
 
-A frame is reduced by ``cv2.pyrDown`` (a Gaussian blur, then every other pixel) once per halving,
-so a reduced pixel ``i`` is centred on pixel ``2i`` of the frame above (as
-:func:`~toonmotion.capture.template_context.at_level` takes it): a place ``xy`` in the frame is
-``xy / 2^n`` after ``n`` halvings, whatever the frame's size, odd or even.
+A frame halved ``n`` times is level ``n`` of its Gaussian pyramid
+(:class:`~toonmotion.capture.template_context.Pyramid`: ``cv2.pyrDown``, a blur then every other
+pixel, once per halving), so a place ``xy`` in the frame is
+:func:`~toonmotion.capture.template_context.at_level` ``(xy, n)``, ``xy / 2^n``, whatever the
+frame's size, odd or even.
 """
 
 from __future__ import annotations
@@ -20,10 +21,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion.capture.template_context import Pyramid
 from toonmotion.capture.track_checks import Frames, read_frame
 from toonmotion.capture.track_figure import check_mask
 
@@ -63,11 +64,8 @@ def reduce(image: NDArray[Any], n: int) -> NDArray[Any]:
     (270, 480, 3)
     """
     if image.dtype == bool:
-        level = np.ascontiguousarray(image).view(np.uint8) * np.uint8(255)
-        return reduce(level, n) >= 128
-    for _ in range(n):
-        image = np.asarray(cv2.pyrDown(np.ascontiguousarray(image)), image.dtype)
-    return image
+        return reduce(np.ascontiguousarray(image).view(np.uint8) * np.uint8(255), n) >= 128
+    return Pyramid(image).level(n)
 
 
 class ReducedFrames(Sequence):
@@ -102,15 +100,12 @@ class ReducedMasks(Sequence):
         return reduce(mask if mask.dtype == bool else mask != 0, self._n)
 
 
-def to_working(points: NDArray[np.float64], n: int) -> NDArray[np.float64]:
-    """Places in the frames' pixels, after ``n`` halvings (sizes too: both scale by ``2^-n``)."""
-    return np.asarray(points, dtype=float) / 2**n
-
-
 def from_working(points: NDArray[np.float64], n: int) -> NDArray[np.float64]:
-    """Places found after ``n`` halvings, in the frames' own pixels.
+    """Places found after ``n`` halvings, in the frames' own pixels: the inverse of
+    :func:`~toonmotion.capture.template_context.at_level`.
 
-    >>> from_working(to_working(np.array([[7.0, 3.5]]), 2), 2).tolist()
+    >>> from toonmotion.capture.template_context import at_level
+    >>> from_working(at_level(np.array([[7.0, 3.5]]), 2), 2).tolist()
     [[7.0, 3.5]]
     """
     return np.asarray(points, dtype=float) * 2**n

@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from toonmotion.capture.template_context import Pyramid, cut_templates
+from toonmotion.capture.template_context import Pyramid, at_level, cut_templates
 from toonmotion.capture.template_match import (
     OTHERS,
     UPDATE_CONFIDENCE,
@@ -57,7 +57,6 @@ from toonmotion.capture.track_scale import (
     ReducedMasks,
     from_working,
     halvings,
-    to_working,
     working_weight,
 )
 from toonmotion.capture.track_search import MAX_WIDEN, FrameSearch, Plans, hidden_for, longest_bones
@@ -302,7 +301,7 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     n = halvings((first.shape[1], first.shape[0]), settings.working_side)
     if n:
         frames, masks, setup, settings = _at_working(frames, masks, setup, settings, first.shape, n)
-        first, initial = read_frame(frames, start, None), to_working(initial, n)
+        first, initial = read_frame(frames, start, None), at_level(initial, n)
     if settings.relight:
         frames = Relit(frames, first)
     out = _Arrays.empty(count, k)
@@ -390,7 +389,7 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     n = halvings((current.shape[1], current.shape[0]), settings.working_side)
     if n:
         frames, masks, setup, settings = _at_working(frames, masks, setup, settings, current.shape, n)
-        out.positions = to_working(out.positions, n)
+        out.positions = at_level(out.positions, n)
     if settings.relight:  # in the light of the frame the run started from, as track saw them
         frames = Relit(frames, read_frame(frames, begin, None))
     current = read_frame(frames, frame, None)
@@ -420,8 +419,8 @@ def _at_working(frames, masks, setup, settings, shape, n):
     for frames of ``shape``; a frame or mask of another size is named in the frames' own pixels."""
     frames = ReducedFrames(frames, n, shape)
     masks = None if masks is None else ReducedMasks(masks, n, shape)
-    setup = TrackSetup(skeleton=setup.skeleton, sizes=to_working(setup.sizes, n))
-    search = None if settings.search is None else float(to_working(settings.search, n))
+    setup = TrackSetup(skeleton=setup.skeleton, sizes=at_level(setup.sizes, n))
+    search = None if settings.search is None else float(at_level(settings.search, n))
     settings = replace(settings, search=max(search, 1.0) if search is not None else None,
                        w_beta=working_weight(settings.w_beta, n))
     return frames, masks, setup, settings
