@@ -3,7 +3,7 @@
     python benchmarks/track.py [CLIP.bvh ...] [--frames N] [--trackers toonmotion,MIL,CSRT,KCF]
                                [--style textured|flat ...] [--twos] [--noise SIGMA] [--seed N]
                                [--frame-by-frame | --both-ways] [--repeat N]
-                               [--size WxH] [--full-resolution]
+                               [--size WxH] [--full-resolution] [--restart N]
 
 Each clip (default: every .bvh in ../shared/data/mocap) is read, 16 joints are picked by the
 usual naming conventions (CMU, FAIR, Mixamo, Rokoko), projected orthographically from the front,
@@ -19,7 +19,10 @@ figure with other textures or colours; ``--frame-by-frame`` leaves out toonmotio
 joint's path over the whole clip (``TrackSettings.best_path``), ``--both-ways`` also tracks
 backwards and chooses between the two ways (``TrackSettings.both_ways``). On frames larger than
 1000 px (``--size 1280x960``) toonmotion tracks them halved (``TrackSettings.working_side``);
-``--full-resolution`` tracks them at their own size. Every tracker starts from the true frame-1
+``--full-resolution`` tracks them at their own size. ``--restart N`` starts every tracker again
+from the true joints every N frames, each stretch on its own, and scores the frames between:
+one joint lost early cannot then weigh on the rest of the clip, which steadies comparisons of
+two versions of the tracker (see docs/capture.md). Every tracker starts from the true frame-1
 rectangles (a square of the joint disc's diameter, ~30 px at 640x480) and runs on
 one core. toonmotion tracks each clip ``--repeat`` times (default 3), as ``timeit`` does, and its
 speed is that of the fastest run (a shared machine only ever slows a run down; the runs give the
@@ -28,12 +31,13 @@ same joints); OpenCV's trackers, at a few frames a second, run once.
 Keys, one line per clip, style and tracker:
   clip, style, twos, noise, seed, tracker, joints, frames
   size                 the frames' width x height
+  restart              N of --restart, null without it
   best_path, both_ways whether toonmotion chose the paths over the whole clip, and between
                        the two ways (its lines only)
   working_side         toonmotion's TrackSettings.working_side, null at full resolution (its lines
                        only)
   mean_px, median_px   error of the tracked joint centres against the true ones, over every
-                       joint and frame after the first
+                       joint and frame after the first (with --restart, but those it restarted at)
   pck5                 fraction of joint-frames within 5 px
   lost                 fraction of joint-frames more than 20 px off
   fps                  frames tracked per second, all 16 joints (rendering not counted); toonmotion:
@@ -65,7 +69,19 @@ DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
 OPENCV = {"MIL": "TrackerMIL_create", "CSRT": "TrackerCSRT_create", "KCF": "TrackerKCF_create"}
 
 
-def run_opencv(kind, images, start_points, side):
+def run_opencv(kind, images, truth, side, restart=None):
+    """An OpenCV tracker's joint centres from the true ones, started again every ``restart``
+    frames as toonmotion is (``track_from_truth``), and the seconds it took."""
+    step = restart or len(images)
+    out, seconds = np.empty_like(truth), 0.0
+    for begin in range(0, len(images), step):
+        stop = min(len(images), begin + step)
+        out[begin:stop], more = _run_opencv(kind, images[begin:stop], truth[begin], side)
+        seconds += more
+    return out, seconds
+
+
+def _run_opencv(kind, images, start_points, side):
     trackers = []
     frames = [cv2.cvtColor(f, cv2.COLOR_RGB2BGR) for f in images]
     for x, y in start_points:
@@ -86,7 +102,7 @@ def run_opencv(kind, images, start_points, side):
 
 
 def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, best_path=True,
-          both_ways=False, noise=None, repeat=1, size=(640, 480), full_resolution=False):
+          both_ways=False, noise=None, repeat=1, size=(640, 480), full_resolution=False, restart=None):
     clip = render_bvh_clip(path, frames=frames, style=style, twos=twos, seed=seed, noise=noise, size=size)
     images = clip.images
     lines, ours = [], None
@@ -95,18 +111,19 @@ def bench(path, trackers, frames=None, style="textured", twos=False, seed=0, bes
             settings = TrackSettings(best_path=best_path, both_ways=both_ways)
             if full_resolution:
                 settings = replace(settings, working_side=None)
-            found, seconds = track_from_truth(clip, settings=settings)
+            found, seconds = track_from_truth(clip, settings=settings, restart=restart)
             for _ in range(repeat - 1):
-                again, more = track_from_truth(clip, settings=settings)
+                again, more = track_from_truth(clip, settings=settings, restart=restart)
                 if not np.array_equal(again, found, equal_nan=True):
                     raise SystemExit(f"{Path(path).stem}: toonmotion's runs disagree")
                 seconds = min(seconds, more)
         else:
-            found, seconds = run_opencv(name, images, clip.truth[0], clip.side)
+            found, seconds = run_opencv(name, images, clip.truth, clip.side, restart)
         line = {"clip": Path(path).stem, "style": style, "twos": twos, "noise": clip.noise, "seed": seed,
-                "tracker": name, "size": f"{size[0]}x{size[1]}",
+                "tracker": name, "size": f"{size[0]}x{size[1]}", "restart": restart,
                 "joints": len(clip.skeleton), "frames": len(images),
-                **tracking_scores(found, clip.truth), "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
+                **tracking_scores(found, clip.truth, restart=restart),
+                "fps": round((len(images) - 1) / max(seconds, 1e-9), 1)}
         if name == "toonmotion":
             ours, line["best_path"], line["both_ways"] = line["mean_px"], best_path, both_ways
             line["working_side"] = settings.working_side
@@ -130,6 +147,16 @@ def _runs(text):
         value = 0
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of runs >= 1")
+    return value
+
+
+def _restart(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of frames >= 2")
     return value
 
 
@@ -166,6 +193,8 @@ def main():
                         help="the frames' size in pixels (default 640x480)")
     parser.add_argument("--full-resolution", action="store_true",
                         help="toonmotion tracks frames larger than 1000 px at their own size, not halved")
+    parser.add_argument("--restart", type=_restart, default=None, metavar="N",
+                        help="every tracker starts again from the true joints every N frames")
     args = parser.parse_args()
     clips = args.clips or sorted(DEFAULT_DIR.glob("*.bvh"))
     for clip in clips:
@@ -173,7 +202,7 @@ def main():
             lines = bench(clip, args.trackers.split(","), frames=args.frames, style=style, twos=args.twos,
                           seed=args.seed, best_path=not args.frame_by_frame, both_ways=args.both_ways,
                           noise=args.noise, repeat=args.repeat, size=args.size,
-                          full_resolution=args.full_resolution)
+                          full_resolution=args.full_resolution, restart=args.restart)
             for line in lines:
                 print(json.dumps(line), flush=True)
 

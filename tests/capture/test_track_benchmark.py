@@ -11,7 +11,12 @@ from tests.conftest import SHARED_DATA, _require
 from toonmotion.capture.foreground import flat_figure_masks
 from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
 from toonmotion.capture.tracker import TrackSetup, track
-from toonmotion.testing.mocap_tracking import render_bvh_clip, track_from_truth, tracking_scores
+from toonmotion.testing.mocap_tracking import (
+    render_bvh_clip,
+    track_from_truth,
+    tracking_errors,
+    tracking_scores,
+)
 
 # The issue's bar for the jumping-jacks clip: mean error at most 3 px.
 MEAN_BAR_PX = 3.0
@@ -80,6 +85,25 @@ def test_hands_turning_far_in_a_drawing_on_twos_are_matched_as_their_bones_turne
     found, _ = track_from_truth(twos)
     worst = np.hypot(*(found - twos.truth).transpose(2, 0, 1)).max(axis=0)
     assert worst.max() < 1.0, f"worst error per joint: {np.round(worst, 2)}"
+
+
+def test_restarting_tracks_each_stretch_on_its_own_from_the_true_joints(waving_cartoon):
+    """``restart``: every stretch starts at the true joints and is tracked as if it were the whole
+    clip, and the frames it starts at are not scored."""
+    clip, step = waving_cartoon, 15
+    found, _ = track_from_truth(clip, restart=step)
+    starts = np.arange(0, FRAMES, step)
+    assert (found[starts] == clip.truth[starts]).all()
+    setup = TrackSetup(skeleton=clip.skeleton, sizes=np.full((len(clip.skeleton), 2), clip.side))
+    alone = track(clip.images, setup, start=step, stop=2 * step, initial=clip.truth[step],
+                  masks=flat_figure_masks(clip.images))
+    assert (found[step:2 * step] == alone.positions[step:2 * step]).all()
+    errors = tracking_errors(found, clip.truth, restart=step)
+    assert errors.shape == ((FRAMES - len(starts)) * len(clip.skeleton),)
+    assert tracking_scores(found, clip.truth, restart=step)["mean_px"] == round(float(errors.mean()), 3)
+    for bad in (1, 0, True, 2.5):
+        with pytest.raises(ValueError, match="restart"):
+            track_from_truth(clip, restart=bad)
 
 
 def test_noise_is_added_to_every_frame_as_asked(jumping_jacks):

@@ -160,13 +160,18 @@ def render_mocap(clip: BvhClip, *, frames: int | None = None, fps: float = FPS,
                         fps=clip.fps / step, style=style, twos=twos, noise=noise)
 
 
-def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None = None, figure: bool = True
-                     ) -> tuple[NDArray[np.float64], float]:
+def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None = None, figure: bool = True,
+                     restart: int | None = None) -> tuple[NDArray[np.float64], float]:
     """Track every joint of a rendered clip with toonmotion's tracker from the true frame-0 rectangles.
 
     With ``figure`` the tracker holds joints to the figure's masks where the figure is drawn on
     a flat colour, as ``toonmotion track`` does
     (:func:`~toonmotion.capture.foreground.flat_figure_masks`); the time includes making them.
+
+    With ``restart``, tracking starts again from the true centres every ``restart`` frames
+    (frames 0, ``restart``, ``2 restart``, ...), each stretch tracked on its own as if it were
+    the whole clip: a joint lost in one stretch cannot carry its loss into the next. Scored
+    with the same ``restart`` (:func:`tracking_scores`), the restart frames are left out.
 
     Returns
     -------
@@ -175,36 +180,68 @@ def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None =
     seconds : float
         Wall-clock time of the tracking alone.
     """
+    count = len(rendered.images)
+    step = _restart_step(restart, count)
     sizes = np.full((len(rendered.skeleton), 2), rendered.side)
     setup = TrackSetup(skeleton=rendered.skeleton, sizes=sizes)
     start = time.perf_counter()
     masks = flat_figure_masks(rendered.images) if figure else None
-    result = track(rendered.images, setup, settings=settings, masks=masks)
-    return result.positions, time.perf_counter() - start
+    positions = np.empty_like(rendered.truth)
+    for begin in range(0, count, step):
+        stop = min(count, begin + step)
+        if stop - begin < 2:  # a last stretch of one frame is its own start
+            positions[begin] = rendered.truth[begin]
+            continue
+        result = track(rendered.images, setup, settings=settings, masks=masks, start=begin, stop=stop,
+                       initial=rendered.truth[begin])
+        positions[begin:stop] = result.positions[begin:stop]
+    return positions, time.perf_counter() - start
 
 
-def tracking_errors(found: NDArray[np.float64], truth: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Distance of every tracked joint from its true centre, over every frame after the first.
+def _restart_step(restart: int | None, count: int) -> int:
+    """The frames between restarts: ``restart``, or the whole clip for None."""
+    if restart is None:
+        return max(count, 1)
+    if isinstance(restart, bool) or not isinstance(restart, int) or restart < 2:
+        raise ValueError(f"restart must be a whole number of frames >= 2 or None, not {restart!r}")
+    return restart
+
+
+def tracking_errors(found: NDArray[np.float64], truth: NDArray[np.float64], *, restart: int | None = None
+                    ) -> NDArray[np.float64]:
+    """Distance of every tracked joint from its true centre, over every frame tracking did not
+    start from.
 
     Parameters
     ----------
     found, truth : (T, J, 2) float
         Pixels.
+    restart : int, optional
+        Tracking started again from the truth every ``restart`` frames
+        (:func:`track_from_truth`).
 
     Returns
     -------
-    ((T - 1) * J,) float
-        Pixels, frame by frame. Frame 0 is where tracking starts, so it is left out.
+    (n * J,) float
+        Pixels, frame by frame. Frame 0 is where tracking starts, so it is left out, as is every
+        ``restart``-th frame.
+
+    >>> found = np.zeros((5, 1, 2)); truth = found + np.arange(5.0)[:, None, None]
+    >>> tracking_errors(found, truth, restart=2).round(3).tolist()  # frames 1 and 3
+    [1.414, 4.243]
     """
     found, truth = np.asarray(found, dtype=float), np.asarray(truth, dtype=float)
     if found.shape != truth.shape or found.ndim != 3 or found.shape[2] != 2:
         raise ValueError(f"found and truth must both be (frames, joints, 2), got {found.shape} and "
                          f"{truth.shape}")
-    return np.hypot(*(found[1:] - truth[1:]).reshape(-1, 2).T)
+    scored = np.arange(len(found)) % _restart_step(restart, len(found)) != 0
+    return np.hypot(*(found[scored] - truth[scored]).reshape(-1, 2).T)
 
 
-def tracking_scores(found: NDArray[np.float64], truth: NDArray[np.float64]) -> dict[str, float]:
-    """The benchmark's figures for tracked joints against the true ones (frame 0 left out).
+def tracking_scores(found: NDArray[np.float64], truth: NDArray[np.float64], *, restart: int | None = None
+                    ) -> dict[str, float]:
+    """The benchmark's figures for tracked joints against the true ones (frame 0 left out, and
+    with ``restart`` every frame tracking started again from, as :func:`tracking_errors`).
 
     Returns
     -------
@@ -213,7 +250,7 @@ def tracking_scores(found: NDArray[np.float64], truth: NDArray[np.float64]) -> d
         fraction of joint-frames within :data:`PCK_PX`, and ``lost``, more than :data:`LOST_PX`
         off (rounded to 0.0001).
     """
-    error = tracking_errors(found, truth)
+    error = tracking_errors(found, truth, restart=restart)
     return {
         "mean_px": round(float(error.mean()), 3),
         "median_px": round(float(np.median(error)), 3),
