@@ -140,24 +140,17 @@ def _grey_levels(text):
     return value
 
 
-def _runs(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of runs >= 1")
-    return value
-
-
-def _restart(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of frames >= 2")
-    return value
+def _whole_number(least, what):
+    """An argparse type: a whole number of ``what`` at least ``least``."""
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            value = least - 1
+        if value < least:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of {what} >= {least}")
+        return value
+    return parse
 
 
 def _size(text):
@@ -187,13 +180,13 @@ def main():
                       help="leave out toonmotion's choice of each joint's path over the whole clip")
     ways.add_argument("--both-ways", action="store_true",
                       help="toonmotion also tracks backwards and chooses between the two ways")
-    parser.add_argument("--repeat", type=_runs, default=3, metavar="N",
+    parser.add_argument("--repeat", type=_whole_number(1, "runs"), default=3, metavar="N",
                         help="toonmotion's runs per clip; its fps is the fastest's (default 3)")
     parser.add_argument("--size", type=_size, default=(640, 480), metavar="WxH",
                         help="the frames' size in pixels (default 640x480)")
     parser.add_argument("--full-resolution", action="store_true",
                         help="toonmotion tracks frames larger than 1000 px at their own size, not halved")
-    parser.add_argument("--restart", type=_restart, default=None, metavar="N",
+    parser.add_argument("--restart", type=_whole_number(2, "frames"), default=None, metavar="N",
                         help="every tracker starts again from the true joints every N frames")
     args = parser.parse_args()
     clips = args.clips or sorted(DEFAULT_DIR.glob("*.bvh"))
