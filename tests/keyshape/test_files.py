@@ -38,6 +38,26 @@ def test_files_round_trip_exactly(tmp_path, smooth_keys):
     np.testing.assert_array_equal(back.affine, found.affine)
 
 
+
+@pytest.mark.parametrize("count", [1, 2])
+def test_one_key_or_keys_all_alike_make_a_model_of_affine_motion_alone(tmp_path, smooth_keys, count, capsys):
+    """No eigen-shapes: the model saves, loads and captures a key moved affinely, exactly."""
+    save_contours(tmp_path / "keys.json", [smooth_keys[0]] * count)
+    assert run_cli("keyshapes", tmp_path / "keys.json", "-o", tmp_path / "model.json") == 0
+    assert "0 eigen-shapes" in capsys.readouterr().out
+    space = load_model(tmp_path / "model.json")
+    assert space.eigen.shape == (0, *smooth_keys.shape[1:])
+    np.testing.assert_allclose(space.mean, smooth_keys[0], atol=1e-9)
+    A = np.array([[[1.0, 0.1, 30], [-0.1, 0.9, -12]], [[0.8, -0.3, 5], [0.3, 0.8, 7]]])
+    frames = [warp(a, [1.0], smooth_keys[:1]) for a in A]
+    save_contours(tmp_path / "clip.json", frames)
+    for extra in ((), ("--keys",)):
+        assert run_cli("capture-contours", tmp_path / "model.json", tmp_path / "clip.json", *extra,
+                       "-o", tmp_path / "motion.json") == 0
+        found, _, _ = load_keymotion(tmp_path / "motion.json")
+        np.testing.assert_allclose(found.affine, A, atol=1e-6)
+        assert found.error.max() < 1e-6
+
 def test_contours_read_from_csv(tmp_path, smooth_keys):
     rows = ["contour,point,x,y"] + [f"{c},{p},{float(x)!r},{float(y)!r}"
                                     for c, shape in enumerate(smooth_keys) for p, (x, y) in enumerate(shape)]

@@ -146,7 +146,9 @@ def load_model(path: str | Path) -> KeyShapeSpace:
     model = read_versioned(path, MODEL_FORMAT)
     keys = check_shapes(model.keys, what=f"{path.name}: the keys")
     mean = np.array(model.mean, dtype=float)
-    eigen = np.array(model.eigen, dtype=float).reshape(len(model.eigen), -1, 2)
+    # A model of one key (or of keys all alike) has no eigen-shapes.
+    eigen = (np.array(model.eigen, dtype=float).reshape(len(model.eigen), -1, 2) if model.eigen
+             else np.zeros((0, *keys.shape[1:])))
     if mean.shape != keys.shape[1:] or eigen.shape[1:] != keys.shape[1:]:
         raise KeyShapeError(f"{path.name}: the mean and eigen-shapes must have the keys' "
                             f"{keys.shape[1]} points")

@@ -112,6 +112,6 @@ def build_space(keys: ArrayLike, *, closed: bool = True, inbetweens: int = 5, to
             break
     scale = np.abs(coefficients).max(axis=0) if L else np.zeros(0)
     scale[scale == 0] = 1.0
-    eigen = (basis * scale[:, None]).reshape(L, -1, 2)
+    eigen = (basis * scale[:, None]).reshape(L, len(mean) // 2, 2)
     return KeyShapeSpace(keys=K, closed=closed, inbetweens=inbetweens, tolerance=tolerance,
                          mean=mean.reshape(-1, 2), eigen=eigen, error=error)
