@@ -8,6 +8,7 @@ from toonmotion.rig.kinematics import bone_angles
 from toonmotion.rig.pose import (
     MIN_POSED_FRACTION,
     Pose,
+    carried_pose,
     check_pose,
     descendants,
     pose_from_joints,
@@ -15,6 +16,7 @@ from toonmotion.rig.pose import (
     rest_pose,
     rotate_about,
 )
+from toonmotion.rig.skeleton import Skeleton
 from toonmotion.samples import sample_character
 
 
@@ -187,3 +189,26 @@ def test_rotate_about_scales_the_bones_below(skeleton):
 def test_rotate_about_a_leaf_changes_nothing(skeleton):
     Q = rotate_about(skeleton, skeleton.positions, "left_foot", 1.0)
     np.testing.assert_array_equal(Q, skeleton.positions)
+
+
+def test_a_pose_carried_onto_moved_joints_keeps_every_other_joint_and_each_bones_turn(skeleton):
+    rng = np.random.default_rng(3)
+    pose = Pose(skeleton.positions + rng.normal(0, 15, skeleton.positions.shape))
+    same = carried_pose(skeleton, skeleton, pose)
+    np.testing.assert_array_equal(same.positions, pose.positions)  # nothing moved: exactly the pose
+    moved = skeleton.positions.copy()
+    elbow = skeleton.index("left_elbow")
+    moved[elbow] += (3.0, -2.0)
+    after = Skeleton(skeleton.names, skeleton.parents, moved)
+    carried = carried_pose(skeleton, after, pose).positions
+    others = np.arange(len(skeleton)) != elbow
+    np.testing.assert_array_equal(carried[others], pose.positions[others])
+    # The upper arm's turn and stretch from rest to pose, applied to the moved rest elbow.
+    shoulder = skeleton.parents[elbow]
+    rest_bone, posed_bone = (complex(*(p[elbow] - p[shoulder])) for p in (skeleton.positions, pose.positions))
+    expected = posed_bone / rest_bone * complex(*(moved[elbow] - skeleton.positions[shoulder]))
+    assert complex(*(carried[elbow] - pose.positions[shoulder])) == pytest.approx(expected, abs=1e-9)
+    np.testing.assert_allclose(carried_pose(skeleton, after, rest_pose(skeleton)).positions, moved, atol=1e-9)
+    fewer = Skeleton.from_joints([("extra", None, (0.0, 0.0))])
+    with pytest.raises(PoseError, match="'extra' is not in the skeleton"):
+        carried_pose(skeleton, fewer, pose)

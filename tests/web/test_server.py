@@ -608,6 +608,40 @@ def test_while_there_are_keys_a_rig_keeps_the_joint_names(editable):
     assert reply["type"] == "error" and "keep their names" in reply["message"]
 
 
+
+def test_joints_moved_in_a_rig_carry_the_keys_with_them_and_undo_takes_both_back(editable):
+    from toonmotion.io.pose_json import load_keyframes
+
+    folder, client = editable
+    character = api.load_project(folder)
+    skeleton = character.skeleton
+    joints = _joints(character)
+    head, hand, elbow = (skeleton.index(n) for n in ("head", "right_hand", "right_elbow"))
+    joints[head]["position"][1] -= 6
+    forearm = skeleton.positions[hand] - skeleton.positions[elbow]
+    joints[hand]["position"] = (skeleton.positions[hand] + 4 * forearm / np.linalg.norm(forearm)).tolist()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _keyed(folder, socket)  # the rest pose at 0, the forearm turned 1 radian at 6
+        keys_before = (folder / "keys.json").read_text()
+        assert _send(socket, {"type": "rig", "joints": joints})["type"] == "rigged"
+        moved = api.load_project(folder).skeleton
+        rest, turned = (k.pose.positions for k in load_keyframes(folder / "keys.json", moved).keys)
+        # A key of the rest pose is the new rest pose; a joint not moved keeps its keyed place.
+        np.testing.assert_allclose(rest, moved.positions, atol=1e-9)
+        bent = np.array(_pose(character, "right_elbow", 1.0))
+        still = [j for j in range(len(skeleton)) if j not in (head, hand)]
+        np.testing.assert_array_equal(turned[still], bent[still])
+        # The hand, moved 4 px along its forearm, is 4 px farther along the turned forearm.
+        before, after = bent[hand] - bent[elbow], turned[hand] - turned[elbow]
+        assert np.linalg.norm(after) == pytest.approx(np.linalg.norm(before) + 4, abs=1e-6)
+        assert before[0] * after[1] - before[1] * after[0] == pytest.approx(0.0, abs=1e-6)
+        undone = _send(socket, {"type": "undo"})
+        assert undone["kind"] == "rig" and (folder / "keys.json").read_text() == keys_before
+        np.testing.assert_array_equal(api.load_project(folder).skeleton.positions, skeleton.positions)
+        assert _send(socket, {"type": "redo"})["kind"] == "rig"
+    again = load_keyframes(folder / "keys.json", api.load_project(folder).skeleton).keys[0].pose.positions
+    np.testing.assert_allclose(again, moved.positions, atol=1e-9)
+
 def test_timing_changes_the_keys_rate_and_easing(editable):
     from toonmotion.io.pose_json import load_keyframes
 

@@ -24,6 +24,7 @@ from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
 from toonmotion.api.animation import (
     animate_character,
+    carry_keys,
     delete_key,
     filter_motion,
     motion_in_frames,
@@ -107,6 +108,7 @@ __all__ = [
     "animate_character",
     "animate_drawing",
     "animation_frames",
+    "carry_keys",
     "border_colour",
     "capture_contours",
     "capture_parts",

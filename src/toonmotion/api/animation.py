@@ -19,7 +19,7 @@ from toonmotion.deform.tuning import TuningEdit
 from toonmotion.errors import KeyframeError
 from toonmotion.render.sequence import frame_transform
 from toonmotion.rig.character import Character
-from toonmotion.rig.pose import Pose, check_pose
+from toonmotion.rig.pose import Pose, carried_pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
 
 
@@ -250,6 +250,38 @@ def retime(skeleton: Skeleton, timeline: Timeline, *, fps: float | None = None,
     """
     return make_timeline(skeleton, timeline.keys, fps=timeline.fps if fps is None else fps,
                          ease=timeline.ease if ease is None else ease)
+
+
+def carry_keys(before: Skeleton, after: Skeleton, timeline: Timeline) -> Timeline:
+    """``timeline``'s key poses, made for skeleton ``before``, carried onto ``after``: the same
+    joints, some moved at rest (a drawing rigged again with its joints placed better). A joint
+    that did not move keeps its keyed places exactly; one that moved goes where its keyed bone
+    carries its new rest place (:func:`~toonmotion.rig.pose.carried_pose`), so a key of the rest
+    pose is still the rest pose. Each key keeps its frame and fine-tuning edits.
+
+    Parameters
+    ----------
+    before, after : Skeleton
+        The skeleton the keys were made for, and the new one (the same joint names).
+    timeline : Timeline
+
+    Returns
+    -------
+    Timeline
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
+    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
+    >>> higher = hero.skeleton.positions.copy()
+    >>> higher[hero.skeleton.index("head")] -= (0, 6)  # the head joint placed 6 px higher
+    >>> moved = Skeleton(hero.skeleton.names, hero.skeleton.parents, higher)
+    >>> bool((carry_keys(hero.skeleton, moved, keys).keys[0].pose.positions == higher).all())
+    True
+    """
+    carried = [Keyframe(key.frame, carried_pose(before, after, key.pose), key.edits) for key in timeline.keys]
+    return make_timeline(after, carried, fps=timeline.fps, ease=timeline.ease)
 
 
 def motion_in_frames(character: Character, animation: Animation, *,

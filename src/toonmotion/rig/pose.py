@@ -142,3 +142,42 @@ def rotate_about(
     below = descendants(skeleton, j)
     out[below] = transform(out[below], rotation(angle) * scale, about=out[j])
     return out
+
+
+def carried_pose(before: Skeleton, after: Skeleton, pose: Pose) -> Pose:
+    """``pose`` of skeleton ``before`` as a pose of ``after``: the same joints by name, some of them
+    moved at rest (the animator placed them better), in ``after``'s joint order.
+
+    A joint that did not move keeps its posed place exactly. One that moved goes where its bone's
+    pose carries its new rest place: the turn, stretch and move that take the bone from its
+    parent (``after``'s) at rest onto the pose, applied to the new rest place; a root, or a joint
+    whose bone had no length at rest, keeps its offset from rest. So a key of the rest pose stays
+    the rest pose, and a moved elbow sits as far along a posed arm as it was moved along the arm.
+
+    Raises :class:`PoseError` if ``after`` names a joint ``before`` has not.
+
+    Examples
+    --------
+    >>> arm = Skeleton.from_joints([("shoulder", None, (0, 0)), ("hand", "shoulder", (10, 0))])
+    >>> raised = Pose(np.array([[0.0, 0.0], [0.0, -10.0]]))  # the arm turned up
+    >>> longer = Skeleton.from_joints([("shoulder", None, (0, 0)), ("hand", "shoulder", (12, 0))])
+    >>> carried_pose(arm, longer, raised).positions.round(9).tolist()
+    [[0.0, 0.0], [0.0, -12.0]]
+    """
+    missing = [name for name in after.names if name not in before.names]
+    if missing:
+        raise PoseError(f"joint {missing[0]!r} is not in the skeleton the pose was made for")
+    order = [before.names.index(name) for name in after.names]
+    posed, rest = pose.positions[order], np.asarray(before.positions, dtype=float)[order]
+    moved_rest = np.asarray(after.positions, dtype=float)
+    out = posed.copy()
+    for j in np.flatnonzero((moved_rest != rest).any(axis=1)):
+        p = int(after.parents[j])
+        bone = complex(*(rest[j] - rest[p])) if p >= 0 else 0j
+        if abs(bone) <= MIN_BONE_LENGTH:
+            out[j] = posed[j] + (moved_rest[j] - rest[j])
+            continue
+        # The complex ratio is the turn and stretch taking the rest bone onto the posed one.
+        carried = complex(*(posed[j] - posed[p])) / bone * complex(*(moved_rest[j] - rest[p]))
+        out[j] = posed[p] + (carried.real, carried.imag)
+    return Pose(out)

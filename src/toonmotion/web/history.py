@@ -8,8 +8,10 @@ reload and a restart.
   many edits the project had after it, to check that the two histories still agree.
 * ``{"kind": "keys", "before": text or null, "after": text or null}``: the key-frames file
   before and after a key edit (set, move, delete, timing, fine-tuning), ``null`` for none.
-* ``{"kind": "rig", "before": joints, "after": joints}``: the skeleton before and after
-  rigging again, each ``[[name, parent or null, [x, y]], ...]``.
+* ``{"kind": "rig", "before": joints, "after": joints, "keys_before": text or null,
+  "keys_after": text or null}``: the skeleton before and after rigging again, each
+  ``[[name, parent or null, [x, y]], ...]``, and the key-frames file before and after (the keys
+  follow the joints moved); an entry saved without the keys leaves them as they are.
 * ``{"kind": "drawing", "before": folder, "after": folder}``: a new drawing opened into the
   project; the projects before and after it are kept whole in ``history/<folder>``.
 

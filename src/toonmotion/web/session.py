@@ -674,10 +674,17 @@ def _rig(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     with editing.lock:
         if editing.timeline is not None and set(skeleton.names) != set(editing.character.skeleton.names):
             raise SkeletonError("the key-frames name the joints: keep their names, or delete the keys first")
-        before = _joints(editing.character.skeleton)
+        before, keys_before = _joints(editing.character.skeleton), editing.keys_text()
         character, skipped = api.rig_again(editing.character, skeleton)
+        # The keys follow the joints moved: a key of the rest pose stays the rest pose (checked
+        # before anything is saved).
+        carried = None if editing.timeline is None else api.carry_keys(
+            editing.character.skeleton, character.skeleton, editing.timeline)
         editing.edited(character)
-        editing.history.record({"kind": "rig", "before": before, "after": _joints(character.skeleton)})
+        if carried is not None:
+            editing.keyed(carried)
+        editing.history.record({"kind": "rig", "before": before, "after": _joints(character.skeleton),
+                                "keys_before": keys_before, "keys_after": editing.keys_text()})
     return {"type": "rigged", "skipped": len(skipped)}
 
 
@@ -724,10 +731,16 @@ def _step(editing: Editing, *, undo: bool) -> dict[str, Any]:
                 editing.edited(api.load_project(snapshots / then))
             else:
                 now, then = (entry["after"], entry["before"]) if undo else (entry["before"], entry["after"])
-                if _joints(editing.character.skeleton) != now:
+                keys_now, keys_then = ((entry.get("keys_after"), entry.get("keys_before")) if undo
+                                       else (entry.get("keys_before"), entry.get("keys_after")))
+                carries_keys = "keys_before" in entry  # a rig step saved before the keys followed has not
+                keys_changed = carries_keys and editing.keys_text() != keys_now
+                if _joints(editing.character.skeleton) != now or keys_changed:
                     _stale(history)
                 skeleton = Skeleton.from_joints((name, parent, xy) for name, parent, xy in then)
                 editing.edited(api.rig_again(editing.character, skeleton)[0])
+                if carries_keys:
+                    editing.restore_keys(keys_then)
             history.moved(entry, undo=undo)
         return {"type": "undone" if undo else "redone", "kind": kind, **regions(editing.character),
                 "keys": keys(editing.timeline), "history": history.counts()}

@@ -48,7 +48,7 @@ export function mount(ctx) {
     <p><button id="rig-open" disabled>Rig the new drawing</button> <progress id="rig-progress" hidden></progress></p>`;
   if (project.keys) {
     document.getElementById("rig-note").textContent =
-      "The key-frames name the joints: move them, but keep their names (or delete the keys).";
+      "The key-frames name the joints: move them (the keys follow), but keep their names (or delete the keys).";
   }
 
   function showJoint() {
