@@ -13,11 +13,18 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import Delaunay, cKDTree
 
 from tests.conftest import drawing_names
-from toonmotion.deform.fine_tune import JOINT_REACH, drag_points, follow, sketch_targets, tune_with_curve
+from toonmotion.deform.fine_tune import (
+    JOINT_REACH,
+    MAX_SHORTENING,
+    drag_points,
+    follow,
+    sketch_targets,
+    tune_with_curve,
+)
 from toonmotion.deform.needles import needle_model
 from toonmotion.errors import EditError
 from toonmotion.geometry.polygon import points_in_polygon, triangle_areas
-from toonmotion.geometry.segments import closest_points_on_segments
+from toonmotion.geometry.segments import arc_lengths, closest_points_on_segments
 from toonmotion.rig.pose import Pose, rotate_about
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.mesh import Mesh, unique_edges
@@ -360,6 +367,23 @@ def test_curve_ending_at_its_start_vertex_is_an_edit_error(sample):
     with pytest.raises(EditError, match="ends meet the outline at one vertex"):
         tune_with_curve(deformer, P, U, [v, v + (3.0, 0.0), v + (0.5, 0.5)])
 
+
+
+def test_curve_whose_ends_straddle_a_limb_is_an_edit_error(sample):
+    """A straight stroke across the wrist, its ends on the outline either side of the hand: the
+    outline between them runs round the hand, far longer than the stroke, and would be crushed
+    onto it."""
+    deformer, P, U = sample
+    mesh = deformer.character.mesh
+    hand = deformer.character.skeleton.bone_names.index(FOREARM)
+    loop = next(loop for loop in mesh.boundary if (deformer.needles.bone[loop] == hand).any())
+    on_hand = np.flatnonzero(deformer.needles.bone[loop] == hand)
+    assert (np.diff(on_hand) == 1).all()  # one run of outline round the hand
+    run = loop[on_hand]
+    stroke = U[[run[0], run[-1]]]
+    assert float(arc_lengths(U[run])[-1]) > MAX_SHORTENING * float(arc_lengths(stroke)[-1])
+    with pytest.raises(EditError, match="would be crushed onto it"):
+        tune_with_curve(deformer, P, U, stroke)
 
 def test_curve_between_two_outline_loops_is_an_edit_error():
     """The shared drawings are one part each, so two strips side by side stand in for two parts."""

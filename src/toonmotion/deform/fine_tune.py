@@ -56,6 +56,10 @@ from toonmotion.shape.mesh import Mesh, unique_edges
 
 # A drag frees the joint area it is in up to this many joint widths away along mesh edges.
 JOINT_REACH = 2.0
+# A sketch curve reshapes the outline stretch between its ends; one that stretch would have to be
+# folded onto, more than this many times the curve's length, is refused: its ends were drawn either
+# side of a limb (a short stroke by a cat's tail crushed the whole tail onto it).
+MAX_SHORTENING = 3.0
 # The follow solve runs once per edit, not per frame, so it iterates further than a pose does.
 _MAX_ITERATIONS = 100
 _TOLERANCE = 1e-6
@@ -334,7 +338,13 @@ def _arc_along(mesh, U, C):
     backward = loop[(a - np.arange((a - b) % size + 1)) % size]
     A, B = C[:-1], C[1:]
     mean = [closest_points_on_segments(U[arc], A, B)[1].min(axis=1).mean() for arc in (forward, backward)]
-    return forward if mean[0] <= mean[1] else backward
+    arc = forward if mean[0] <= mean[1] else backward
+    arc_length, curve_length = float(arc_lengths(U[arc])[-1]), float(arc_lengths(C)[-1])
+    if arc_length > MAX_SHORTENING * curve_length:
+        raise EditError(f"the outline between the curve's ends runs {arc_length:.0f} px, "
+                        f"{arc_length / curve_length:.1f} times the curve's {curve_length:.0f} px, and "
+                        "would be crushed onto it; draw the curve along the whole stretch to change")
+    return arc
 
 
 def _feet(needles, positions, arc):
