@@ -713,7 +713,7 @@ def test_fine_tune_drag_a_point_and_sketch_the_outline_then_key_them(page, edito
     page.evaluate("() => { const c = window.toonmotion; c.pose = c.project.joints.map((j) => j.position); }")
     page.evaluate("() => { window.toonmotion.tuning = " + str(edits).replace("'", '"') + "; }")
     page.click("#timeline-key")
-    page.wait_for_function("window.toonmotion.project.keys.keys.some((k) => k.frame === 20)")
+    page.wait_for_function("(window.toonmotion.project.keys?.keys || []).some((k) => k.frame === 20)")
     keyed = load_keyframes(folder / "keys.json", character.skeleton)
     assert [type(e).__name__ for e in keyed.keys[-1].edits] == ["DragEdit", "CurveEdit"]  # saved with the key
     page.keyboard.press("Control+z")  # and undone like any key edit
