@@ -638,6 +638,22 @@ def test_remesh_replays_the_edits(posable, tmp_path, capsys):
     assert character.depth[character.skeleton.bone_names.index("right_elbow")] == 1
 
 
+
+def test_remesh_too_coarse_warns_and_too_fine_is_refused_keeping_the_project(posable, tmp_path, capsys):
+    from toonmotion.shape.mesh import left_out
+
+    project = _copy_project(posable, tmp_path)
+    assert _run("remesh", project, "--vertices", "40") == 0
+    coarse = load_project(project)
+    said = capsys.readouterr().err
+    assert left_out(coarse.mesh, coarse.mask) > 0.05 and "of the figure" in said and "more --vertices" in said
+    before = (project / "project.json").read_bytes()
+    assert _run("remesh", project, "--vertices", "60000") == 2
+    assert "mesh_vertices=50,000" in capsys.readouterr().err
+    assert (project / "project.json").read_bytes() == before
+    assert _run("remesh", project, "--vertices", "1500") == 0
+    assert "of the figure" not in capsys.readouterr().err
+
 def test_tune_adds_lists_and_undoes_edits_in_a_pose_file(posable, tmp_path, capsys):
     import shutil
 

@@ -44,6 +44,8 @@ class Limits:
         Joints in a skeleton (a drawing's, a motion's or a BVH file's).
     figure_parts : int
         Separate pieces in a figure's mask (specks of dust or a dithered alpha count).
+    mesh_vertices : int
+        Vertices in a character's mesh (posing time grows with them).
     file_bytes : int
         Size of a JSON, YAML or BVH file read.
     upload_bytes : int
@@ -58,6 +60,7 @@ class Limits:
     frames: int = 100_000
     joints: int = 1_000
     figure_parts: int = 200
+    mesh_vertices: int = 50_000
     file_bytes: int = 256_000_000
     upload_bytes: int = 500_000_000
 

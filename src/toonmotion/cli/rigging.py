@@ -19,7 +19,7 @@ from toonmotion.io.skeleton_json import save_skeleton_json
 from toonmotion.render.overview import render_overview
 from toonmotion.rig.character import RigSettings
 from toonmotion.rig.edits import describe as describe_edit
-from toonmotion.rig.pipeline import remesh
+from toonmotion.rig.pipeline import coarse_mesh_warning, remesh
 from toonmotion.sample_animation import sample_keyframes
 from toonmotion.samples import sample_character
 
@@ -67,6 +67,7 @@ def rig(
         f"rigged {image.name}: {len(mesh.V)} vertices, {len(mesh.F)} triangles, "
         f"{len(character.skeleton)} joints -> {output}"
     )
+    _warn_if_coarse(character)
 
 
 @app.command()
@@ -143,3 +144,10 @@ def remesh_project(
     )
     for edit, reason in skipped:
         options.warn(f"dropped an edit that no longer applies ({describe_edit(edit)}): {reason}")
+    _warn_if_coarse(character)
+
+
+def _warn_if_coarse(character: api.Character) -> None:
+    warning = coarse_mesh_warning(character)
+    if warning:
+        options.warn(warning)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion import limits
 from toonmotion.errors import MaskError, SkeletonError
 from toonmotion.progress import Progress
 from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
@@ -16,7 +17,7 @@ from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.edits import Edit, replay
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
 from toonmotion.shape.curve_skeleton import curve_skeleton
-from toonmotion.shape.mesh import choose_spacing, triangulate
+from toonmotion.shape.mesh import choose_spacing, left_out, triangulate
 from toonmotion.shape.segment import (
     check_mask,
     clean_mask,
@@ -32,6 +33,9 @@ STAGES = ("mask", "silhouette", "curve skeleton", "skeleton", "mesh", "binding")
 _FAR_FRACTION = 0.1
 _FAR_MIN_PX = 8.0
 _BASE_TOLERANCE = 1.0
+# A mesh whose outline leaves out more of the figure than this is too coarse for its thin parts
+# (the shared drawings: 0.2-0.8% at 1,500 vertices, 1-2% at 300, 6-25% at 120 and 10-26% at 50).
+LEFT_OUT_WARNING = 0.05
 
 
 def rig_drawing(
@@ -85,6 +89,8 @@ def rig_drawing(
     spacing = settings.spacing
     if spacing is None:
         target = settings.vertices or 1500
+        limits.check("mesh_vertices", target, f"the mesh asked for, {target:,} vertices,",
+                     hint="ask for fewer")
         spacing = choose_spacing(silhouette, target, refine_points=refine)
         if settings.tolerance is None and spacing / 10 > _BASE_TOLERANCE:
             silhouette = trace_silhouette(figure, tolerance=spacing / 10)
@@ -92,6 +98,8 @@ def rig_drawing(
     elif settings.tolerance is None and spacing / 10 > _BASE_TOLERANCE:
         silhouette = trace_silhouette(figure, tolerance=spacing / 10)
     mesh = triangulate(silhouette, spacing=spacing, refine_points=refine)
+    limits.check("mesh_vertices", len(mesh.V), f"the mesh, {len(mesh.V):,} vertices,",
+                 hint="mesh it coarser (a larger spacing)")
 
     report("binding", 5, len(STAGES))
     binding = decompose(mesh, skeleton, figure, rule=settings.decomposition)
@@ -171,3 +179,14 @@ def _meeting_joints(skeleton):
     bones = skeleton.bones[skeleton.bone_lengths > MIN_BONE_LENGTH]
     degree = np.bincount(bones.ravel(), minlength=len(skeleton))
     return skeleton.positions[degree >= 2]
+
+
+def coarse_mesh_warning(character: Character) -> str | None:
+    """A warning when ``character``'s mesh leaves out more than :data:`LEFT_OUT_WARNING` of its
+    figure (:func:`~toonmotion.shape.mesh.left_out`): what is left out does not show when posed."""
+    share = left_out(character.mesh, character.mask)
+    if share <= LEFT_OUT_WARNING:
+        return None
+    return (f"the mesh leaves out {share:.0%} of the figure (parts thinner than its "
+            f"{character.mesh.spacing:.0f} px spacing are cut off, and do not show when posed); "
+            f"mesh it finer (more --vertices)")
