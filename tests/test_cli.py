@@ -323,10 +323,13 @@ def test_unwritable_output_is_a_user_error(tmp_path, capsys):
     (tmp_path / "file").write_text("x")
     result = run(["rig", _drawing(tmp_path), "-o", tmp_path / "file" / "p", "--vertices", "200"],
                  capsys)
-    assert_user_error(result, r"\[Errno \d+\] .*file")
+    assert_user_error(result, r"file\S* is a file, not a folder")
     result = run(["sample", "-o", tmp_path / "file" / "s.png"], capsys)
-    assert_user_error(result, r"\[Errno \d+\] .*file")
+    assert_user_error(result, r"file\S* is a file, not a folder")
     assert (tmp_path / "file").read_text() == "x"
+    # Refused as the file is written: named as the user gave it, not by its temporary name.
+    result = run(["sample", "-o", "/proc/toonmotion-sample.png"], capsys)
+    assert_user_error(result, r"cannot write /proc/toonmotion-sample.png: ")
 
 
 def test_sample_refuses_a_skeleton_file_rig_cannot_read(tmp_path, capsys):

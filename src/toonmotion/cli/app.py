@@ -9,9 +9,11 @@ draw as a multi-line box.
 from __future__ import annotations
 
 import os
+import re
 import sys
 import traceback
 import warnings
+from pathlib import Path
 from typing import Annotated, NoReturn
 
 import typer
@@ -71,8 +73,10 @@ def main(argv: list[str] | None = None) -> NoReturn:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             code = app(args=args, prog_name="toonmotion", standalone_mode=False)
-    except (ToonmotionError, OSError) as error:  # OSError: an output that cannot be written, a full disk
+    except ToonmotionError as error:
         _fail(str(error) or type(error).__name__)
+    except OSError as error:  # an output that cannot be written, a full disk
+        _fail(os_error_message(error))
     except typer.TyperException as error:  # the option parser's: a missing argument, a value out of range
         context = getattr(error, "ctx", None)
         if type(error).__name__ == "NoArgsIsHelpError" and context is not None:
@@ -96,6 +100,27 @@ _BUG_HINT = (
     "this is a bug in toonmotion, please report it with the command and its input files "
     "(set TOONMOTION_TRACEBACK=1 to see where it happened)"
 )
+
+
+def os_error_message(error: OSError) -> str:
+    """An operating system's refusal in the user's words: the file they named (not the temporary
+    one it was being written to, :mod:`toonmotion.io.atomic`) and why.
+
+    >>> os_error_message(PermissionError(13, "Permission denied", "/sys/.x.png.123.ab_c.tmp"))
+    'cannot write /sys/x.png: permission denied'
+    """
+    if error.filename is None:
+        return str(error) or type(error).__name__
+    path = Path(os.fsdecode(error.filename))
+    temporary = re.fullmatch(r"\.(.+)\.\d+\..*\.tmp", path.name)
+    if isinstance(error, FileExistsError | NotADirectoryError):
+        blocking = next((part for part in (path, *path.parents) if part.is_file()), None)
+        if blocking is not None:
+            return f"{blocking} is a file, not a folder: give a path in a folder"
+    reason = (error.strerror or type(error).__name__).lower()
+    if temporary:
+        return f"cannot write {path.with_name(temporary.group(1))}: {reason}"
+    return f"{path}: {reason}"
 
 
 def _fail(message: str, *, status: int = 2) -> NoReturn:
