@@ -486,6 +486,11 @@ def test_rig_move_a_joint_and_rig_again(page, editor):
     page.click("#rig-go")
     page.wait_for_function("!document.getElementById('error').hidden")
     assert "keep their names" in page.locator("#error").text_content()
+    # The message is clear of the stage's foot, where the timeline's ruler goes, and clicks away.
+    box, stage = page.locator("#error").bounding_box(), page.locator("#stage").bounding_box()
+    assert box["y"] + box["height"] < stage["y"] + stage["height"] - 44
+    page.click("#error")
+    assert page.locator("#error").is_hidden()
     page.click("#rig-delete")  # the new joint is selected: take it out again
     x, y = _joint_on_screen(page, "head")
     page.mouse.move(x, y)

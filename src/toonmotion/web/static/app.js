@@ -20,6 +20,10 @@ export function showError(message) {
   box.hidden = !message;
 }
 
+// The message stays until something works again, or until it is clicked away.
+document.getElementById("error").title = "click to dismiss";
+document.getElementById("error").addEventListener("click", () => showError(""));
+
 function status(text) {
   document.getElementById("status").textContent = text;
 }
