@@ -627,6 +627,18 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     page.wait_for_timeout(500)
     page.click("#capture-play")
     assert page.evaluate("document.getElementById('mesh').style.visibility") == "visible"
+    # Another panel and back, or a reload: the footage and its tracking are as they were left.
+    tracked = page.evaluate("window.toonmotion.capture.joints().map((j) => j.position)")
+    page.click("nav button[data-panel=pose]")
+    page.click("nav button[data-panel=capture]")
+    assert "4 frames of 210×300" in page.locator("#capture-info").text_content()
+    page.reload()
+    page.wait_for_function("window.toonmotion && window.toonmotion.capture")
+    page.click("nav button[data-panel=capture]")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
+    assert "4 frames of 210×300" in page.locator("#capture-info").text_content()
+    assert page.evaluate("window.toonmotion.capture.joints().map((j) => j.position)") == tracked
+    assert not page.is_disabled("#capture-play") and page.locator("#error").is_hidden()
     # A folder of frames, named as cameras and renderers number them (f_2 before f_10).
     shots = tmp_path / "shots"
     shots.mkdir()

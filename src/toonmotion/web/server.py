@@ -203,9 +203,11 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         rate = fps or 24.0
         editing.footage, editing.capture, editing.captured = (frames, rate), None, None
         border = api.border_colour(frames[0])
-        return {"frames": len(frames), "width": frames.shape[2], "height": frames.shape[1], "fps": rate,
-                "joints": suggested_joints(skeleton, sizes),
-                "border": None if border is None else list(border)}
+        described = {"frames": len(frames), "width": frames.shape[2], "height": frames.shape[1], "fps": rate,
+                     "joints": suggested_joints(skeleton, sizes),
+                     "border": None if border is None else list(border)}
+        editing.capture_page = {"footage": described, "joints": None, "tracked": None}
+        return described
 
     @app.put("/api/uploads/{part}")
     async def upload(request: Request, part: str, format: str = "") -> dict[str, Any]:

@@ -167,6 +167,10 @@ class Editing:
     footage: tuple[NDArray[np.uint8], float] | None = None  # frames and their rate
     capture: api.Capture | None = None
     captured: api.Animation | None = None  # the capture retargeted onto the character
+    # What the Capture panel last showed, to show it again after a reload: the footage as
+    # ``PUT /api/footage`` described it, the joints last tracked (with their rectangles) and the
+    # ``tracked`` reply; None before footage is sent.
+    capture_page: dict[str, Any] | None = None
     _history: History | None = None
 
     @property
@@ -268,6 +272,7 @@ def describe(editing: Editing) -> dict[str, Any]:
         **regions(character),
         "keys": keys(editing.timeline),
         "history": editing.history.counts(),
+        "capture": editing.capture_page,
     }
 
 
@@ -532,15 +537,18 @@ def track(editing: Editing, message: dict[str, Any],
                                 corrections=corrections, at=at, settings=settings, background=background,
                                 progress=lambda stage, index, total: progress(index, total))
     save_motion(editing.folder / CAPTURED, capture.motion)
-    with editing.lock:
-        editing.capture, editing.captured = capture, None
     confidence = capture.motion.confidence
     assert confidence is not None  # tracking always says how sure it is
-    return {"type": "tracked", "first": capture.first, "names": list(skeleton.names),
-            "positions": np.round(capture.motion.positions, 2).tolist(),
-            "confidence": np.round(confidence, 3).tolist(),
-            "poorly": [{"name": joint.name, "fraction": round(joint.fraction, 3), "start": joint.start,
-                        "length": joint.length} for joint in capture.poorly_matched()]}
+    reply = {"type": "tracked", "first": capture.first, "names": list(skeleton.names),
+             "positions": np.round(capture.motion.positions, 2).tolist(),
+             "confidence": np.round(confidence, 3).tolist(),
+             "poorly": [{"name": joint.name, "fraction": round(joint.fraction, 3), "start": joint.start,
+                         "length": joint.length} for joint in capture.poorly_matched()]}
+    with editing.lock:
+        editing.capture, editing.captured = capture, None
+        if editing.capture_page is not None:
+            editing.capture_page = {**editing.capture_page, "joints": joints, "tracked": reply}
+    return reply
 
 
 @_off_loop("suggest the joints")

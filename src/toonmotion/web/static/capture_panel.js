@@ -149,7 +149,8 @@ export function mount(ctx) {
     }
   };
 
-  function loaded(body) {
+  function loaded(body, fresh = true) {
+    if (fresh) project.capture = { footage: body, joints: null, tracked: null };
     footage = body;
     images = [];
     tracked = null;
@@ -182,15 +183,10 @@ export function mount(ctx) {
     cancel.hidden = false;
     cancel.onclick = () => { live.cancel(job.id); status("cancelling…"); };
     try {
-      tracked = await job;
-      // The motion lists the joints parents first: follow its order.
-      joints = tracked.names.map((n) => joints.find((j) => j.name === n));
-      corrected = {};
-      document.getElementById("capture-play").disabled = false;
-      showPoorly(tracked.poorly);
-      status("tracked: scrub to check it, then retarget");
+      const reply = await job;
+      project.capture = { ...project.capture, joints: JSON.parse(JSON.stringify(message.joints)), tracked: reply };
+      finished(reply);
       showError("");
-      show(frame);
     } catch (error) {
       if (error.cancelled) {
         showError("");
@@ -203,6 +199,16 @@ export function mount(ctx) {
       bar.hidden = true;
       cancel.hidden = true;
     }
+  }
+  function finished(reply) {
+    tracked = reply;
+    // The motion lists the joints parents first: follow its order.
+    joints = tracked.names.map((n) => joints.find((j) => j.name === n));
+    corrected = {};
+    document.getElementById("capture-play").disabled = false;
+    showPoorly(tracked.poorly);
+    status("tracked: scrub to check it, then retarget");
+    show(frame);
   }
   // The joints that matched poorly most (hidden, or their looks changed), each a button to the
   // frame where its longest such stretch starts: where to drag it right and track again from.
@@ -336,7 +342,16 @@ export function mount(ctx) {
       return [box.left + x * k, box.top + y * k];
     },
   };
-  status(footage ? "" : "send footage to capture from");
+  // Back from another panel, or after a reload: the footage and its tracking as they were left.
+  const saved = project.capture;
+  if (saved && saved.footage) {
+    loaded(saved.footage, false);
+    if (saved.joints) joints = JSON.parse(JSON.stringify(saved.joints));
+    if (saved.tracked) finished(saved.tracked);
+  } else {
+    status("send footage to capture from");
+    view.draw(); // clear the last panel's handles off the stage
+  }
 
   return {
     unmount() {
