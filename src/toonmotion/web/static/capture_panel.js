@@ -97,7 +97,7 @@ export function mount(ctx) {
     document.getElementById("capture-retrack").disabled = Object.keys(corrected).length === 0;
     document.getElementById("capture-scrub").value = String(at);
     document.getElementById("capture-info").textContent =
-      `${footage.frames} frames of ${footage.width}×${footage.height} at ${footage.fps} fps; frame ${at}`;
+      `${footage.frames} frames of ${footage.width}×${footage.height} at ${Number(footage.fps.toFixed(2))} fps; frame ${at}`;
     if (!images[at]) {
       images[at] = new Image();
       images[at].onload = () => view.draw();
