@@ -133,6 +133,23 @@ def test_picking_the_layer_by_its_colour_outlines_it():
         api.pick_layer(hero.frames[0], (2, 2))
 
 
+
+def test_a_picked_layer_stops_at_its_outline_on_an_outlined_cartoon():
+    """Jeans and a shirt, flat colours inside one soft dark outline (a cartoon's, scaled): the
+    fill may creep through the outline's soft edge step by step, but the layer keeps to colours
+    near the one picked, so the jeans alone are picked."""
+    import cv2
+
+    frame = np.full((120, 100, 3), 255, np.uint8)
+    cv2.rectangle(frame, (20, 10), (80, 110), (40, 40, 40), -1)  # the ink round the figure
+    cv2.rectangle(frame, (24, 14), (76, 58), (220, 90, 80), -1)  # the shirt
+    cv2.rectangle(frame, (24, 62), (76, 106), (66, 111, 196), -1)  # the jeans
+    frame = cv2.GaussianBlur(frame, (0, 0), 1.2)  # soft edges, as a scaled cartoon's
+    outline = api.pick_layer(frame, (50, 85))
+    area = shapely.Polygon(outline).area
+    assert 0.8 * 53 * 45 <= area <= 1.1 * 53 * 45, area
+    assert outline[:, 1].min() >= 58  # not into the shirt
+
 @pytest.mark.parametrize(("change", "message"), [
     ({"key_frames": [24]}, "key frame 24 is outside"),
     ({"key_frames": [0, 0]}, "twice"),

@@ -197,6 +197,10 @@ def capture_video(
         "--pick", help="Instead of --keys: X,Y on the layer in frame --at; its colour region is the layer "
                        "(affine motion only).")] = None,
     at: Annotated[int, typer.Option("--at", min=0, help="With --pick: the frame picked in.")] = 0,
+    tolerance: Annotated[int, typer.Option(
+        "--tolerance", min=1, max=255,
+        help="With --pick: the colour step, per channel, allowed between neighbouring pixels of the "
+             "layer; the layer's colours stay within three steps of the one picked.")] = 24,
     motion_file: Annotated[Path | None, typer.Option(
         "--motion", help="Also write the key-shape motion of the captured shapes, with the --keys outlines "
                          "as keys (for 'retarget-keyshapes').")] = None,
@@ -237,7 +241,8 @@ def capture_video(
     if spot is not None:
         if at >= len(frames):
             raise SettingsError(f"--at {at} is outside the footage's {len(frames)} frames")
-        keys, closed, frames_at = api.pick_layer(frames[at], spot, points=points or 100)[None], True, [at]
+        picked = api.pick_layer(frames[at], spot, tolerance=tolerance, points=points or 100)
+        keys, closed, frames_at = picked[None], True, [at]
     else:
         assert keys_file is not None  # checked above
         keys, _, closed = load_contours(keys_file, points=points, start=_start(start, points))

@@ -119,6 +119,10 @@ def _mixture(pixels, components, rng):
     return density
 
 
+# How far a picked layer's colours may stray from the one picked, in steps of the tolerance.
+SEED_REACH = 3
+
+
 def pick_layer(rgb: ArrayLike, point: ArrayLike, *, tolerance: int = 24, points: int = 100
                ) -> NDArray[np.float64]:
     """The outline (``points``, 2) of the layer under ``point`` (x, y): the connected region of
@@ -141,7 +145,12 @@ def pick_layer(rgb: ArrayLike, point: ArrayLike, *, tolerance: int = 24, points:
     mask = np.zeros((h + 2, w + 2), np.uint8)
     flags = 8 | cv2.FLOODFILL_MASK_ONLY | (1 << 8)
     cv2.floodFill(image.copy(), mask, (x, y), (0, 0, 0), (tolerance,) * 3, (tolerance,) * 3, flags)
-    region = ndimage.binary_fill_holes(mask[1:-1, 1:-1].astype(bool))
+    # Step by step, a fill can creep through an outline's soft edge into the next colour and round
+    # the whole figure (an outlined cartoon's jeans picked the whole character): it keeps only the
+    # colours within SEED_REACH steps of the one picked, joined to the point.
+    near = np.abs(image.astype(np.int16) - image[y, x].astype(np.int16)).max(axis=2) <= SEED_REACH * tolerance
+    labels, _ = ndimage.label(mask[1:-1, 1:-1].astype(bool) & near, structure=np.ones((3, 3)))
+    region = ndimage.binary_fill_holes(labels == labels[y, x])
     if region.sum() < 16:
         raise KeyShapeError(f"the region picked at ({x}, {y}) is under 16 px: pick inside the layer")
     if region.all():
