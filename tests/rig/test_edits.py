@@ -132,3 +132,16 @@ def test_without_edits_is_the_automatic_rig(character, edited):
 def test_malformed_depth_edits(kwargs, message):
     with pytest.raises(EditError, match=message):
         DepthEdit(**kwargs)
+
+
+def test_an_edit_that_would_change_nothing_or_lies_off_the_drawing_is_refused(character, edited):
+    """A lasso round no vertex, a lasso giving vertices to the bone they are on already, and a
+    depth picked far off the drawing: each an EditError, and no edit recorded."""
+    far = character.mesh.V.max(axis=0) + 500
+    with pytest.raises(EditError, match="holds no vertex"):
+        apply_edit(edited, Correction(curve=np.array([far, far + (5, 0), far + (0, 5)]), bone="head"))
+    with pytest.raises(EditError, match="attached to right_hand already"):
+        apply_edit(edited, Correction(curve=HAND_BOX, bone="right_hand"))
+    with pytest.raises(EditError, match="no part of the drawing"):
+        apply_edit(edited, DepthEdit(value=1, at=tuple(far)))
+    assert len(edited.edits) == 3

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.errors import EditError
+from toonmotion.geometry.arrays import finite_point
 from toonmotion.io.image import load_image, load_mask
 from toonmotion.io.skeleton_json import load_skeleton_file
 from toonmotion.progress import Progress
@@ -100,6 +102,8 @@ def set_depth(character: Character, value: int, *, bone: str | None = None,
     >>> int(hero.depth.max()), len(hero.edits)
     (1, 1)
     """
+    if at is not None:
+        at = finite_point(at, name="a depth edit's point", error=EditError)
     if by is not None:
         index = region_at(character, at) if at is not None else character.skeleton.bone_names.index(bone)
         value = int(character.depth[index]) + int(by)

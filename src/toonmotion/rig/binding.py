@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from toonmotion.errors import SkeletonError, ToonmotionError
+from toonmotion.errors import EditError, SkeletonError, ToonmotionError
 from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.polygon import points_in_polygon
 from toonmotion.geometry.segments import closest_points_on_segments
@@ -224,8 +224,11 @@ def attach_inside(binding: Binding, mesh: Mesh, skeleton: Skeleton, curve: Array
     names = skeleton.bone_names
     if bone not in names:
         raise SkeletonError(f"no bone is called {bone!r}; the bones are: {', '.join(names)}")
+    inside = points_in_polygon(mesh.V, [curve])
+    if not inside.any():
+        raise EditError("the curve holds no vertex of the mesh: draw it round the part to attach")
     new_bone = binding.bone.copy()
-    new_bone[points_in_polygon(mesh.V, [curve])] = names.index(bone)
+    new_bone[inside] = names.index(bone)
     corrections = (*binding.corrections, Correction(curve=curve, bone=bone))
     return binding_from_bones(mesh, new_bone, binding.fallback, corrections)
 

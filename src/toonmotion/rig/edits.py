@@ -66,9 +66,14 @@ Edit: TypeAlias = Correction | DepthEdit
 def apply_edit(character: Character, edit: Edit) -> Character:
     """``character`` with ``edit`` made: its result applied and the edit appended to the history.
 
-    A new edit clears what :func:`redo` could bring back.
+    A new edit clears what :func:`redo` could bring back. A correction that moves no vertex to
+    another bone is an :class:`EditError`, not an edit to keep.
     """
-    return dataclasses.replace(_applied(character, edit), undone=())
+    edited = _applied(character, edit)
+    if isinstance(edit, Correction) and np.array_equal(edited.binding.bone, character.binding.bone):
+        raise EditError(f"every vertex inside the curve is attached to {edit.bone} already: nothing "
+                        "to change")
+    return dataclasses.replace(edited, undone=())
 
 
 def replay(character: Character, edits: Iterable[Edit]) -> tuple[Character, list[tuple[Edit, str]]]:
@@ -140,9 +145,15 @@ def describe(edit: Edit) -> str:
 
 
 def region_at(character: Character, point: tuple[float, float] | NDArray[np.float64]) -> int:
-    """The bone (index) whose region holds the rest-mesh vertex nearest ``point``."""
+    """The bone (index) whose region holds the rest-mesh vertex nearest ``point``; an
+    :class:`EditError` when no vertex is within two mesh spacings (a point off the drawing)."""
     V = character.mesh.V
-    vertex = int(np.argmin(np.hypot(V[:, 0] - point[0], V[:, 1] - point[1])))
+    distance = np.hypot(V[:, 0] - point[0], V[:, 1] - point[1])
+    vertex = int(np.argmin(distance))
+    reach = max(3.0, 2.0 * character.mesh.spacing)
+    if distance[vertex] > reach:
+        raise EditError(f"no part of the drawing is at ({point[0]:.0f}, {point[1]:.0f}): the nearest is "
+                        f"{distance[vertex]:.0f} px away (at most {reach:.0f}); pick a point on the drawing")
     return int(character.binding.bone[vertex])
 
 
