@@ -1,5 +1,6 @@
-"""An editor server killed (kill -9) in the middle of its saves leaves the project loadable, with
-every edit it acknowledged, and the next save leaves no temporary file behind."""
+"""The editor server run as its own process: killed (kill -9) in the middle of its saves it leaves
+the project loadable, with every edit it acknowledged, and the next save leaves no temporary file
+behind; and its terminal shows no traceback for work that went well."""
 
 from __future__ import annotations
 
@@ -29,11 +30,11 @@ def project(tmp_path_factory):
     return folder
 
 
-def _start(project):
+def _start(project, stderr=subprocess.DEVNULL):
     child = subprocess.Popen(
         [sys.executable, "-m", "toonmotion.cli", "edit", str(project)],
         stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
+        stderr=stderr,
         text=True,
     )
     line = child.stdout.readline()
@@ -74,3 +75,28 @@ def test_a_killed_server_keeps_every_acknowledged_edit(project):
         child.kill()
         child.wait()
     assert [p.name for p in project.iterdir() if p.name.endswith(".tmp")] == []
+
+
+def test_the_server_writes_a_video_without_printing_a_traceback(tmp_path):
+    """ffmpeg started from the server's worker threads: the export is written, and the terminal
+    shows no "Exception ignored in _after_fork" traceback (imageio-ffmpeg's preexec_fn)."""
+    drawing, skeleton = sample_character(scale=0.5)
+    folder = tmp_path / "hero"
+    api.save_project(folder, rig_drawing(drawing, skeleton=skeleton))
+    rest = api.load_project(folder).skeleton.positions
+    child, url = _start(folder, stderr=subprocess.PIPE)
+    try:
+        with connect(url, open_timeout=20) as socket:
+            for frame in (0, 4):
+                socket.send(json.dumps({"type": "set_key", "frame": frame, "positions": rest.tolist()}))
+                assert json.loads(socket.recv())["type"] == "keys"
+            socket.send(json.dumps({"type": "export", "format": "mp4", "name": "clip"}))
+            reply = json.loads(socket.recv())
+            while reply["type"] == "progress":
+                reply = json.loads(socket.recv())
+            assert reply["type"] == "exported", reply
+    finally:
+        child.terminate()
+        _, said = child.communicate(timeout=30)
+    assert (folder / "exports" / "clip.mp4").stat().st_size > 0
+    assert "Traceback" not in said and "Exception ignored" not in said, said

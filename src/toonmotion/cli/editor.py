@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import socket
 import webbrowser
 from pathlib import Path
@@ -31,6 +32,11 @@ def edit(
     import uvicorn
 
     from toonmotion.web.server import create_app, new_token
+
+    # imageio-ffmpeg starts ffmpeg with preexec_fn (to keep Ctrl+C from it); started from the
+    # server's worker threads, Python prints an "Exception ignored in _after_fork" traceback for
+    # every video read or written. Its own switch turns that off; the server stops ffmpeg itself.
+    os.environ.setdefault("IMAGEIO_FFMPEG_NO_PREVENT_SIGINT", "1")
 
     project = _project_for(target)
     listener = _listen(host, port)
