@@ -775,6 +775,20 @@ def test_track_writes_a_motion_csv_and_overlay(footage, tmp_path, capsys):
     assert Image.open(tmp_path / "o.gif").n_frames == 12
 
 
+def test_track_warns_of_rectangles_much_smaller_than_the_figure_asks_for(footage, tmp_path, capsys):
+    from toonmotion.io.track_json import load_joints, save_joints
+
+    folder, _ = footage
+    skeleton, sizes, _ = load_joints(folder / "joints.json")  # twice the arm's thickness: no warning
+    out = tmp_path / "m.json"
+    assert _run("track", folder / "frames", "--joints", folder / "joints.json", "-o", out) == 0
+    assert "small" not in capsys.readouterr().err
+    save_joints(tmp_path / "small.json", skeleton, sizes / 3)
+    assert _run("track", folder / "frames", "--joints", tmp_path / "small.json", "-o", out) == 0
+    said = capsys.readouterr().err
+    assert f"median {sizes[0, 0] / 3:.0f} px" in said and "rectangles are small" in said
+
+
 @pytest.mark.parametrize("options", [[], ["--background", "#f6f0e2"], ["--free"], ["--frame-by-frame"],
                                      ["--both-ways"]])
 def test_track_follows_a_cartoon_on_plain_paper(footage, tmp_path, options):

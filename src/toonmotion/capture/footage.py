@@ -18,7 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.animate.motion import Motion, motion_for
 from toonmotion.capture.foreground import (
@@ -28,7 +28,7 @@ from toonmotion.capture.foreground import (
     foreground_masks,
     without_frame,
 )
-from toonmotion.capture.setup import check_setup, suggest_setup
+from toonmotion.capture.setup import check_setup, rectangle_sizes, suggest_setup
 from toonmotion.capture.tracker import Tracking, TrackSettings, TrackSetup, retrack, track
 from toonmotion.errors import SettingsError
 from toonmotion.progress import Progress
@@ -139,6 +139,39 @@ def suggest_joints(
     True
     """
     return suggest_setup(first_figure(frames, colour=colour))
+
+
+def suggested_sizes(frames: NDArray[np.uint8], positions: ArrayLike, *, start: int = 0,
+                    colour: tuple[int, int, int] | None = None) -> NDArray[np.float64]:
+    """The rectangles :func:`suggest_joints` would give joints at ``positions`` ``(k, 2)`` on
+    frame ``start``'s figure (found as :func:`first_figure` finds frame 0's): twice the figure's
+    thickness there. To tell a user whose own rectangles are much smaller.
+
+    Parameters
+    ----------
+    frames : (T, H, W, 3) uint8
+    positions : (k, 2) float
+        Joints on frame ``start``, (x, y) pixels.
+    start : int
+        The frame the joints are placed on.
+    colour : (int, int, int), optional
+        A flat background colour, as for :func:`suggest_joints`.
+
+    Returns
+    -------
+    (k, 2) float
+        Each joint's suggested rectangle (width, height) in pixels.
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_character_on
+    >>> picture, skeleton = sample_character_on("white", scale=0.5)
+    >>> sizes = suggested_sizes(picture[None], skeleton.positions)
+    >>> sizes.shape == (len(skeleton), 2) and bool((sizes >= 8).all())
+    True
+    """
+    figure = first_figure(frames[start:], colour=colour)
+    return rectangle_sizes(figure, np.asarray(positions, dtype=float))
 
 
 def first_figure(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None

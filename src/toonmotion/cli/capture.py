@@ -84,6 +84,7 @@ def track(
     start = 0
     if joints is not None:
         skeleton, sizes, start = load_joints(joints)
+        _warn_if_small(frames, skeleton, sizes, start, flat)
     else:
         skeleton, sizes = api.suggest_joints(frames, colour=flat)
         joints = output.with_name(output.stem + ".joints.json")
@@ -128,6 +129,24 @@ def track(
                          f"{joint.length} frame{'s' if joint.length > 1 else ''})" for joint in poor)
         typer.echo(f"matched poorly most: {said}; where one is lost, put it right with "
                    f"--joints {joints} --resume {output} --at FRAME --set NAME=X,Y -o FIXED.json")
+
+
+# Rectangles at most this fraction of the suggested ones (median sides) are worth a warning: on the
+# sample character's own wave, 24 px rectangles where 48 are suggested lost a hand for 15 frames
+# (5.9 px mean error, 1.8 with 48 px; 3.2 with 36).
+SMALL_RECTANGLES = 0.6
+
+
+def _warn_if_small(frames, skeleton, sizes, start, flat):
+    """Warn when the rectangles given are much smaller than those toonmotion would suggest there."""
+    given = float(np.median(np.max(sizes, axis=1)))
+    suggested = float(np.median(np.max(api.suggested_sizes(frames, skeleton.positions, start=start,
+                                                           colour=flat), axis=1)))
+    if given < SMALL_RECTANGLES * suggested:
+        options.warn(f"the rectangles are small for this figure (median {given:.0f} px, where "
+                     f"{suggested:.0f} px are suggested from its thickness): a rectangle holding little "
+                     "but one flat colour loses its joint; make them larger, or let toonmotion suggest "
+                     "them (no --joints)")
 
 
 def _figure_said(frame, flat):
