@@ -75,7 +75,7 @@ def test_wrong_format_and_version(tmp_path):
 def test_bad_sizes_name_the_file_and_joint(tmp_path, size):
     joint = {"name": "hip", "parent": None, "position": [1, 2], "size": size}
     path = _write(tmp_path / "j.json", {"format": FORMAT, "version": VERSION, "joints": [joint]})
-    with pytest.raises(TrackingError, match=r"j\.json: joint 'hip'.s 'size'"):
+    with pytest.raises(TrackingError, match=r"j\.json: the 'size' of joint 'hip'"):
         load_joints(path)
     del joint["size"]
     path = _write(path, {"format": FORMAT, "version": VERSION, "size": size, "joints": [joint]})
@@ -105,7 +105,7 @@ def test_save_rejects_bad_sizes_and_frames(tmp_path):
     skeleton = _skeleton()
     with pytest.raises(TrackingError, match="each of the 3 joints"):
         save_joints(tmp_path / "j.json", skeleton, np.ones((2, 2)))
-    with pytest.raises(TrackingError, match="joint 'arm'.s size"):
+    with pytest.raises(TrackingError, match="the size of joint 'arm'"):
         save_joints(tmp_path / "j.json", skeleton, [[1, 1], [0, 1], [1, 1]])
     with pytest.raises(TrackingError, match="frame"):
         save_joints(tmp_path / "j.json", skeleton, np.ones((3, 2)), frame=-1)

@@ -140,7 +140,7 @@ def _chain_transform(OB, a, root_name, fixed_name):
     length = np.hypot(*OB)
     if length < MIN_CHAIN_LENGTH:
         raise FilterError(
-            f"fixed joint {fixed_name!r} is at the root {root_name!r}'s position, so its chain has no "
+            f"fixed joint {fixed_name!r} is at the position of the root {root_name!r}, so its chain has no "
             "direction; fix a joint away from the root"
         )
     target = OB + a

@@ -54,7 +54,7 @@ _Size = tuple[Annotated[Float, Field(gt=0)], Annotated[Float, Field(gt=0)]]
 def _joint_problem(value: Any, errors: list[ErrorDetails]) -> tuple[str, type[ToonmotionError]] | None:
     loc = errors[0]["loc"]
     if loc and loc[0] == "size" and isinstance(value.get("name"), str):
-        return f"joint {value['name']!r}'s 'size' is {value['size']!r}; {_SIZE_HINT}", TrackingError
+        return f"the 'size' of joint {value['name']!r} is {value['size']!r}; {_SIZE_HINT}", TrackingError
     if joint_needs(value, errors):
         return "joint {n} needs a 'name' and a 'position: [x, y]'", SkeletonError
     return None
@@ -137,7 +137,7 @@ def save_joints(path: str | Path, skeleton: Skeleton, sizes: ArrayLike, frame: i
         raise TrackingError(f"the frame must be a whole number >= 0, got {frame!r}")
     joints = skeleton_to_dict(skeleton)
     for joint, size in zip(joints, sizes, strict=True):
-        joint["size"] = list(_size(size.tolist(), f"joint {joint['name']!r}'s size"))
+        joint["size"] = list(_size(size.tolist(), f"the size of joint {joint['name']!r}"))
     data = {"format": FORMAT, "version": VERSION, "frame": int(frame), "joints": joints}
     write_text(path, json.dumps(data, indent=1) + "\n")
 

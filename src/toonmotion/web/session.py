@@ -513,7 +513,7 @@ def track(editing: Editing, message: dict[str, Any],
     if not isinstance(joints, list) or not joints:
         raise TrackingError("'joints' must list the joints to track, each with its rectangle's 'size'")
     skeleton = _skeleton(joints)
-    sizes = np.array([_point(j.get("size"), f"joint {j['name']!r}'s size") for j in joints], dtype=float)
+    sizes = np.array([_point(j.get("size"), f"the size of joint {j['name']!r}") for j in joints], dtype=float)
     order = [next(i for i, j in enumerate(joints) if j["name"] == name) for name in skeleton.names]
     earlier, at, corrections = None, None, None
     if message.get("at") is not None:  # a correction: the earlier tracking is kept before it

@@ -293,7 +293,7 @@ class SpineFile(Model):
                             raise problem(f"animation {name!r} deforms {skin_name}/{slot_name}/{attachment}, "
                                           "which is not an attachment in 'skins'")
                         _check_deform(timelines.deform, target,
-                                      f"animation {name!r}'s deform of {attachment!r}")
+                                      f"the deform of {attachment!r} in animation {name!r}")
         return self
 
     def _bone_indices(self) -> dict[str, int]:
