@@ -96,12 +96,17 @@ def test_bad_input_exits_2_in_one_line_and_overwrites_nothing(drawn, capsys, tmp
 
     save_bvh(short, type(clip)(clip.names, clip.parents, clip.offsets, clip.channels, clip.motion[:20],
                                clip.frame_time))
+    hand = markers.names[-1]
     cases = [
         (["lift", tmp_path / "odd.json", "--prior", walk, "-o", kept], "pelvis"),
         (["lift", folder / "markers.json", "--prior", short, "-o", kept], "too short"),
         (["lift", folder / "markers.json", "--prior", walk, "--view", "30", "-o", kept], "--view"),
         (["lift", folder / "markers.json", "--prior", walk, "--segment", "x:y", "-o", kept], "--segment"),
         (["lift", folder / "markers.json", "--prior", walk, "--width", "3=1,2", "-o", kept], "--width"),
+        (["lift", folder / "markers.json", "--prior", walk, "--width", f"0:{hand}=1,2", "-o", kept],
+         "give them with --frames"),
+        (["lift", folder / "markers.json", "--prior", walk, "--frames", folder / "markers.json",
+          "--width", f"0:{hand}=-5,3", "-o", kept], f"the limb to {hand} needs two"),
         (["lift", folder / "markers.json", "--prior", walk, "-o", tmp_path / "proxy.txt"], ".json"),
         (["proxy-export", kept, "-o", tmp_path / "out.glb"], "proxy"),
         (["proxy-export", folder / "markers.json", "-o", tmp_path / "out.fbx"], ".glb"),

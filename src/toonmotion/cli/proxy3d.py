@@ -79,6 +79,9 @@ def lift_command(
         options.suffix(bvh, ".bvh", "a BVH file")
     if preview is not None:
         animation_format(preview)
+    overrides = _widths(widths)
+    if overrides and frames is None:
+        raise SettingsError("--width sets a limb's width on the drawn frames: give them with --frames")
     markers = read_markers(source, fps)
     clip = load_bvh(prior)
     pictures = None
@@ -89,7 +92,7 @@ def lift_command(
             markers, clip, joint_map=_pairs(joint_map, "--map"), segment=_segment(segment),
             view=None if view is None else options.numbers(view, 2, "--view"),  # type: ignore[arg-type]
             focal=focal, still_camera=still_camera, size=options.size(size), frames=pictures,
-            widths=_widths(widths),
+            widths=overrides,
             units=_units(units), extra=[load_bvh(p) for p in extra or ()], progress=report,
         )
     save_proxy(output, proxy)
@@ -218,5 +221,7 @@ def _widths(items: list[str] | None) -> dict[tuple[int, str], tuple[float, float
         except ValueError:
             raise SettingsError(f"--width takes a whole frame number before ':', got {frame!r}") from None
         w1, w2 = options.numbers(values, 2, "--width")
+        if not min(w1, w2) >= 0:
+            raise SettingsError(f"--width {item}: the limb to {name.strip()} needs two widths >= 0 in pixels")
         out[t, name.strip()] = (w1, w2)
     return out
