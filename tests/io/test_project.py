@@ -183,6 +183,12 @@ def test_saving_over_a_file_is_refused(character, tmp_path):
         save_project(tmp_path / "file", character)
 
 
+def test_a_drawing_given_for_a_project_is_named_as_not_one(tmp_path):
+    (tmp_path / "hero.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    with pytest.raises(ProjectError, match=r"hero\.png is a file, not a project: give the project folder"):
+        load_project(tmp_path / "hero.png")
+
+
 @pytest.fixture
 def saved(character, tmp_path):
     folder = tmp_path / "p"

@@ -302,6 +302,8 @@ def load_project(path: str | Path) -> Character:
     See :func:`save_project`.
     """
     path = Path(path)
+    if path.is_file() and path.suffix.lower() != ".json":  # a drawing given where the project goes
+        raise ProjectError(f"{path} is a file, not a project: give the project folder 'toonmotion rig' made")
     file = path / PROJECT_FILE if path.is_dir() else path
     model = read_versioned(file, PROJECT)
     try:
