@@ -427,13 +427,17 @@ def test_a_bad_sketch_file_is_one_line(posable, tmp_path, capsys, content, messa
     assert not (tmp_path / "out.json").exists()
 
 
-def test_animate_writes_every_frame_of_the_timeline(posable, tmp_path):
+def test_animate_writes_every_frame_of_the_timeline(posable, tmp_path, capsys):
     out = tmp_path / "anim.gif"
     assert _run("animate", str(posable / "hero"), str(posable / "keys.json"), "-o", str(out),
                 "--size", "84x120", "--fps", "24") == 0
     gif = Image.open(out)
     assert gif.n_frames == 37  # the built-in key-frames end at frame 36
     assert gif.size == (84, 120)
+    assert "GIF plays" not in capsys.readouterr().err
+    assert _run("animate", str(posable / "hero"), str(posable / "keys.json"), "-o", str(out),
+                "--size", "42x60", "--fps", "200") == 0  # faster than a GIF can play: said
+    assert "a GIF plays at most 50 frames a second" in capsys.readouterr().err
 
 
 def test_export_writes_a_glb_a_spine_rig_and_a_sprite_sheet(posable, tmp_path, capsys):

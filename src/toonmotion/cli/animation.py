@@ -21,7 +21,7 @@ from toonmotion.io.image import save_png
 from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion
 from toonmotion.io.pose_json import load_keyframes, load_pose, load_pose_edits, save_pose
 from toonmotion.io.sketch_json import load_sketch
-from toonmotion.io.video import TRANSPARENT_FORMATS, animation_format
+from toonmotion.io.video import TRANSPARENT_FORMATS, animation_format, rate_note
 from toonmotion.rig.character import Character
 
 
@@ -157,6 +157,9 @@ def animate(
         + (f" (motion -> {save_motion_to})" if save_motion_to is not None else "")
         + (f" (motion in the frames -> {save_frame_motion_to})" if save_frame_motion_to is not None else "")
     )
+    note = rate_note(kind, animation.motion.fps)
+    if note:
+        options.warn(note)
     solved = zip(animation.keys, animation.solved, strict=True)
     report_overlaps(character, [(key.frame, result.U) for key, result in solved], keys=True)
 

@@ -163,6 +163,26 @@ def save_animation(path: str | os.PathLike[str], frames: Iterable[NDArray[np.uin
     return _save_png(Path(path), frames)
 
 
+# A GIF's frames last whole hundredths of a second, and browsers play those under two hundredths
+# at ten: above this rate a GIF plays slower than asked.
+GIF_MAX_FPS = 50.0
+
+
+def rate_note(kind: str, fps: float) -> str | None:
+    """A note when an animation of format ``kind`` cannot play at ``fps``, else None.
+
+    >>> rate_note("gif", 24) is None, rate_note("mp4", 1000) is None
+    (True, True)
+    >>> rate_note("gif", 1000)[:40]
+    'a GIF plays at most 50 frames a second ('
+    """
+    if kind == "gif" and fps > GIF_MAX_FPS:
+        return (f"a GIF plays at most {GIF_MAX_FPS:g} frames a second (its frames last whole hundredths of a "
+                f"second, and browsers show shorter ones for a tenth): at {fps:g} it plays slower; write MP4 "
+                "or WebP for a faster rate")
+    return None
+
+
 def frame_durations(count: int, fps: float, *, tick: int = 1) -> list[int]:
     """Frame durations in ms, whole multiples of ``tick`` ms, keeping the total on time.
 
