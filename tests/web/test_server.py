@@ -733,12 +733,14 @@ def test_footage_is_tracked_saved_and_retargeted(editable):
         ("/api/footage", b"x", 400, "suffix"),
         ("/api/footage?suffix=gif", b"not a gif at all", 400, "cannot read"),
         ("/api/footage?suffix=mp4", b"\x00" * 2000, 400, "could not be decoded as a video"),
+        ("/api/footage?suffix=mp4&name=holiday.mp4", b"\x00" * 2000, 400, "cannot read holiday.mp4:"),
     ],
 )
 def test_bad_footage_is_refused_in_one_line(editable, url, body, status, said):
     folder, client = editable
     reply = client.put(url, content=body, headers={"X-Toonmotion-Token": TOKEN})
     assert reply.status_code == status and said in reply.json()["error"], reply.text
+    assert str(folder) not in reply.json()["error"]  # the file sent, not where the server keeps it
     assert not list((folder / "footage").glob("*")) if (folder / "footage").exists() else True
 
 
@@ -1004,6 +1006,7 @@ def test_a_new_drawing_is_rigged_into_the_project_and_undo_brings_the_old_one_ba
     ("url", "body", "status", "said"),
     [
         ("/api/uploads/drawing", b"not an image", 400, "image"),
+        ("/api/uploads/drawing?name=me.png", b"not an image", 400, "cannot read me.png:"),
         ("/api/uploads/passwd", b"x", 404, "uploads are drawing, mask, skeleton"),
         ("/api/uploads/..%2Fproject.json", b"x", 404, ""),
         ("/api/uploads/skeleton", b"x: 1", 400, "format"),
@@ -1016,10 +1019,22 @@ def test_bad_uploads_are_refused_in_one_line_and_change_nothing(editable, url, b
     before = (folder / "project.json").read_bytes()
     reply = client.put(url, content=body, headers={"X-Toonmotion-Token": TOKEN})
     assert reply.status_code == status and said in reply.json()["error"], reply.text
-    assert "\n" not in reply.json()["error"]
+    assert "\n" not in reply.json()["error"] and str(folder) not in reply.json()["error"]
     assert (folder / "project.json").read_bytes() == before
     assert not (folder / "uploads").exists() or list((folder / "uploads").iterdir()) == []
 
+
+
+def test_an_upload_over_the_pixel_limit_names_the_file_sent_and_how_the_editor_raises_it(editable):
+    from toonmotion import limits
+
+    folder, client = editable
+    with limits.using(image_pixels=100):
+        picture = _png(np.zeros((20, 20, 3), np.uint8))
+        reply = client.put(f"/api/uploads/drawing?name=big.png&token={TOKEN}", content=picture)
+    said = reply.json()["error"]
+    assert reply.status_code == 400 and said.startswith("big.png is 20x20"), said
+    assert "toonmotion --limit image_pixels=N edit" in said and "--max-pixels" not in said
 
 def test_opening_a_drawing_needs_one_sent_first(editable):
     folder, client = editable

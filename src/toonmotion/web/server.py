@@ -22,7 +22,7 @@ import json
 import logging
 import secrets
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -162,13 +162,15 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         return Response(png_bytes(editing.character.texture), media_type="image/png")
 
     @app.put("/api/footage")
-    async def footage(request: Request, suffix: str) -> dict[str, Any]:
-        """Footage to capture from, the request's body: saved in the project, read, joints suggested."""
+    async def footage(request: Request, suffix: str, name: str = "") -> dict[str, Any]:
+        """Footage to capture from, the request's body: saved in the project, read, joints suggested
+        (errors name it ``name``, the file the user sent)."""
         if suffix.lower() not in FOOTAGE_SUFFIXES:
             raise HTTPException(400, f"send footage as {', '.join(FOOTAGE_SUFFIXES)}, not {suffix[:10]!r}")
         file = editing.folder / FOOTAGE / f"clip.{suffix.lower()}"
         await _receive(request, file, "the footage")
-        return await footage_read(file)
+        with _as_sent(file, name or "the footage sent"):
+            return await footage_read(file)
 
     @app.put("/api/footage/frames/{index}")
     async def footage_frame_file(request: Request, index: int, count: int, suffix: str) -> dict[str, Any]:
@@ -210,7 +212,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         return described
 
     @app.put("/api/uploads/{part}")
-    async def upload(request: Request, part: str, format: str = "") -> dict[str, Any]:
+    async def upload(request: Request, part: str, format: str = "", name: str = "") -> dict[str, Any]:
         """A drawing, its mask, or a skeleton file, the request's body, kept in the project's
         upload area (``uploads/``) and read at once: a drawing or mask must be an image, a
         skeleton a char_cfg YAML or toonmotion JSON (``format=yaml|json``), whose joints come back."""
@@ -221,6 +223,10 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                                      "or ?format=json")
         file = editing.folder / UPLOADS / (f"skeleton.{format}" if part == "skeleton" else part)
         await _receive(request, file, "the file")
+        with _as_sent(file, name or f"the {part} file sent"):
+            return await read_upload(part, file)
+
+    async def read_upload(part: str, file: Path) -> dict[str, Any]:
         try:
             if part == "skeleton":
                 skeleton = await asyncio.to_thread(load_skeleton_file, file)
@@ -328,6 +334,25 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                     await socket.close(code=1003, reason="the editor sends text messages only; reload")
 
     return app
+
+
+@contextlib.contextmanager
+def _as_sent(file: Path, name: str) -> Iterator[None]:
+    """Errors reading ``file``, where an upload was kept, told of ``name``, the file the user sent
+    (not the server's path), with the editor's way to raise a limit."""
+    try:
+        yield
+    except ToonmotionError as error:
+        message = str(error)
+        # Its path, and its bare name where that cannot be a word of the message (clip.mp4, or
+        # "drawing" opening it).
+        for form in (str(file.resolve()), str(file), *([file.name] if "." in file.name else [])):
+            message = message.replace(form, name[:200])
+        if message.startswith(f"{file.name} "):
+            message = name[:200] + message[len(file.name):]
+        message = message.replace("(--max-pixels, or --limit image_pixels=N)",
+                                  "(start the editor with toonmotion --limit image_pixels=N edit ...)")
+        raise HTTPException(400, message) from None
 
 
 async def _receive(request: Request, file: Path, what: str, *, already: int = 0) -> None:

@@ -118,7 +118,7 @@ export function mount(ctx) {
     const suffix = file.name.split(".").pop().toLowerCase();
     status("sending the footage…");
     try {
-      loaded(await put(`api/footage?suffix=${encodeURIComponent(suffix)}`, file));
+      loaded(await put(`api/footage?suffix=${encodeURIComponent(suffix)}&name=${encodeURIComponent(file.name)}`, file));
     } catch (error) {
       showError(error.message);
       status("");

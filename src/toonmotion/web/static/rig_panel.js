@@ -11,7 +11,8 @@ import { listen, nearest } from "./panel_kit.js";
 
 // A file the user chose, sent to the project's upload area; resolves with the server's reply.
 async function upload(ctx, part, file, query = "") {
-  const reply = await fetch(`api/uploads/${part}${query}`, {
+  const named = `${query ? query + "&" : "?"}name=${encodeURIComponent(file.name || "")}`; // named in errors
+  const reply = await fetch(`api/uploads/${part}${named}`, {
     method: "PUT", body: file, headers: { "X-Toonmotion-Token": ctx.token },
   });
   const body = await reply.json().catch(() => ({ error: `${reply.status} ${reply.statusText}` }));
