@@ -365,6 +365,10 @@ def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
     page.wait_for_function("document.getElementById('timeline-frame').textContent === '7'")
     page.keyboard.press("Control+z")  # the move undone: keys at 0, 12, 18 again
     page.wait_for_function("window.toonmotion.project.keys.keys.some((k) => k.frame === 12)")
+    page.click("#timeline-scrub")  # a slider takes no typing: the panel keys still work from it
+    page.keyboard.press("1")
+    page.wait_for_function(
+        "document.querySelector('nav button[data-panel=pose]').getAttribute('aria-pressed') === 'true'")
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 

@@ -2,6 +2,7 @@
 // connection, and mounts the panels. A panel is one module exporting {name, title, mount(ctx)};
 // mount returns {unmount()}. Add a panel by importing it into PANELS.
 import { MeshView } from "./mesh_view.js";
+import { typingIn } from "./panel_kit.js";
 import * as posePanel from "./pose_panel.js";
 import * as rigPanel from "./rig_panel.js";
 import * as regionsPanel from "./regions_panel.js";
@@ -206,8 +207,7 @@ function mountPanels(ctx) {
   ctx.remount = () => nav.querySelector(`button[data-panel=${currentName}]`).click();
   // Keys 1 to 9 open the panels, in the order of the bar.
   window.addEventListener("keydown", (event) => {
-    if (event.ctrlKey || event.metaKey || event.altKey || event.target instanceof HTMLInputElement
-        || event.target instanceof HTMLSelectElement) return;
+    if (event.ctrlKey || event.metaKey || event.altKey || typingIn(event.target)) return;
     const button = nav.children[Number(event.key) - 1];
     if (/^[1-9]$/.test(event.key) && button) button.click();
   });

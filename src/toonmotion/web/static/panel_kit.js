@@ -60,3 +60,11 @@ export function capture(target, event) {
 // A colour input's "#rrggbb" as [r, g, b], 0-255, as messages carry colours, and back.
 export const rgbOf = (hex) => [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
 export const hexOf = (rgb) => "#" + rgb.map((v) => v.toString(16).padStart(2, "0")).join("");
+
+// Whether a key pressed in ``target`` is typing (a text field, a number, a list): the editor's
+// shortcut keys leave it be. A slider, a tick box or a button takes no typing.
+export function typingIn(target) {
+  if (target instanceof HTMLSelectElement || target instanceof HTMLTextAreaElement) return true;
+  return target instanceof HTMLInputElement
+    && !["range", "checkbox", "radio", "button", "color", "file"].includes(target.type);
+}
