@@ -47,8 +47,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from toonmotion.animate.motion import motion_for  # noqa: E402
-from toonmotion.capture.footage import capture_motion, first_figure  # noqa: E402
-from toonmotion.capture.setup import rectangle_sizes  # noqa: E402
+from toonmotion.capture.footage import capture_motion, suggested_sizes  # noqa: E402
 from toonmotion.capture.tracker import TrackSettings  # noqa: E402
 from toonmotion.io.frames import load_frames  # noqa: E402
 from toonmotion.io.motion_json import load_motion  # noqa: E402
@@ -102,7 +101,7 @@ def bench(video, truth_file, figure=True, best_path=True, both_ways=False, full_
     positions = motion_for(skeleton, truth, where="the true motion")
     count = min(len(frames), len(positions))
     frames, positions = frames[:count], positions[:count]
-    sizes = rectangle_sizes(first_figure(frames), positions[0])
+    sizes = suggested_sizes(frames, positions[0])
     start = time.perf_counter()
     placed = Skeleton.from_joints([(n, p, tuple(xy)) for (n, p, _), xy in zip(skeleton.joints(), positions[0],
                                                                               strict=True)])
