@@ -791,6 +791,22 @@ def test_track_warns_of_rectangles_much_smaller_than_the_figure_asks_for(footage
     assert _run("track", folder / "frames", "--joints", tmp_path / "small.json", "-o", out) == 0
     said = capsys.readouterr().err
     assert f"median {sizes[0, 0] / 3:.0f} px" in said and "rectangles are small" in said
+    assert "apart" not in said
+
+
+def test_track_warns_of_joints_that_start_on_one_another(footage, tmp_path, capsys):
+    from toonmotion.io.track_json import load_joints, save_joints
+    from toonmotion.rig.skeleton import Skeleton
+
+    folder, _ = footage
+    skeleton, sizes, _ = load_joints(folder / "joints.json")
+    joints = list(skeleton.joints())
+    shoulder = joints[0][2]
+    joints[2] = (joints[2][0], joints[2][1], (shoulder[0] + 3, shoulder[1]))  # the hand on the shoulder
+    save_joints(tmp_path / "folded.json", Skeleton.from_joints(joints), sizes)
+    folded = tmp_path / "folded.json"
+    assert _run("track", folder / "frames", "--joints", folded, "-o", tmp_path / "m.json") == 0
+    assert "joints right_shoulder and right_hand start 3 px apart" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("options", [[], ["--background", "#f6f0e2"], ["--free"], ["--frame-by-frame"],

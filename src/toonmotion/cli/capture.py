@@ -85,6 +85,7 @@ def track(
     if joints is not None:
         skeleton, sizes, start = load_joints(joints)
         _warn_if_small(frames, skeleton, sizes, start, flat)
+        _warn_if_overlapping(skeleton, sizes, start)
     else:
         skeleton, sizes = api.suggest_joints(frames, colour=flat)
         joints = output.with_name(output.stem + ".joints.json")
@@ -147,6 +148,23 @@ def _warn_if_small(frames, skeleton, sizes, start, flat):
                      f"{suggested:.0f} px are suggested from its thickness): a rectangle holding little "
                      "but one flat colour loses its joint; make them larger, or let toonmotion suggest "
                      "them (no --joints)")
+
+
+def _warn_if_overlapping(skeleton, sizes, start):
+    """Warn when two joints (neither the other's parent) start within half a rectangle of each
+    other: each one's template is cut mostly from the other, and the tracker may follow one for
+    the other (two legs that look alike, crossing)."""
+    P = skeleton.positions
+    gap = np.hypot(*(P[:, None] - P[None]).transpose(2, 0, 1))
+    reach = 0.5 * np.maximum(sizes.max(axis=1)[:, None], sizes.max(axis=1)[None])
+    for a, b in zip(*np.nonzero(np.triu(gap < reach, 1)), strict=True):
+        if a in (skeleton.parents[b], b) or b == skeleton.parents[a]:
+            continue
+        names = skeleton.names
+        options.warn(f"joints {names[a]} and {names[b]} start {gap[a, b]:.0f} px apart, within half a "
+                     "rectangle: each is cut mostly from the other, and the tracker may follow one for the "
+                     f"other; start on a frame where they are apart (the joints file's frame, now {start})")
+        return
 
 
 def _figure_said(frame, flat):
