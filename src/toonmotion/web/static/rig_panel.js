@@ -152,9 +152,9 @@ export function mount(ctx) {
       overlay.setPointerCapture(event.pointerId);
     } else {
       let n = draft.length + 1;
-      while (draft.some((j) => j.name === `joint_${n}`)) n++;
+      while (draft.some((j) => j.name === `joint${n}`)) n++;
       const parent = selected >= 0 ? draft[selected].name : null;
-      draft.push({ name: `joint_${n}`, parent, position: snapped(event) });
+      draft.push({ name: `joint${n}`, parent, position: snapped(event) });
       selected = draft.length - 1;
     }
     showJoint();
