@@ -391,6 +391,9 @@ def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
     # The options: a size, a black background and the skeleton drawn over the drawing.
     page.fill("#export-name", "framed")
     page.fill("#export-width", "120")
+    page.click("#export-go")  # a width without a height: said in the page, nothing sent
+    page.wait_for_function("!document.getElementById('error').hidden")
+    assert "width and height, or neither" in page.locator("#error").text_content()
     page.fill("#export-height", "160")
     page.select_option("#export-background", "#000000")
     page.check("input[name=export-overlay][value=skeleton]")

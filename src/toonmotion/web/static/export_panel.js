@@ -65,7 +65,8 @@ export function mount(ctx) {
     const message = { type: "export", format, name: document.getElementById("export-name").value };
     if (!["glb", "spine"].includes(format)) {
       const width = document.getElementById("export-width").value, height = document.getElementById("export-height").value;
-      if (width || height) message.size = [Number(width), Number(height)];
+      if (!width !== !height) return showError("give the size's width and height, or neither (the view's own)");
+      if (width) message.size = [Number(width), Number(height)];
       const hex = colourChoice.value === "custom" ? document.getElementById("export-colour").value : colourChoice.value;
       if (hex) message.background = rgbOf(hex);
       message.overlays = [...side.querySelectorAll("input[name=export-overlay]:checked:not(:disabled)")]
