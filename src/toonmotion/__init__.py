@@ -32,7 +32,7 @@ _API = (
     "render_pose", "retarget", "retarget_keyposes", "retarget_keyshapes", "retarget_line_of_action",
     "retarget_parts", "retime", "rig_again", "rig_image", "rotate_joint", "same_depth_overlaps",
     "save_project", "scene_passes", "set_depth", "set_key", "simulate_scene", "sketch_pose",
-    "suggest_joints", "suggested_sizes", "track_footage", "undo_edits", "write_animation",
+    "setup_warnings", "suggest_joints", "suggested_sizes", "track_footage", "undo_edits", "write_animation",
 )
 
 __all__ = ["ToonmotionError", "__version__", *_API]

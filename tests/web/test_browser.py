@@ -594,6 +594,9 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     assert page.evaluate("window.toonmotion.capture.joints().find((j) => j.name === 'head').size") == [20, 28]
     page.click("#capture-track")
     page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')")
+    notes = page.evaluate("window.toonmotion.project.capture.tracked.notes")  # shown when there are any
+    assert page.locator("#capture-notes").is_visible() == bool(notes)
+    assert page.locator("#capture-notes").text_content() == " ".join(notes)
     motion = load_motion(folder / "motions" / "captured.json")
     assert motion.positions.shape[0] == 4
     assert np.median(motion.positions[-1, :, 0] - motion.positions[0, :, 0]) == pytest.approx(6, abs=1)

@@ -715,6 +715,9 @@ def test_footage_is_tracked_saved_and_retargeted(editable):
         while reply["type"] == "progress":
             reply = socket.receive_json()
         assert reply["type"] == "tracked", reply
+        # 16 px rectangles on a figure whose limbs ask for 48: said with the tracking.
+        small = "the rectangles are small for this figure (median 16 px,"
+        assert [note[:len(small)] for note in reply["notes"]] == [small]
         retargeted = _send(socket, {"type": "retarget"})
         shown = _send(socket, {"type": "frame", "frame": 3, "source": "capture"})
     motion = load_motion(folder / "motions" / "captured.json")  # saved in the project

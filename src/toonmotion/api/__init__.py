@@ -64,7 +64,7 @@ from toonmotion.api.scene3d import (
     scene_passes,
     simulate_scene,
 )
-from toonmotion.capture.footage import Capture, PoorlyMatched, suggest_joints, suggested_sizes
+from toonmotion.capture.footage import Capture, PoorlyMatched, setup_warnings, suggest_joints, suggested_sizes
 from toonmotion.capture.foreground import border_colour
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
@@ -149,6 +149,7 @@ __all__ = [
     "set_key",
     "simulate_scene",
     "sketch_pose",
+    "setup_warnings",
     "suggest_joints",
     "suggested_sizes",
     "track_footage",

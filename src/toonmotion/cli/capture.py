@@ -84,8 +84,8 @@ def track(
     start = 0
     if joints is not None:
         skeleton, sizes, start = load_joints(joints)
-        _warn_if_small(frames, skeleton, sizes, start, flat)
-        _warn_if_overlapping(skeleton, sizes, start)
+        for warning in api.setup_warnings(frames, skeleton, sizes, start=start, colour=flat):
+            options.warn(warning)
     else:
         skeleton, sizes = api.suggest_joints(frames, colour=flat)
         joints = output.with_name(output.stem + ".joints.json")
@@ -130,41 +130,6 @@ def track(
                          f"{joint.length} frame{'s' if joint.length > 1 else ''})" for joint in poor)
         typer.echo(f"matched poorly most: {said}; where one is lost, put it right with "
                    f"--joints {joints} --resume {output} --at FRAME --set NAME=X,Y -o FIXED.json")
-
-
-# Rectangles at most this fraction of the suggested ones (median sides) are worth a warning: on the
-# sample character's own wave, 24 px rectangles where 48 are suggested lost a hand for 15 frames
-# (5.9 px mean error, 1.8 with 48 px; 3.2 with 36).
-SMALL_RECTANGLES = 0.6
-
-
-def _warn_if_small(frames, skeleton, sizes, start, flat):
-    """Warn when the rectangles given are much smaller than those toonmotion would suggest there."""
-    given = float(np.median(np.max(sizes, axis=1)))
-    suggested = float(np.median(np.max(api.suggested_sizes(frames, skeleton.positions, start=start,
-                                                           colour=flat), axis=1)))
-    if given < SMALL_RECTANGLES * suggested:
-        options.warn(f"the rectangles are small for this figure (median {given:.0f} px, where "
-                     f"{suggested:.0f} px are suggested from its thickness): a rectangle holding little "
-                     "but one flat colour loses its joint; make them larger, or let toonmotion suggest "
-                     "them (no --joints)")
-
-
-def _warn_if_overlapping(skeleton, sizes, start):
-    """Warn when two joints (neither the other's parent) start within half a rectangle of each
-    other: each one's template is cut mostly from the other, and the tracker may follow one for
-    the other (two legs that look alike, crossing)."""
-    P = skeleton.positions
-    gap = np.hypot(*(P[:, None] - P[None]).transpose(2, 0, 1))
-    reach = 0.5 * np.maximum(sizes.max(axis=1)[:, None], sizes.max(axis=1)[None])
-    for a, b in zip(*np.nonzero(np.triu(gap < reach, 1)), strict=True):
-        if a in (skeleton.parents[b], b) or b == skeleton.parents[a]:
-            continue
-        names = skeleton.names
-        options.warn(f"joints {names[a]} and {names[b]} start {gap[a, b]:.0f} px apart, within half a "
-                     "rectangle: each is cut mostly from the other, and the tracker may follow one for the "
-                     f"other; start on a frame where they are apart (the joints file's frame, now {start})")
-        return
 
 
 def _figure_said(frame, flat):

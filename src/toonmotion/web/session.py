@@ -539,7 +539,9 @@ def track(editing: Editing, message: dict[str, Any],
     save_motion(editing.folder / CAPTURED, capture.motion)
     confidence = capture.motion.confidence
     assert confidence is not None  # tracking always says how sure it is
-    reply = {"type": "tracked", "first": capture.first, "names": list(skeleton.names),
+    # What may have gone wrong from the start (rectangles too small, joints on one another).
+    notes = [] if at is not None else api.setup_warnings(frames, skeleton, sizes[order], colour=background)
+    reply = {"type": "tracked", "first": capture.first, "names": list(skeleton.names), "notes": notes,
              "positions": np.round(capture.motion.positions, 2).tolist(),
              "confidence": np.round(confidence, 3).tolist(),
              "poorly": [{"name": joint.name, "fraction": round(joint.fraction, 3), "start": joint.start,

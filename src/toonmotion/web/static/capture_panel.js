@@ -34,6 +34,7 @@ export function mount(ctx) {
     <p><progress id="capture-progress" max="1" value="0" hidden></progress>
       <button id="capture-cancel" hidden>Cancel</button></p>
     <p id="capture-poor" hidden></p>
+    <p id="capture-notes" class="warning" hidden></p>
     <p>Drag the joints onto the figure in the first frame (they snap to the orange suggestions),
     drag a rectangle's corner to size it, then track.</p>`;
 
@@ -207,6 +208,9 @@ export function mount(ctx) {
     corrected = {};
     document.getElementById("capture-play").disabled = false;
     showPoorly(tracked.poorly);
+    const notes = document.getElementById("capture-notes");
+    notes.textContent = (tracked.notes || []).join(" ");
+    notes.hidden = !notes.textContent;
     status("tracked: scrub to check it, then retarget");
     show(frame);
   }
