@@ -37,13 +37,16 @@ def test_figure_cells_lay_out_a_turned_window_as_the_tracker_does():
     assert cells.any() and not cells.all()
 
 
-def test_a_point_off_the_figure_goes_to_its_nearest_pixel_within_reach():
+def test_a_point_off_the_figure_goes_to_its_nearest_pixel_within_reach_and_toward_it_beyond():
     near = _disc()
     inside, outside = np.array([50.0, 30.0]), np.array([50.0, 50.0])  # 20 px below the centre
     assert onto_figure(near, inside, 5.0) is inside
     moved = onto_figure(near, outside, 10.0)
     assert on_figure(near, moved[None])[0] and np.hypot(*(moved - outside)) == pytest.approx(8.0, abs=1.0)
-    assert (onto_figure(near, outside, 5.0) == outside).all()  # too far: left where it was
+    # About 8 px off: a reach of 5 takes it 5 px toward the figure, straight up; one of 1.5 (the
+    # figure beyond PULL_REACH reaches) leaves it where it was.
+    np.testing.assert_allclose(onto_figure(near, outside, 5.0), [50.0, 45.0])
+    assert (onto_figure(near, outside, 1.5) == outside).all()
 
 
 def test_masks_hold_points_within_the_slack_of_the_figure():
