@@ -53,6 +53,8 @@ def test_check_names_the_limit_and_how_to_raise_it():
         limits.check("joints", 1001, "the thing", hint="trim it")
     with pytest.raises(LimitError):
         limits.check("joints", float("nan"), "a NaN")
+    with pytest.raises(LimitError, match=r"\(it is 150,672,000\)"):  # a size worked out, not 1.50672e+08
+        limits.check("canvas_pixels", 150_671_999.9, "the picture")
     assert issubclass(LimitError, ToonmotionError) and issubclass(ImageTooLargeError, LimitError)
 
 

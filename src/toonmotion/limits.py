@@ -130,7 +130,8 @@ def check(name: str, amount: float, what: str, *, hint: str = "") -> None:
     limit = operator.attrgetter(name)(_current)
     if not amount <= limit:  # also refuses NaN
         whole = isinstance(amount, int) or (math.isfinite(amount) and amount.is_integer() and amount < 1e15)
-        shown = f"{int(amount):,}" if whole else f"{amount:g}"
+        large = math.isfinite(amount) and 1000 <= abs(amount) < 1e15  # pixels worked out: 150,672,000
+        shown = f"{int(amount):,}" if whole else f"{amount:,.0f}" if large else f"{amount:g}"
         advice = f"{hint}, or raise" if hint else "raise"
         raise LimitError(
             f"{what} is over the limit {name}={limit:,} (it is {shown}); {advice} the limit with "

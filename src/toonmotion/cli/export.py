@@ -31,8 +31,8 @@ def export(
     solve_inbetweens: options.SolveInbetweens = False,
     size: options.Size = None,
     background: Annotated[str | None, typer.Option(
-        "--background", help="Pictures: white, black or #rrggbb \\[default: transparent; GIF and MP4 "
-        "over white].")] = None,
+        "--background", help="Pictures: transparent, white, black or #rrggbb \\[default: transparent; GIF "
+        "and MP4 over white].")] = None,
     padding: Annotated[int, typer.Option("--padding", help="Sprite sheet: pixels between frames.")] = 2,
     no_trim: Annotated[bool, typer.Option(
         "--no-trim", help="Sprite sheet: keep whole frames instead of cropping to what is drawn.")] = False,

@@ -192,9 +192,9 @@ def prior_from_bvh(
     missing = [n for n, j in zip(names, found, strict=True) if j is None]
     if missing:
         raise ProxyError(
-            f"the motion prior lacks the marker{'s' if len(missing) > 1 else ''} {', '.join(missing)}: name "
-            f"markers after standard joints ({', '.join(STANDARD_JOINTS)}) or the clip's joints "
-            f"({', '.join(clip.names)}), or map them to joints"
+            f"the motion prior lacks the marker{'s' if len(missing) > 1 else ''} {_some(missing)}: name "
+            f"markers after standard joints ({_some(STANDARD_JOINTS)}) or the clip's joints "
+            f"({_some(clip.names)}), or map them to joints (--map MARKER=JOINT)"
         )
     index = [int(j) for j in found if j is not None]
     if len(set(index)) != len(index):
@@ -380,3 +380,11 @@ def prior_in_metres(prior: Prior, units: float | str | None = None) -> tuple[Pri
     positions = prior.positions * scale
     positions[..., 1] -= positions[..., 1].min()
     return Prior(prior.names, prior.parents, positions, prior.fps, prior.joints, prior.turns), scale
+
+
+def _some(names, shown=4):
+    """The first ``shown`` of ``names`` and how many there are, for a message that fits a line."""
+    names = list(names)
+    if len(names) <= shown + 1:
+        return ", ".join(names)
+    return f"{', '.join(names[:shown])}, ... ({len(names)} in all)"
