@@ -750,6 +750,29 @@ def test_drawings_held_two_frames_are_found_and_stepped_over():
     np.testing.assert_array_equal(twos.positions[1::2], twos.positions[0::2])
 
 
+
+def test_held_drawings_are_told_on_the_footage_s_own_frames_when_it_is_tracked_halved():
+    """A faint square creeping half a pixel a frame over flat paper, two of its drawings held a
+    frame. Its edges change by 20 grey levels a frame in the footage's own pixels, but halving
+    blurs that under the held test's 16: told on the frames' own pixels, only the two repeats
+    are held."""
+    columns = np.arange(240) + 0.5
+    canvases, truth = [], []
+    x = 60.0
+    for t in range(12):
+        if t not in (4, 8):  # frames 4 and 8 repeat the drawing before
+            x += 0.5
+        cover = np.clip(columns - (x - 6) + 0.5, 0, 1) * np.clip((x + 6) - columns + 0.5, 0, 1)
+        canvas = np.full((160, 240, 3), 235.0)
+        canvas[74:86] -= 40 * cover[None, :, None]
+        canvases.append(np.rint(canvas).astype(np.uint8))
+        truth.append([[x, 79.5]])
+    frames, truth = np.stack(canvases), np.array(truth)
+    setup = TrackSetup(skeleton=Skeleton.from_joints([("dot", None, tuple(truth[0, 0]))]),
+                       sizes=np.array([[24.0, 24.0]]))
+    halved = track(frames, setup, settings=TrackSettings(working_side=150))  # tracked at 120x80
+    assert np.flatnonzero(halved.held).tolist() == [4, 8]
+
 def _shortening_arm(seed=6, T=16):
     """A hand drawn towards its still shoulder at 4 px a frame (its bone shortens as fast: an arm
     swinging towards the camera), 25 grey levels lighter from frame 4 on, so that it matches

@@ -299,6 +299,7 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     initial = setup.skeleton.positions if initial is None else check_initial(initial, k)
     check_inside(setup.skeleton, setup.sizes, initial, np.zeros(k), first, start, range(k))
     n = halvings((first.shape[1], first.shape[0]), settings.working_side)
+    own = _held_on(frames, first, settings) if n else None
     if n:
         frames, masks, setup, settings = _at_working(frames, masks, setup, settings, first.shape, n)
         first, initial = read_frame(frames, start, None), at_level(initial, n)
@@ -317,7 +318,7 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     if progress:
         progress("tracking", start, stop)
     _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress,
-         figure, on_figure, settings.best_path)
+         figure, on_figure, settings.best_path, own)
     if settings.both_ways:
         _run_back(frames, masks, first.shape, plan, templates, out, start, stop, on_figure)
     return _in_frame_pixels(_filled(out, plan, settings, figure, on_figure).freeze(), n)
@@ -387,6 +388,7 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     current = read_frame(frames, frame, None)
     check_inside(setup.skeleton, setup.sizes, out.positions[frame], out.angles[frame], current, frame, fixed)
     n = halvings((current.shape[1], current.shape[0]), settings.working_side)
+    own = _held_on(frames, read_frame(frames, begin, None), settings) if n else None
     if n:
         frames, masks, setup, settings = _at_working(frames, masks, setup, settings, current.shape, n)
         out.positions = at_level(out.positions, n)
@@ -408,7 +410,7 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     if progress:
         progress("tracking", frame, stop)
     _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure,
-         settings.best_path)
+         settings.best_path, own)
     if settings.both_ways:
         _run_back(frames, masks, current.shape, plan, templates, out, frame, stop, on_figure)
     return _in_frame_pixels(_filled(out, plan, settings, figure, on_figure, since=frame).freeze(), n)
@@ -471,19 +473,22 @@ class _Arrays:
 
 
 def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, history, begin, stop,
-         progress, figure=None, on_figure=None, options=True):
+         progress, figure=None, on_figure=None, options=True, own=None):
     """Track frames ``begin`` to ``stop - 1``; frame ``begin - 1`` is tracked; write into ``out``
-    (with ``options``, the other places each joint's search found too)."""
+    (with ``options``, the other places each joint's search found too). A held drawing is told on
+    ``own``, the footage's own frames where ``frames`` are halved (:func:`_held_on`)."""
     P, C = out.positions, out.confidence
     drawings = _drawings(out, begin)
     search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
                          longest_bones(P, C, drawings, plans.hangs_from), figure, on_figure)
-    previous = read_frame(frames, begin - 1, shape)
-    work = np.empty_like(previous)
+    told = frames if own is None else own
+    drawn = read_frame(told, begin - 1, None)
+    work = np.empty_like(drawn)
     for t in range(begin, stop):
         image = read_frame(frames, t, shape)
+        seen = image if own is None else read_frame(own, t, drawn.shape)
         out.tracked[t] = True
-        if is_held(image, previous, work=work):
+        if is_held(seen, drawn, work=work):
             P[t], C[t], out.angles[t], out.held[t] = P[t - 1], C[t - 1], out.angles[t - 1], True
         else:
             predicted, coast = predict(P, C, np.array(drawings), history)
@@ -494,9 +499,16 @@ def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, 
                     if found is not None:
                         out.options[t, m, :len(found.others)] = found.others
             drawings = drawings[-COAST_STEPS:] + [t]
-            previous = image
+            drawn = seen
         if progress:
             progress("tracking", t, stop)
+
+
+def _held_on(frames, first, settings):
+    """The frames a held drawing is told on where the tracker halves them: their own, in the light
+    of ``first`` if the settings relight them. Halving blurs a slow move away: a 1080p clip halved
+    had 10 frames taken for held where 2 were, and its joints stood still on the other 8."""
+    return Relit(frames, first) if settings.relight else frames
 
 
 def _plans(setup, settings, image, centres):
