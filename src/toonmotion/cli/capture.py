@@ -84,9 +84,9 @@ def track(
     start = 0
     if joints is not None:
         skeleton, sizes, start = load_joints(joints)
-        for warning in api.setup_warnings(frames, skeleton, sizes, start=start, colour=flat):
-            options.warn(warning)
+        given = True
     else:
+        given = False
         skeleton, sizes = api.suggest_joints(frames, colour=flat)
         joints = output.with_name(output.stem + ".joints.json")
         save_joints(joints, skeleton, sizes)
@@ -111,6 +111,9 @@ def track(
         )
     motion = captured.motion
     save_motion(output, motion)
+    if given:  # what may have gone wrong from the start (after the run: a refusal is one line)
+        for warning in api.setup_warnings(frames, skeleton, sizes, start=start, colour=flat):
+            options.warn(warning)
     if csv is not None:
         save_motion_csv(csv, motion)
     if overlay is not None:
