@@ -50,6 +50,23 @@ def test_gif_round_trip_is_exact_and_fps_comes_from_durations(tmp_path):
     np.testing.assert_array_equal(frames, truth)
 
 
+
+def test_a_gif_is_read_into_its_frames_without_a_second_copy(tmp_path):
+    """Footage is held in memory (the footage_pixels limit counts it once): a GIF's frames are
+    decoded straight into the array, not gathered in a list and copied (twice the memory)."""
+    import tracemalloc
+
+    truth = np.repeat(_frames(8), 4, axis=1).repeat(4, axis=2)  # larger frames: the arrays dominate
+    save_animation(tmp_path / "clip.gif", _rgba(truth), fps=10)
+    tracemalloc.start()
+    try:
+        frames, _ = load_frames(tmp_path / "clip.gif")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    np.testing.assert_array_equal(frames, truth)
+    assert peak < 1.5 * frames.nbytes, (peak, frames.nbytes)
+
 def test_gif_holds_become_repeated_frames(tmp_path):
     truth = _frames(3)
     images = [Image.fromarray(f) for f in truth]

@@ -221,33 +221,33 @@ def _load_animated(path, limits, channels):
         ) from None
     with image:
         w, h = image.size
-        frames, durations = [], []
+        durations: list[float] = []
         try:  # Pillow counts frames by reading past each one: a damaged file can fail here too
-            limits.check(path.name, getattr(image, "n_frames", 1), w, h)
-            for frame in ImageSequence.Iterator(image):
-                frames.append(np.asarray(frame.convert("RGBA" if channels == 4 else "RGB")))
+            count = getattr(image, "n_frames", 1)
+            limits.check(path.name, count, w, h)
+            # Decoded straight into the array (a list of frames, then a copy, held them twice).
+            out = np.empty((count, h, w, channels), np.uint8)
+            for i, frame in enumerate(ImageSequence.Iterator(image)):
+                if i == count:
+                    break
+                out[i] = np.asarray(frame.convert("RGBA" if channels == 4 else "RGB"))
                 durations.append(frame.info.get("duration") or 0)
         except (OSError, EOFError, SyntaxError, ValueError, IndexError, struct.error) as error:
             raise VideoReadError(
-                f"cannot read {path}: frame {len(frames)} is damaged or truncated ({error})"
+                f"cannot read {path}: frame {len(durations)} is damaged or truncated ({error})"
             ) from None
-    durations = np.asarray(durations, dtype=float)
-    if len(frames) == 0:
+    times = np.asarray(durations, dtype=float)
+    if len(times) == 0:
         raise VideoReadError(f"no frames in {path}")
-    if np.all(durations > 0):
-        # Holds become repeated frames, so frames are evenly spaced in time.
-        repeats = np.maximum(1, np.rint(durations / np.median(durations)).astype(int))
-        count = int(repeats.sum())
-        limits.check(path.name, count, w, h)
-        fps = 1000.0 * count / float(durations.sum())
-    else:
-        repeats, fps = np.ones(len(frames), int), None
-    out = np.empty((int(repeats.sum()), h, w, channels), np.uint8)
-    at = 0
-    for frame, n in zip(frames, repeats, strict=True):
-        out[at : at + n] = frame
-        at += n
-    return out, fps
+    out = out[: len(times)]
+    if not np.all(times > 0):
+        return out, None
+    # Holds become repeated frames, so frames are evenly spaced in time.
+    repeats = np.maximum(1, np.rint(times / np.median(times)).astype(int))
+    total = int(repeats.sum())
+    limits.check(path.name, total, w, h)
+    fps = 1000.0 * total / float(times.sum())
+    return (out if total == len(out) else np.repeat(out, repeats, axis=0)), fps
 
 
 # --- video (ffmpeg) ------------------------------------------------------------------------------
