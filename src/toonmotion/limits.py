@@ -46,6 +46,8 @@ class Limits:
         Separate pieces in a figure's mask (specks of dust or a dithered alpha count).
     mesh_vertices : int
         Vertices in a character's mesh (posing time grows with them).
+    held_pixels : int
+        Pixels of the frames of a GIF, APNG or WebP written, which are held in memory to write it.
     file_bytes : int
         Size of a JSON, YAML or BVH file read.
     upload_bytes : int
@@ -61,6 +63,7 @@ class Limits:
     joints: int = 1_000
     figure_parts: int = 200
     mesh_vertices: int = 50_000
+    held_pixels: int = 250_000_000
     file_bytes: int = 256_000_000
     upload_bytes: int = 500_000_000
 

@@ -230,3 +230,25 @@ def test_a_failure_midway_leaves_old_png_frames_untouched(tmp_path, error):
     with pytest.raises(type(error)):
         save_animation(tmp_path / "new" / "f_%02d.png", _failing(_frames(3), 1, error), fps=10)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["frames"]
+
+
+@pytest.mark.parametrize("name", ["a.gif", "a.apng", "a.webp"])
+def test_formats_written_whole_are_refused_over_held_pixels_before_the_frames_pile_up(tmp_path, name):
+    """GIF, APNG and WebP are written by Pillow from every frame at once: their pixels count
+    against held_pixels as the frames come, and the frames after the refusal are never drawn."""
+    from toonmotion import limits
+    from toonmotion.errors import LimitError
+
+    drawn = []
+
+    def frames():
+        for i in range(50):
+            drawn.append(i)
+            yield np.zeros((40, 50, 4), np.uint8)
+
+    (tmp_path / name).write_bytes(b"earlier")
+    with limits.using(held_pixels=10 * 40 * 50), pytest.raises(LimitError, match="held_pixels=20,000"):
+        save_animation(tmp_path / name, frames(), fps=12)
+    assert len(drawn) == 11 and (tmp_path / name).read_bytes() == b"earlier"
+    with limits.using(held_pixels=10 * 40 * 50):  # MP4 and PNG frames are written a frame at a time
+        assert save_animation(tmp_path / "a.mp4", frames(), fps=12) == 50

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from PIL import Image
 from PIL.PngImagePlugin import Blend, Disposal
 
+from toonmotion import limits
 from toonmotion.errors import ExportError
 from toonmotion.geometry.arrays import frame_rate
 from toonmotion.io.atomic import atomic_path, sweep_leftovers, temporary_prefix
@@ -151,13 +152,13 @@ def save_animation(path: str | os.PathLike[str], frames: Iterable[NDArray[np.uin
     kind = animation_format(path)
     frames = _checked(frames)
     if kind == "gif":
-        return _save_gif(Path(path), frames, float(fps), background)
+        return _save_gif(Path(path), _held(frames, "GIF"), float(fps), background)
     if kind == "mp4":
         return _save_mp4(Path(path), frames, float(fps), background)
     if kind == "apng":
-        return _save_apng(Path(path), frames, float(fps))
+        return _save_apng(Path(path), _held(frames, "APNG"), float(fps))
     if kind == "webp":
-        return _save_webp(Path(path), frames, float(fps))
+        return _save_webp(Path(path), _held(frames, "WebP"), float(fps))
     if kind == "webm":
         return _save_webm(Path(path), frames, float(fps))
     return _save_png(Path(path), frames)
@@ -445,6 +446,18 @@ def _png_names(path):
             f"frame pattern {name} must give each frame its own file name, like frame_%04d.png"
         )
     return path.parent, name_of
+
+
+def _held(frames, kind):
+    """The frames of a GIF, APNG or WebP, whose writer (Pillow's) holds them all before it writes:
+    their pixels are counted against the ``held_pixels`` limit as they come (a 4000x3000 APNG
+    took 92 MB more a frame, and 150 frames would have run out of memory with no word)."""
+    total = 0
+    for rgba in frames:
+        total += rgba.shape[0] * rgba.shape[1]
+        limits.check("held_pixels", total, f"writing this {kind} (its frames are held)",
+                     hint="write MP4, WebM or PNG frames, written a frame at a time, or draw it smaller")
+        yield rgba
 
 
 def _checked(frames):
