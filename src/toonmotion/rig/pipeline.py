@@ -66,6 +66,9 @@ def rig_drawing(
     Character
     """
     settings = settings or RigSettings()
+    asked = settings.vertices
+    if asked is not None:  # before any work: a mesh asked for too fine is refused at once
+        limits.check("mesh_vertices", asked, f"the mesh asked for, {asked:,} vertices,", hint="ask for fewer")
     report = progress or (lambda stage, index, count: None)
     rgba = _as_rgba(texture)
 
@@ -89,8 +92,6 @@ def rig_drawing(
     spacing = settings.spacing
     if spacing is None:
         target = settings.vertices or 1500
-        limits.check("mesh_vertices", target, f"the mesh asked for, {target:,} vertices,",
-                     hint="ask for fewer")
         spacing = choose_spacing(silhouette, target, refine_points=refine)
         if settings.tolerance is None and spacing / 10 > _BASE_TOLERANCE:
             silhouette = trace_silhouette(figure, tolerance=spacing / 10)
