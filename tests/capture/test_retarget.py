@@ -102,3 +102,23 @@ def test_mismatched_motions_are_refused(skeleton):
         retarget(motion, skeleton, joint_map={"tail": "root"})
     with pytest.raises(MotionError, match="the joint map names 'tail', which the motion"):
         retarget(motion, skeleton, joint_map={"root": "tail"})
+
+
+def test_a_captured_bone_seen_end_on_keeps_enough_length_to_pose(skeleton):
+    """The forearm foreshortened to 0.5% at one frame (pointing at the camera): the target's
+    forearm keeps SHORTEST of its length there, so the frame can be posed, and every other frame
+    is as the capture says."""
+    from toonmotion.capture.retarget import SHORTEST
+    from toonmotion.rig.pose import Pose, check_pose
+
+    frames = np.repeat(skeleton.positions[None], 5, axis=0)
+    hand, elbow = skeleton.index("right_hand"), skeleton.index("right_elbow")
+    frames[2, hand] = frames[2, elbow] + 0.005 * (frames[2, hand] - frames[2, elbow])
+    found = retarget(Motion(skeleton, frames, fps=12), skeleton)
+    _, length = bone_angles(skeleton, found.positions)
+    _, rest = bone_angles(skeleton, skeleton.positions)
+    b = skeleton.bone_names.index("right_hand")
+    assert length[2, b] == pytest.approx(SHORTEST * rest[b])
+    for t in range(5):
+        check_pose(skeleton, Pose(found.positions[t]), where=f"frame {t}")
+    np.testing.assert_allclose(found.positions[[0, 1, 3, 4]], frames[[0, 1, 3, 4]], atol=1e-9)

@@ -18,6 +18,8 @@ Choices where the thesis leaves them open:
   its two ends; those must be parent and child in the capture, or the motion and the target do
   not match (:class:`MotionError`). A target bone whose ends are not both captured keeps its
   rest angle relative to its parent bone and its rest length: it turns with what it hangs from.
+- **Bones seen end-on.** A captured bone may foreshorten to nothing; its target bone keeps at
+  least :data:`SHORTEST` of its length, so every frame can be posed.
 - **Roots.** A root of the target (a forest is allowed: a hat tracked apart from a man) moves
   by its captured joint's displacement from frame 0, scaled by the ratio of the two figures'
   sizes (the summed lengths of the matched bones, target over capture), so a smaller character
@@ -33,10 +35,16 @@ import numpy as np
 from toonmotion.animate.motion import Motion
 from toonmotion.errors import MotionError
 from toonmotion.rig.kinematics import bone_angles, positions_from_bones
+from toonmotion.rig.pose import MIN_POSED_FRACTION
 from toonmotion.rig.skeleton import Skeleton
 
 # Captured bones shorter than this (px) at frame 0 keep the target's length.
 _MIN_LENGTH = 1e-6
+# A target bone is drawn at least this fraction of its length: a captured bone seen end-on (a
+# forearm pointing at the camera) squashed to nothing, which no drawing can be posed to (the
+# needle model divides by the stretch, rig.pose.MIN_POSED_FRACTION); the zombie walk retargeted
+# onto char2 failed at frame 137 of 450 with "bone 'right_elbow' is squashed to 1 px".
+SHORTEST = 2 * MIN_POSED_FRACTION
 
 
 def retarget(motion: Motion, skeleton: Skeleton, *, joint_map: Mapping[str, str] | None = None) -> Motion:
@@ -90,7 +98,7 @@ def retarget(motion: Motion, skeleton: Skeleton, *, joint_map: Mapping[str, str]
         if f is not None:
             turn[:, b] = angle[:, f] - angle[0, f]
             if length[0, f] > _MIN_LENGTH:  # a captured bone of no length has no ratio to copy
-                stretch[:, b] = length[:, f] / length[0, f]
+                stretch[:, b] = np.maximum(length[:, f] / length[0, f], SHORTEST)
     scale = _size_ratio(rest_length, length[0], followed)
     return Motion(skeleton=skeleton, positions=_pose_frames(skeleton, S, match, turn, stretch, scale,
                                                             rest_angle, rest_length, followed),
