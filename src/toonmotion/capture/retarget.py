@@ -35,16 +35,17 @@ import numpy as np
 from toonmotion.animate.motion import Motion
 from toonmotion.errors import MotionError
 from toonmotion.rig.kinematics import bone_angles, positions_from_bones
-from toonmotion.rig.pose import MIN_POSED_FRACTION
 from toonmotion.rig.skeleton import Skeleton
 
 # Captured bones shorter than this (px) at frame 0 keep the target's length.
 _MIN_LENGTH = 1e-6
-# A target bone is drawn at least this fraction of its length: a captured bone seen end-on (a
-# forearm pointing at the camera) squashed to nothing, which no drawing can be posed to (the
-# needle model divides by the stretch, rig.pose.MIN_POSED_FRACTION); the zombie walk retargeted
-# onto char2 failed at frame 137 of 450 with "bone 'right_elbow' is squashed to 1 px".
-SHORTEST = 2 * MIN_POSED_FRACTION
+# A target bone is drawn at least this fraction of its length. A captured bone seen end-on (a
+# forearm pointing at the camera) squashes to nothing, which no drawing can be posed to (the
+# needle model divides by the stretch, rig.pose.MIN_POSED_FRACTION): the zombie walk retargeted
+# onto char2 failed at frame 137 of 450 with "bone 'right_elbow' is squashed to 1 px". Kept at
+# twice that fraction (4%), the frame posed, but the forearm's drawing was torn into spikes; at a
+# quarter it is drawn short and whole, as an animator would draw a limb pointing at the viewer.
+SHORTEST = 0.25
 
 
 def retarget(motion: Motion, skeleton: Skeleton, *, joint_map: Mapping[str, str] | None = None) -> Motion:
