@@ -989,3 +989,19 @@ def test_capture_errors_are_one_line_and_keep_the_old_motion(footage, posable, t
     assert err.startswith("toonmotion: error: ") and "\n" not in err
     assert message in err
     assert (tmp_path / "m.json").read_text() == "previous motion"
+
+
+def test_a_picture_over_the_limits_is_refused_before_the_pose_is_worked_out(posable, tmp_path, monkeypatch,
+                                                                             capsys):
+    from toonmotion import api
+
+    def no_pose(*args, **kwargs):
+        raise AssertionError("posed before the size was checked")
+
+    monkeypatch.setattr(api, "pose_character", no_pose)
+    monkeypatch.setattr(api, "animate_character", no_pose)
+    project = posable / "hero"
+    for argv in (["pose", project, posable / "pose.json", "-o", tmp_path / "p.png"],
+                 ["animate", project, posable / "keys.json", "-o", tmp_path / "a.gif"]):
+        assert _run(*argv, "--size", "16000x12000") == 2
+        assert "over the limit canvas_pixels=64,000,000" in capsys.readouterr().err

@@ -55,6 +55,7 @@ def pose(
     --accel and --fixed exaggerate the pose with the single-frame cartoon filter first.
     """
     options.suffix(output, ".png", "an output", why="the frame is a PNG; ")
+    options.size(size)  # before the pose is worked out
     if (accel is None) != (fixed is None):
         raise SettingsError(
             "--accel and --fixed go together: give the acceleration and the joints that stay put"
@@ -136,6 +137,7 @@ def animate(
     --exaggerate runs the cartoon filter over every bone's angle and length and the root's path.
     """
     kind = animation_format(output)
+    options.size(size)  # before the frames are worked out
     for path in (save_motion_to, save_frame_motion_to):
         if path is not None:
             options.suffix(path, ".json", "a motion file")

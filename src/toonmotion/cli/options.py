@@ -16,6 +16,7 @@ from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.deform.deformer import DeformSettings
 from toonmotion.errors import SettingsError
 from toonmotion.render.frame import check_overlays
+from toonmotion.render.raster import check_canvas
 
 err = Console(stderr=True)
 
@@ -126,7 +127,8 @@ def named_point(text: str, option: str) -> tuple[str, tuple[float, float]]:
 
 
 def size(text: str | None) -> tuple[int, int] | None:
-    """``WxH`` in pixels, each 1 to 16384."""
+    """``WxH`` in pixels, each 1 to 16384, within the picture limits (checked at once: a command
+    gives it before its work, not after)."""
     if text is None:
         return None
     w, _, h = text.lower().partition("x")
@@ -136,6 +138,7 @@ def size(text: str | None) -> tuple[int, int] | None:
         wh = (0, 0)
     if min(wh) < 1 or max(wh) > 16384:
         raise SettingsError(f"--size takes WxH in pixels, each 1 to 16384, e.g. 1024x1024; got {text!r}")
+    check_canvas(*wh, why="give a smaller --size")
     return wh
 
 
