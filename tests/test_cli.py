@@ -1005,3 +1005,21 @@ def test_a_picture_over_the_limits_is_refused_before_the_pose_is_worked_out(posa
                  ["animate", project, posable / "keys.json", "-o", tmp_path / "a.gif"]):
         assert _run(*argv, "--size", "16000x12000") == 2
         assert "over the limit canvas_pixels=64,000,000" in capsys.readouterr().err
+
+
+def test_tune_tries_an_edit_under_the_deformation_options_pose_takes(posable, tmp_path, monkeypatch):
+    import shutil
+
+    from toonmotion import api
+
+    seen, real = [], api.pose_character
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs["settings"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(api, "pose_character", spy)
+    shutil.copy(posable / "pose.json", tmp_path / "pose.json")
+    assert _run("tune", posable / "hero", tmp_path / "pose.json", "--skinning", "weights", "--no-area",
+                "--joint-width", "2") == 0
+    assert [(s.skinning, s.preserve_area, s.joint_width) for s in seen] == [("weights", False, 2.0)]
