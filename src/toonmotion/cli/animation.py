@@ -55,7 +55,7 @@ def pose(
     --accel and --fixed exaggerate the pose with the single-frame cartoon filter first.
     """
     options.suffix(output, ".png", "an output", why="the frame is a PNG; ")
-    options.size(size)  # before the pose is worked out
+    picture_size = options.size(size)  # checked before the pose is worked out
     if (accel is None) != (fixed is None):
         raise SettingsError(
             "--accel and --fixed go together: give the acceleration and the joints that stay put"
@@ -68,7 +68,7 @@ def pose(
         fixed=options.names(fixed) if fixed is not None else (), root=root,
         settings=options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning,
                                          joint_anchor))
-    picture = api.render_pose(character, frame, size=options.size(size),
+    picture = api.render_pose(character, frame, size=picture_size,
                               background=options.colour(background), overlays=options.overlays(overlay))
     save_png(output, picture)
     result = frame.deformation
@@ -137,7 +137,7 @@ def animate(
     --exaggerate runs the cartoon filter over every bone's angle and length and the root's path.
     """
     kind = animation_format(output)
-    options.size(size)  # before the frames are worked out
+    picture_size = options.size(size)  # checked before the frames are worked out
     for path in (save_motion_to, save_frame_motion_to):
         if path is not None:
             options.suffix(path, ".json", "a motion file")
@@ -146,12 +146,12 @@ def animate(
     character, animation, what = make_animation(project, keys_file, settings=settings, fps=fps, ease=ease,
                                                 exaggeration=exaggeration, solve_inbetweens=solve_inbetweens)
     count, out_size = write(
-        output, character, animation, kind=kind, size=size, background=background, overlay=overlay
+        output, character, animation, kind=kind, size=picture_size, background=background, overlay=overlay
     )
     if save_motion_to is not None:
         save_motion(save_motion_to, animation.motion)
     if save_frame_motion_to is not None:
-        save_motion(save_frame_motion_to, api.motion_in_frames(character, animation, size=options.size(size)))
+        save_motion(save_frame_motion_to, api.motion_in_frames(character, animation, size=picture_size))
     typer.echo(
         f"animated {what}"
         + (f", exaggerated (A={exaggerate:g})" if exaggeration else "")
@@ -214,11 +214,11 @@ def make_animation(project: Path, keys_file: Path, *, settings: DeformSettings, 
 
 
 def write(output: Path, character: Character, animation: api.Animation, *, kind: str,
-          size: str | None, background: str | None, overlay: str) -> tuple[int, tuple[int, int]]:
+          size: tuple[int, int] | None, background: str | None, overlay: str) -> tuple[int, tuple[int, int]]:
     """Render and save an animation with the shared output options; ``(frames, (w, h))``."""
     colour = options.colour(background or ("transparent" if kind in TRANSPARENT_FORMATS else "white"))
     with options.progress("rendering") as report:
-        return api.write_animation(output, character, animation, size=options.size(size),
+        return api.write_animation(output, character, animation, size=size,
                                    background=colour, overlays=options.overlays(overlay), progress=report)
 
 

@@ -186,7 +186,7 @@ def retarget_command(
 ) -> None:
     """Replay a captured motion on a rigged drawing (thesis 4.5); the result is kept in the project."""
     kind = animation_format(output)
-    options.size(size)  # before the frames are worked out
+    picture_size = options.size(size)  # checked before the frames are worked out
     character = api.load_project(project)
     captured = load_motion(motion_file)
     motion = api.retarget(captured, character.skeleton, joint_map=_joint_map(joint_map))
@@ -197,7 +197,7 @@ def retarget_command(
                                          joint_anchor)
     )
     count, _ = write(
-        output, character, animation, kind=kind, size=size, background=background, overlay=overlay
+        output, character, animation, kind=kind, size=picture_size, background=background, overlay=overlay
     )
     kept = Path(project) / "motions" / f"{motion_file.stem}.json"
     save_motion(kept, motion)

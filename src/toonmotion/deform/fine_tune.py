@@ -230,7 +230,7 @@ def drag_points(deformer, U, start, end, *, radius=None):
     if start.shape != end.shape:
         raise EditError(f"got {len(start)} drag starts but {len(end)} ends; give one end per start")
     distance, index = cKDTree(U).query(start)
-    reach = max(2.0 * mesh.spacing, 3.0)
+    reach = mesh.pick_reach
     far = np.flatnonzero(distance > reach)
     if len(far):
         x, y = start[far[0]]

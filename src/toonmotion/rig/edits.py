@@ -150,7 +150,7 @@ def region_at(character: Character, point: tuple[float, float] | NDArray[np.floa
     V = character.mesh.V
     distance = np.hypot(V[:, 0] - point[0], V[:, 1] - point[1])
     vertex = int(np.argmin(distance))
-    reach = max(3.0, 2.0 * character.mesh.spacing)
+    reach = character.mesh.pick_reach
     if distance[vertex] > reach:
         raise EditError(f"no part of the drawing is at ({point[0]:.0f}, {point[1]:.0f}): the nearest is "
                         f"{distance[vertex]:.0f} px away (at most {reach:.0f}); pick a point on the drawing")

@@ -72,6 +72,12 @@ class Mesh:
         object.__setattr__(self, "spacing", spacing)
 
     @property
+    def pick_reach(self) -> float:
+        """How far (px) a point may lie from the vertex it picks (a drag's start, a click on a
+        region): two spacings, at least 3 px; farther, the point is off the drawing."""
+        return max(2.0 * self.spacing, 3.0)
+
+    @property
     def n_outline(self) -> int:
         """Number of outline vertices; they are ``V[:n_outline]``."""
         return sum(len(loop) for loop in self.boundary)
