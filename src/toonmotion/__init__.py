@@ -19,13 +19,14 @@ __version__ = "0.1.0"
 
 _API = (
     "Animation", "Balloon", "Balls", "Capture", "Character", "ContourCapture", "DeformSettings",
-    "Exported", "FilterSettings", "KeyShapeSpace", "LiftReport", "Markers", "Motion", "PoorlyMatched",
+    "EnvironmentItem", "Exported", "FilterSettings", "KeyShapeSpace", "LiftReport", "Markers", "Motion",
+    "PoorlyMatched",
     "PosedFrame", "Proxy",
     "RigSettings", "SameDepthOverlap", "SceneMotion", "SketchMatch", "TrackSettings", "VideoCapture",
     "animate_character", "animate_drawing", "animation_frames", "border_colour", "capture_contours",
     "capture_parts",
     "capture_video", "carry_keys", "composite_scene", "correct_regions", "delete_key", "exaggerate",
-    "export_animation",
+    "environment_report", "export_animation",
     "export_format", "filter_motion",
     "keyshape_sheet", "keyshape_space", "lift_proxy", "load_project", "motion_in_frames", "move_key",
     "pick_layer", "pose_character", "pose_view", "preview_proxy", "redo_edits", "render_elements",

@@ -6,6 +6,7 @@ import sys
 
 import pytest
 
+import toonmotion
 from toonmotion.cli import main
 
 
@@ -143,3 +144,17 @@ def test_edit_rigs_a_drawing_into_a_project_beside_it_once(capsys, tmp_path):
         code, out, err = _run(["edit", tmp_path / "hero.png", "--port", port], capsys)
         assert out.startswith("opening ") and "made from hero.png" in out
     assert load_project(tmp_path / "hero").mesh.V.tolist() == rigged.mesh.V.tolist()
+
+
+def test_doctor_lists_the_versions_a_bug_report_needs(capsys, tmp_path, monkeypatch):
+    import numpy
+    import PIL
+
+    monkeypatch.chdir(tmp_path)  # no node_modules here or above: the validator is missing, not an error
+    code, out, err = _run(["doctor"], capsys)
+    assert code == 0 and not err
+    rows = {line.split()[0]: line for line in out.splitlines()}
+    assert rows["toonmotion"].split()[1] == toonmotion.__version__
+    assert rows["numpy"].split()[1] == numpy.__version__ and rows["pillow"].split()[1] == PIL.__version__
+    assert {"scipy", "opencv", "mujoco", "ffmpeg", "chromium", "python"} <= rows.keys()
+    assert "not found" in rows["gltf-validator"] and "(missing)" in rows["gltf-validator"]

@@ -33,6 +33,7 @@ from toonmotion.api.animation import (
     set_key,
 )
 from toonmotion.api.capture import track_footage
+from toonmotion.api.environment import EnvironmentItem, environment_report
 from toonmotion.api.export import Exported, export_animation, export_format
 from toonmotion.api.keyshapes import (
     animate_drawing,
@@ -91,6 +92,7 @@ __all__ = [
     "Character",
     "ContourCapture",
     "DeformSettings",
+    "EnvironmentItem",
     "Exported",
     "FilterSettings",
     "Motion",
@@ -109,6 +111,7 @@ __all__ = [
     "animate_drawing",
     "animation_frames",
     "carry_keys",
+    "environment_report",
     "border_colour",
     "capture_contours",
     "capture_parts",

@@ -5,9 +5,10 @@ One module per command group registers its commands on the shared Typer ``app``:
 (pose, animate, filter), :mod:`~toonmotion.cli.editing` (depth, correct, undo, redo, edits, tune)
 and :mod:`~toonmotion.cli.capture` (track, retarget), :mod:`~toonmotion.cli.keyshapes`
 (keyshapes, capture-contours), :mod:`~toonmotion.cli.proxy3d` (lift, proxy-export,
-proxy-preview), :mod:`~toonmotion.cli.scene3d` (scene) and :mod:`~toonmotion.cli.export`
-(export). Errors the user can fix print one line, ``toonmotion: error: ...``, and exit with
-status 2 (:func:`~toonmotion.cli.app.main`).
+proxy-preview), :mod:`~toonmotion.cli.scene3d` (scene), :mod:`~toonmotion.cli.export`
+(export), :mod:`~toonmotion.cli.editor` (edit) and :mod:`~toonmotion.cli.about` (doctor).
+Errors the user can fix print one line, ``toonmotion: error: ...``, and exit with status 2
+(:func:`~toonmotion.cli.app.main`).
 """
 
 # The order the groups register their commands in is the order --help lists them: the workflow's.
@@ -29,7 +30,9 @@ from toonmotion.cli import export  # isort: split
 
 from toonmotion.cli import editor  # isort: split
 
+from toonmotion.cli import about  # isort: split
+
 from toonmotion.cli.app import app, main
 
-__all__ = ["animation", "app", "capture", "editing", "editor", "export", "keyshapes", "main", "proxy3d",
-           "rigging", "scene3d"]
+__all__ = ["about", "animation", "app", "capture", "editing", "editor", "export", "keyshapes", "main",
+           "proxy3d", "rigging", "scene3d"]

@@ -78,7 +78,7 @@ def over(src: NDArray[np.float32], background: Sequence[int] | NDArray[np.uint8]
             if value:
                 p[:, channel] += np.float32(value) * uncovered
         if colour[3] == 255:
-            return cast(NDArray[np.uint8], cv2.convertScaleAbs(p))  # opaque: no division needed
+            return _rounded(p)  # opaque: no division needed
         return _unpremultiplied(p, 255)
     # One background pixel under each: the same arithmetic, row by row.
     p *= np.float32(1 / 255)
@@ -91,14 +91,26 @@ def over(src: NDArray[np.float32], background: Sequence[int] | NDArray[np.uint8]
     opaque = bg[:, 3] == 255
     out = np.empty(p.shape, np.uint8)
     if opaque.any():
-        out[opaque] = cv2.convertScaleAbs(p[opaque]).reshape(-1, 4)
+        out[opaque] = _rounded(p[opaque])
     if not opaque.all():
         out[~opaque] = _unpremultiplied(p[~opaque], 255)
     return out
 
 
 def _unpremultiplied(p: NDArray[np.float32], full: int) -> NDArray[np.uint8]:
-    """Straight-alpha uint8 ``(k, 4)``: colour * 255 / alpha, alpha * 255 / ``full``; 0 / 0 gives 0."""
-    divisor = np.repeat(p[:, 3:], 4, axis=1)
-    divisor[:, 3] = full
-    return cast(NDArray[np.uint8], cv2.divide(p, divisor, scale=255, dtype=cv2.CV_8U)).reshape(-1, 4)
+    """Straight-alpha uint8 ``(k, 4)``: colour * 255 / alpha, alpha * 255 / ``full``; 0 / 0 gives 0.
+
+    Computed here, not by a library's division, whose result for 0 / 0 is its own choice (OpenCV
+    4 gave 0, OpenCV 5 gives 255). Products of uint8 levels stay below 2**24, so a pixel made from
+    uint8 values comes back exactly.
+    """
+    out = np.zeros(p.shape, np.float32)
+    alpha = p[:, 3:]
+    np.divide(p[:, :3] * np.float32(255), alpha, out=out[:, :3], where=alpha > 0)
+    np.divide(alpha[:, 0] * np.float32(255), np.float32(full), out=out[:, 3])
+    return _rounded(out)
+
+
+def _rounded(levels: NDArray[np.float32]) -> NDArray[np.uint8]:
+    """The nearest uint8 level of each value (halves to even, as ``np.rint``), saturated to 0-255."""
+    return np.clip(np.rint(levels), 0, 255).astype(np.uint8)
