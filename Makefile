@@ -1,20 +1,43 @@
 # The whole set-up on a fresh machine with Python 3.11: `make demo` and `make test`.
-# Both create (or refresh, when pyproject.toml changes) the virtual environment in .venv.
+# Both install exactly the locked environment (requirements-lock.txt: every package, pinned with its
+# hashes) into .venv, and refresh it when the lock changes. uv installs it; uv itself is installed
+# by pip into .tools at the version below, which the lock pins too.
 
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+LOCK := requirements-lock.txt
+TOOLS := .tools
+UV := $(TOOLS)/bin/uv
+UV_VERSION := $(shell sed -n 's/^uv==\([^ ]*\).*/\1/p' $(LOCK))
+# uv never downloads a Python of its own here: the machine's python3 is the one.
+export UV_PYTHON_DOWNLOADS := never
 # The shared motion-capture clips (../shared beside the checkout), for the 3D scene step of the demo.
 MOCAP ?= ../shared/data/mocap
 
-.PHONY: demo test lint bench fuzz browser validator clean
+.PHONY: demo test test-latest lock lint bench fuzz browser validator clean
 
-$(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+$(UV): $(LOCK)
+	test -x $(TOOLS)/bin/python || $(PYTHON) -m venv $(TOOLS)
+	$(TOOLS)/bin/python -m pip install --quiet --disable-pip-version-check 'uv==$(UV_VERSION)'
+	touch $(UV)
+
+# Exactly the lock: packages it does not list are removed, every file is checked against its hash.
+# The project itself is installed editable, built by the locked setuptools.
+$(STAMP): $(LOCK) pyproject.toml $(UV)
+	$(UV) venv --quiet --allow-existing --python $(PYTHON) $(VENV)
+	$(UV) pip sync --quiet --python $(BIN)/python --require-hashes $(LOCK)
+	$(UV) pip install --quiet --python $(BIN)/python --no-deps --no-build-isolation -e .
 	touch $(STAMP)
+
+# The lock, made from pyproject.toml's ranges (every extra) for CPython 3.11 on Linux, with the
+# hashes of every file of each pinned version. Pins the ranges still allow are kept, so an unchanged
+# pyproject.toml gives the same lock; UPGRADE=1 moves every pin to the newest allowed version.
+lock: $(UV)
+	$(UV) pip compile pyproject.toml --all-extras --generate-hashes --python-version 3.11 \
+	  --python-platform linux --no-emit-index-url --no-emit-find-links --quiet \
+	  $(if $(UPGRADE),--upgrade) -o $(LOCK)
 
 demo: $(STAMP)
 	mkdir -p demo
@@ -39,6 +62,17 @@ test: $(STAMP) browser validator
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
 	$(BIN)/python -m pytest
+
+# The suite against the newest versions pyproject.toml allows, with no lock: what a user who installs
+# the library into an environment of their own gets today. A throw-away environment in .venv-latest.
+LATEST := .venv-latest
+
+test-latest: $(UV) browser validator
+	rm -rf $(LATEST)
+	$(UV) venv --quiet --python $(PYTHON) $(LATEST)
+	$(UV) pip install --quiet --python $(LATEST)/bin/python --refresh -e '.[dev]'
+	$(UV) pip list --python $(LATEST)/bin/python --format freeze > $(LATEST)/versions.txt
+	$(LATEST)/bin/python -m pytest
 
 # The editor's browser tests drive Debian's Chromium (Playwright); installed here when missing and
 # run as root (as CI is). Elsewhere the tests skip without it, except under CI=true.
@@ -67,17 +101,11 @@ fuzz: $(STAMP)
 	TOONMOTION_FUZZ_PROFILE=long TOONMOTION_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(BIN)/python -m pytest -p no:cacheprovider tests/fuzz
 	cat fuzz-report.json
 
-BENCH_STAMP := $(VENV)/.installed-bench
-
-$(BENCH_STAMP): $(STAMP)
-	$(BIN)/python -m pip install --quiet -e '.[dev,bench]'
-	touch $(BENCH_STAMP)
-
 # The shared Animated Drawings folders, animated and tracked by benchmarks/track_footage.py.
 DRAWINGS := $(wildcard ../shared/data/drawings/*/char_cfg.yaml)
 DRAWINGS := $(DRAWINGS:/char_cfg.yaml=)
 
-bench: $(BENCH_STAMP)
+bench: $(STAMP)
 	$(BIN)/python benchmarks/rig.py
 	$(BIN)/python benchmarks/deform.py
 	$(BIN)/python benchmarks/edit.py
@@ -90,4 +118,4 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python benchmarks/scene3d.py
 
 clean:
-	rm -rf $(VENV) demo node_modules
+	rm -rf $(VENV) $(LATEST) $(TOOLS) demo node_modules dist
