@@ -137,7 +137,7 @@ def _options(command):
 COMMANDS = ("rig", "show", "sample", "pose", "sketch", "animate", "filter", "depth", "correct", "undo",
             "redo", "track", "retarget", "keyshapes", "capture-contours", "retarget-keyshapes",
             "retarget-line", "capture-video", "lift", "proxy-export", "proxy-preview", "edits", "remesh",
-            "tune", "edit", "scene", "export")
+            "tune", "edit", "scene", "export", "doctor")
 
 
 def test_every_command_is_in_the_readme_command_reference():
