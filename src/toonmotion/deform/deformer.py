@@ -35,8 +35,10 @@ SKINNINGS = ("one-bone", "weights")
 _CRUSHED = 0.2
 # Stage two widens its joint area by square cells this many mesh spacings wide.
 _CELL = 4.0
-# Widened joint-area solvers a Deformer keeps (each a factorisation of a few hundred vertices).
-_UNFOLD_SOLVERS = 8
+# Widened joint-area solvers a Deformer keeps (each a factorisation of a few hundred vertices, 2.4 MB
+# for 666 free of char2's 1,504): the benchmark's sequence widens through 10-20 of them, and a cache
+# of 8 refactorised them on every pass.
+_UNFOLD_SOLVERS = 32
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,10 @@ class DeformSettings:
         still inverted after that is untangled locally (:mod:`toonmotion.deform.unfold`), and a
         joint anchor gives way where a triangle stays inverted (``joint_anchor``). 0 keeps to one
         solve, untangles nothing and holds every anchor.
+    acceleration : int
+        Stage two's Anderson acceleration: each local-global step mixed with this many before it
+        (:meth:`~toonmotion.deform.joint_solve.JointSolver.solve`); the same minimum in fewer
+        iterations (docs/posing.md). 0: the plain iterations.
     edge_term : str
         ``"rigid"``: each joint triangle's edges keep their lengths *and* their orientation
         (the edges of a triangle turn together), so triangles do not flip; ``"length"``: the
@@ -94,6 +100,7 @@ class DeformSettings:
     unfold: int = 3
     skinning: str = "one-bone"
     joint_anchor: float = 10.0
+    acceleration: int = 5
 
     def __post_init__(self) -> None:
         for name in ("preserve_area", "stage_two"):
@@ -128,6 +135,9 @@ class DeformSettings:
         object.__setattr__(self, "joint_anchor", float(anchor))
         if isinstance(self.unfold, bool) or not (isinstance(self.unfold, int) and self.unfold >= 0):
             raise SettingsError(f"unfold must be a whole number >= 0, got {self.unfold!r}")
+        if isinstance(self.acceleration, bool) or not (isinstance(self.acceleration, int)
+                                                       and self.acceleration >= 0):
+            raise SettingsError(f"acceleration must be a whole number >= 0, got {self.acceleration!r}")
         if not (isinstance(self.tolerance, (int, float)) and np.isfinite(self.tolerance)
                 and self.tolerance > 0):
             raise SettingsError(f"the stage-two tolerance must be a number > 0, got {self.tolerance!r}")
@@ -274,8 +284,10 @@ class Deformer:
                 iterations += loose[-1]
                 if (triangle_areas(loose[0], self._F) <= 0).any():
                     break  # it folds without them too: they are kept
-            # Holding a joint there folds the drawing: the anchor nearest the fold gives way.
+            # Holding a joint there folds the drawing: the anchor nearest the fold gives way, and
+            # the next solve starts from this one's result (a joint less held moves it little).
             held[self._nearest_anchor(folded, held)] = False
+            initial = U
         # Energies are eq. 3.8 (plus the anchors held) over the deformer's own joint area, whichever
         # solve ran (the start: the plain solve's, warm or not, or stage one's when the first solve
         # was a widened one).
@@ -293,7 +305,7 @@ class Deformer:
             solver = self._solver_for(free, held)
             result = solver.solve(U1, initial=initial, max_iterations=s.max_iterations, tolerance=s.tolerance,
                                   shape=shape if solver is self.solver else self._shape_for(solver, maps),
-                                  area=area)
+                                  area=area, acceleration=s.acceleration)
             U, iterations = result.U, iterations + result.iterations
             areas = triangle_areas(U, self._F)
             wider = free | self._cells_round(areas <= _CRUSHED * self._rest_triangle_areas)

@@ -46,6 +46,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -65,6 +66,12 @@ from toonmotion.geometry.polygon import triangle_areas
 from toonmotion.rig.binding import Binding, bone_half_thickness
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
 from toonmotion.shape.mesh import Mesh, unique_edges
+
+# A change of eq. 3.8's energy (px^2) this small is round-off: a solve whose plain step changes the
+# energy by no more than the tolerance's share plus this has converged (at the rest pose the energy
+# itself is round-off, 1e-23). A step that raises the energy more is not convergence: the area
+# correction can raise it a little after an Anderson step.
+ENERGY_FLOOR = 1e-12
 
 # Added to the normal matrix's diagonal, relative to its mean, pulling free vertices that no
 # fixed vertex anchors (a joint area that is a whole part) towards their starting positions.
@@ -270,6 +277,7 @@ class JointSolver:
         # The area of the triangles that touch a free vertex (the only ones a solve changes) is
         # the Hermitian form area(z) = Re(z^H M z) / 2, its gradient M z.
         self._all_F = mesh.F
+        self._all_V = mesh.V
         self._area_form = _area_form(np.asarray(mesh.F)[free[mesh.F].any(axis=1)], len(free))
         rest = as_complex(mesh.V)
         A1 = _laplacian_rows(mesh, rest, free)
@@ -290,6 +298,7 @@ class JointSolver:
         A4 = None if anchors is None else _anchor_rows(anchors, len(mesh.V))
         self._A4, self._anchor_weight = A4, 0.0 if anchors is None else anchors.weight
         self._anchor_target = np.zeros(0, complex)
+        self._compiled: tuple[Any, dict[str, Any]] | None = None
         if len(self.free) == 0:
             return
         rows = [self._linear, np.sqrt(w3) * A3]
@@ -311,6 +320,41 @@ class JointSolver:
         self._from_edges = (w3 * A3[:, self.free].conj().T).tocsr()
         if A4 is not None:
             self._from_anchors = (self._anchor_weight * A4[:, self.free].conj().T).tocsr()
+        self._compiled = self._kernel_operands() if edge_term == "rigid" else None
+
+    def _kernel_operands(self):
+        """The matrices and factors :func:`toonmotion.deform.kernels.iterate` takes (the rigid
+        edge term's loop, compiled)."""
+        from toonmotion.deform import kernels
+
+        empty = (np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0, complex))
+        operands = {
+            "free": self.free.astype(np.int64),
+            "linear": kernels.csr(self._linear),
+            "anchors": empty if self._A4 is None else kernels.csr(self._A4),
+            "corners": np.ascontiguousarray(self._corners, dtype=np.int64),
+            "w3": float(self.weights[2]),
+            "from_edges": kernels.csr(self._from_edges),
+            "factor": kernels.lu_factors(self._factor),
+            "area_form": kernels.csr(self._area_form),
+        }
+        # No iterations: loads the compiled loop (from Numba's disk cache, or compiled on a machine's
+        # first use) now, with the solver, rather than in the first pose's solve.
+        self._set_anchor_target(self._all_V)
+        self._compiled = (kernels, operands)
+        self._energy(as_complex(self._all_V))
+        start = np.zeros(len(self._all_V), complex)
+        self._iterate(kernels, operands, start, np.zeros(len(self.free), complex), None, 0, 1.0, 0)
+        return kernels, operands
+
+    def _iterate(self, kernels, op, z, base, area, max_iterations, tolerance, acceleration):
+        """The compiled loop from ``z`` (modified in place): ``(iterations, energy, converged)``."""
+        return kernels.iterate(
+            z, op["free"], base, op["linear"], op["anchors"],
+            np.ascontiguousarray(self._anchor_target, dtype=complex), float(self._anchor_weight),
+            op["corners"], np.ascontiguousarray(self._rest), op["w3"], op["from_edges"], op["factor"],
+            op["area_form"], 0.0 if area is None else float(area), area is not None,
+            int(max_iterations), float(tolerance), ENERGY_FLOOR, int(acceleration))
 
     @property
     def triangles(self) -> NDArray[np.int64]:
@@ -358,7 +402,8 @@ class JointSolver:
 
     def solve(self, U: NDArray[np.float64], *, initial: NDArray[np.float64] | None = None,
               max_iterations: int = 50, tolerance: float = 1e-3,
-              shape: NDArray[np.complex128] | None = None, area: float | None = None) -> SolveResult:
+              shape: NDArray[np.complex128] | None = None, area: float | None = None,
+              acceleration: int = 0) -> SolveResult:
         """Solve for the free vertices, the others fixed at ``U`` (the stage-one result).
 
         Parameters
@@ -383,6 +428,10 @@ class JointSolver:
         area : float, optional
             The whole mesh's signed area (px^2, :func:`~toonmotion.geometry.polygon.triangle_areas`
             summed) to keep, a constraint (module docstring); None: no constraint.
+        acceleration : int
+            Anderson acceleration over this many past iterations (:class:`_Anderson`); 0 runs the
+            plain local-global iterations. Either way the energy never goes up, and both reach
+            the same minimum.
         """
         self._set_shape(shape)
         self._set_anchor_target(U)
@@ -400,34 +449,70 @@ class JointSolver:
         base = self._from_fixed @ z[self.fixed] + self._epsilon * z[self.free]
         if self._A4 is not None:
             base = base + self._from_anchors @ self._anchor_target
-        targets, energy = self._local(z)
         if area is not None:
             # The moving triangles' share of the target: the others keep their area in ``U``.
             area = float(area) - float(triangle_areas(as_points(z), np.asarray(self._all_F)).sum()) \
                 + self._moving_area(z)[0]
+        if self._compiled is not None:
+            kernels, operands = self._compiled
+            iterations, energy, converged = self._iterate(kernels, operands, z, base, area, max_iterations,
+                                                          tolerance, acceleration)
+            return SolveResult(U=as_points(z), iterations=int(iterations), energy_start=start,
+                               energy=float(energy), converged=bool(converged))
+        targets, energy = self._local(z)
+        mixer = _Anderson(acceleration) if acceleration else None
         iterations, converged = 0, False
         while iterations < max_iterations and not converged:
             iterations += 1
-            rhs = base + self._from_edges @ targets
-            if area is None:
-                z[self.free] = self._factor.solve(rhs)
-            else:
-                # One solve for the step and for the correction's direction, N^-1 g, with the area's
-                # gradient at the last iterate (it moves little in one iteration).
-                both = self._factor.solve(np.stack([rhs, self._moving_area(z)[1]], axis=1))
-                z[self.free], direction = both[:, 0], both[:, 1]
-                now, gradient = self._moving_area(z)
-                slope = float(np.vdot(gradient, direction).real)
-                if slope > 1e-12 * max(abs(now), 1.0):
-                    z[self.free] += ((area - now) / slope) * direction
+            step = self._global(z, base, targets, area)
+            if mixer is not None and mixer.depth:
+                # Anderson: the step extrapolated from the last few; kept only where it lowers the
+                # energy, so the energy still never goes up. Only a plain step may end the solve:
+                # a mixed one that gains little starts the mixing again from a plain step.
+                tried = z.copy()
+                tried[self.free] = mixer.mix(z[self.free], step)
+                tried_targets, tried_energy = self._local(tried)
+                if tried_energy < energy:
+                    z, targets = tried, tried_targets
+                    if energy - tried_energy <= tolerance * energy:
+                        mixer.restart(plain=True)
+                    energy = tried_energy
+                    continue
+                mixer.restart(plain=True)
+            elif mixer is not None:
+                mixer.restart()  # the plain step asked for, taken: mixing resumes after it
+            z[self.free] = step
             targets, new_energy = self._local(z)
-            converged = energy - new_energy <= tolerance * energy
+            converged = abs(energy - new_energy) <= tolerance * energy + ENERGY_FLOOR
             energy = new_energy
         return SolveResult(U=as_points(z), iterations=iterations, energy_start=start,
                            energy=energy, converged=bool(converged))
 
+    def _global(self, z, base, targets, area):
+        """The free vertices' positions minimising eq. 3.8 with the local step's ``targets`` held,
+        corrected to keep the linearised ``area`` (None: no constraint): ``(m,)`` complex."""
+        rhs = base + self._from_edges @ targets
+        if area is None:
+            return self._factor.solve(rhs)
+        # One solve for the step and for the correction's direction, N^-1 g, with the area's
+        # gradient at the last iterate (it moves little in one iteration).
+        both = self._factor.solve(np.stack([rhs, self._moving_area(z)[1]], axis=1))
+        step, direction = both[:, 0], both[:, 1]
+        moved = z.copy()
+        moved[self.free] = step
+        now, gradient = self._moving_area(moved)
+        slope = float(np.vdot(gradient, direction).real)
+        if slope > 1e-12 * max(abs(now), 1.0):
+            step = step + ((area - now) / slope) * direction
+        return step
+
     def _energy(self, z):
-        return self._local(z)[1]
+        if self._compiled is None:
+            return self._local(z)[1]
+        kernels, op = self._compiled
+        target = np.ascontiguousarray(self._anchor_target, dtype=complex)
+        return float(kernels.energy(z, op["linear"], op["anchors"], target, float(self._anchor_weight),
+                                    op["corners"], np.ascontiguousarray(self._rest), op["w3"]))
 
     def _moving_area(self, z):
         """The moving triangles' total signed area at ``z`` and its gradient over the free
@@ -465,6 +550,56 @@ class JointSolver:
         targets = rotation[:, None] * self._rest
         r = e - targets
         return targets.ravel(), float(energy + self.weights[2] * np.vdot(r, r).real)
+
+
+class _Anderson:
+    """Anderson acceleration of a fixed-point iteration ``x -> G(x)`` (type II, as Peng et al.
+    2018 apply to local-global geometry solves): the next point is the combination of the last
+    few steps whose residuals ``G(x) - x`` combine to the smallest, extrapolating where plain
+    iterations creep along a long valley. Complex vectors are mixed as their real and imaginary
+    parts (the local step is not complex-linear).
+
+    >>> mixer = _Anderson(3)
+    >>> x = np.array([1.0 + 0j])
+    >>> for _ in range(3):  # G(x) = x / 2 + 1, fixed point 2: exact after two mixed steps
+    ...     x = mixer.mix(x, x / 2 + 1)
+    >>> np.round(x, 12).tolist()
+    [(2+0j)]
+    """
+
+    def __init__(self, depth: int) -> None:
+        self.size = depth
+        self.restart()
+
+    def restart(self, *, plain: bool = False) -> None:
+        """Forget the past steps (after a mixed point was refused, or gained too little to go on
+        with); ``plain``: the next step is to be a plain one (:attr:`depth` is 0 until then)."""
+        self.depth = 0 if plain else self.size
+        self._last: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+        self._df: list[NDArray[np.float64]] = []
+        self._dg: list[NDArray[np.float64]] = []
+
+    def mix(self, x: NDArray[np.complex128], step: NDArray[np.complex128]) -> NDArray[np.complex128]:
+        """The next point after ``x``, whose plain step is ``step``."""
+        g = np.ascontiguousarray(step).view(np.float64)
+        f = g - np.ascontiguousarray(x).view(np.float64)
+        if self._last is not None:
+            self._df.append(f - self._last[0])
+            self._dg.append(g - self._last[1])
+            if len(self._df) > self.depth:
+                del self._df[0], self._dg[0]
+        self._last = (f, g)
+        if not self._df:
+            return np.array(step)
+        DF = np.stack(self._df, axis=1)
+        gram = DF.T @ DF
+        gram[np.diag_indices_from(gram)] *= 1 + 1e-10
+        try:
+            gamma = np.linalg.solve(gram, DF.T @ f)
+        except np.linalg.LinAlgError:
+            self.restart()
+            return np.array(step)
+        return (g - np.stack(self._dg, axis=1) @ gamma).view(np.complex128)
 
 
 def _anchor_rows(anchors, n):
