@@ -3,7 +3,7 @@ speed; JSON lines.
 
     python benchmarks/deform.py [DRAWING_DIR|sample ...] [--decomposition straight|geodesic]
                                 [--skinning one-bone|weights ...] [--joint-anchor W] [--exact]
-                                [--no-table]
+                                [--compiled] [--no-table]
 
 Each drawing folder (texture.png, mask.png, char_cfg.yaml; default: every drawing in
 ../shared/data/drawings, then the bundled sample character, named ``sample``) is rigged to about
@@ -20,6 +20,8 @@ Keys, one line per drawing and binding (--skinning one-bone weights, both by def
   skinning                       one-bone (the thesis) or weights (blended needles, 7.2 item 3)
   solve                          default, or converged (--exact: tolerance 1e-10, the eq. 3.8
                                  minimum over the same joint areas)
+  compiled                       stage two's compiled loop (--compiled, as the editor runs it;
+                                 DeformSettings.compiled) or the NumPy loop (the commands' default)
   precompute_ms                  building the Deformer (needle model, joint area, factorisation)
   frame_ms                       median time per frame, stage one + stage two, each frame's solve
                                  warm-started from the previous frame; the sequence is rest,
@@ -116,13 +118,13 @@ def rig_for(folder, decomposition):
     return folder.name, rig_drawing_folder(folder, settings=settings)
 
 
-def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=False):
+def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=False, compiled=False):
     import igl  # the benchmark extra
 
     skeleton, mesh = character.skeleton, character.mesh
 
     start = time.perf_counter()
-    options = {"skinning": skinning}
+    options = {"skinning": skinning, "compiled": compiled}
     if joint_anchor is not None:
         options["joint_anchor"] = joint_anchor
     if exact:  # iterated to convergence: eq. 3.8's minimum over the same joint areas
@@ -198,6 +200,7 @@ def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=
         "decomposition": decomposition,
         "skinning": skinning,
         "solve": "converged" if exact else "default",
+        "compiled": compiled,
         "vertices": len(mesh.V),
         "free": int(deformer.free.sum()),
         "fallback": int(character.binding.fallback.sum()),
@@ -238,13 +241,13 @@ def edge_stretch(character, U, pose):
     return float((grown / allowed).max())
 
 
-def bench_full_mesh(name, character):
+def bench_full_mesh(name, character, compiled=False):
     """Table 3.1: the joint-area solve against a full-mesh solve of the same energy on the same
     poses (every vertex free), per iteration and per frame, warm-started along the sequence."""
-    deformer = Deformer(character, DeformSettings(unfold=0))
+    deformer = Deformer(character, DeformSettings(unfold=0, compiled=compiled))
     every = np.ones(len(character.mesh.V), bool)
     full = JointSolver(character.mesh, every, weights=deformer.settings.weights,
-                       edge_term=deformer.settings.edge_term, anchors=deformer.anchors)
+                       edge_term=deformer.settings.edge_term, anchors=deformer.anchors, compiled=compiled)
     sequence = pose_sequence(character.skeleton, key_poses(character.skeleton))
     s = deformer.settings
     area = float(triangle_areas(character.mesh.V, character.mesh.F).sum())
@@ -309,6 +312,8 @@ def main(argv=None):
                         help="stage two's joint anchor weight (default: DeformSettings' default)")
     parser.add_argument("--exact", action="store_true",
                         help="also measure stage two iterated to convergence (tolerance 1e-10), a line each")
+    parser.add_argument("--compiled", action="store_true",
+                        help="stage two's compiled loop (DeformSettings.compiled, as the editor runs it)")
     parser.add_argument("--no-table", dest="table", action="store_false",
                         help="skip Table 3.1's line (the joint-area solve against a full-mesh solve)")
     args = parser.parse_args(argv)
@@ -323,14 +328,15 @@ def main(argv=None):
     for folder in folders:
         name, character = rig_for(folder, args.decomposition)
         for skinning in args.skinning:
-            line = bench_drawing(name, character, args.decomposition, skinning, args.joint_anchor)
+            line = bench_drawing(name, character, args.decomposition, skinning, args.joint_anchor,
+                                 compiled=args.compiled)
             print(json.dumps(line), flush=True)
             if args.exact:
                 line = bench_drawing(name, character, args.decomposition, skinning, args.joint_anchor,
-                                     exact=True)
+                                     exact=True, compiled=args.compiled)
                 print(json.dumps(line), flush=True)
         if args.table:
-            print(json.dumps(bench_full_mesh(name, character)), flush=True)
+            print(json.dumps(bench_full_mesh(name, character, args.compiled)), flush=True)
     print(json.dumps(bench_render()), flush=True)
 
 

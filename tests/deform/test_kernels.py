@@ -36,7 +36,7 @@ def _numpy(solver, *args, **kwargs):
 @pytest.mark.parametrize("name", CHARACTERS)
 @pytest.mark.parametrize("acceleration", [0, 5])
 def test_the_compiled_loop_is_the_numpy_loop(rigs, name, acceleration):
-    deformer = rigs.deformer(name)
+    deformer = rigs.deformer(name, compiled=True)
     solver = deformer.solver
     assert solver._compiled is not None  # the rigid edge term runs compiled
     for U1, shape, area in _problems(deformer):
@@ -52,7 +52,7 @@ def test_acceleration_reaches_the_same_minimum_in_fewer_iterations(rigs, name):
     """Iterated to convergence, the plain and the accelerated loops end at one energy (the same
     minimum), the accelerated one in at most two thirds of the iterations summed over the poses
     (measured: 0.32-0.61 of them)."""
-    deformer = rigs.deformer(name)
+    deformer = rigs.deformer(name, compiled=True)
     plain_iterations = mixed_iterations = 0
     for U1, shape, area in _problems(deformer):
         options = dict(shape=shape, area=area, max_iterations=20000, tolerance=1e-11)

@@ -251,6 +251,9 @@ class JointSolver:
     anchors : Anchors, optional
         Points held where stage one puts them (``E4``, added to eq. 3.8); none by default (the
         thesis). :class:`~toonmotion.deform.deformer.Deformer` passes the skeleton's joints.
+    compiled : bool
+        Iterate with the compiled loop (:mod:`toonmotion.deform.kernels`, rigid edge term only):
+        the same results, faster, after Numba's one-off load; the NumPy loop by default.
 
     Attributes
     ----------
@@ -261,7 +264,7 @@ class JointSolver:
     """
 
     def __init__(self, mesh: Mesh, free: NDArray[np.bool_], *, weights: Sequence[float] = (1.0, 1.0, 1.0),
-                 edge_term: str = "rigid", anchors: Anchors | None = None) -> None:
+                 edge_term: str = "rigid", anchors: Anchors | None = None, compiled: bool = False) -> None:
         if edge_term not in EDGE_TERMS:
             raise SettingsError(f"the edge term must be one of {', '.join(EDGE_TERMS)}, got {edge_term!r}")
         self.edge_term = edge_term
@@ -320,7 +323,7 @@ class JointSolver:
         self._from_edges = (w3 * A3[:, self.free].conj().T).tocsr()
         if A4 is not None:
             self._from_anchors = (self._anchor_weight * A4[:, self.free].conj().T).tocsr()
-        self._compiled = self._kernel_operands() if edge_term == "rigid" else None
+        self._compiled = self._kernel_operands() if compiled and edge_term == "rigid" else None
 
     def _kernel_operands(self):
         """The matrices and factors :func:`toonmotion.deform.kernels.iterate` takes (the rigid

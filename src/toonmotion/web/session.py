@@ -99,7 +99,7 @@ from scipy.ndimage import distance_transform_edt
 
 from toonmotion import api, limits
 from toonmotion.animate.timeline import Timeline
-from toonmotion.deform.deformer import Deformer
+from toonmotion.deform.deformer import Deformer, DeformSettings
 from toonmotion.deform.depth import draw_order
 from toonmotion.deform.tuning import TuningEdit
 from toonmotion.errors import (
@@ -194,7 +194,8 @@ class Editing:
     def deformer(self) -> Deformer:
         with self.lock:
             if self._deformer is None:
-                self._deformer = Deformer(self.character)
+                # Every drag is a solve: the compiled loop pays its one-off load here.
+                self._deformer = Deformer(self.character, DeformSettings(compiled=True))
             return self._deformer
 
     @property
