@@ -29,7 +29,7 @@ from toonmotion import __version__
 _LIBRARIES = (
     ("numpy", "numpy"), ("scipy", "scipy"), ("opencv", "opencv-contrib-python-headless"),
     ("pillow", "pillow"), ("scikit-image", "scikit-image"), ("shapely", "shapely"),
-    ("mujoco", "mujoco"), ("imageio", "imageio"), ("imageio-ffmpeg", "imageio-ffmpeg"),
+    ("mujoco", "mujoco"), ("numba", "numba"), ("imageio", "imageio"), ("imageio-ffmpeg", "imageio-ffmpeg"),
     ("pydantic", "pydantic"), ("fastapi", "fastapi"), ("uvicorn", "uvicorn"), ("daqp", "daqp"),
     ("dtaidistance", "dtaidistance"), ("pygltflib", "pygltflib"),
 )
