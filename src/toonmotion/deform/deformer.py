@@ -314,8 +314,11 @@ class Deformer:
                                   area=area, acceleration=s.acceleration)
             U, iterations = result.U, iterations + result.iterations
             areas = triangle_areas(U, self._F)
-            wider = free | self._cells_round(areas <= _CRUSHED * self._rest_triangle_areas)
-            if round_ == s.unfold or not (wider != free).any():
+            crushed = areas <= _CRUSHED * self._rest_triangle_areas
+            if round_ == s.unfold or not crushed.any():
+                break
+            wider = free | self._cells_round(crushed)
+            if not (wider != free).any():
                 break
             free, initial = wider, U
         if s.unfold and (areas <= 0).any():
