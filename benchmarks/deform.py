@@ -177,10 +177,7 @@ def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=
     extremes = extreme_poses(skeleton)
     inverted = 0
     for _, pose in extremes:
-        t0 = time.perf_counter()
-        result = deformer.deform(pose)
-        pose_ms.append((time.perf_counter() - t0) * 1e3)
-        iterations.append(result.iterations)
+        result = timed_solve(deformer, pose, pose_ms, iterations)
         inverted += int((triangle_areas(result.U, F) <= 0).sum())
         gaps.append(joint_gaps(deformer, result.U, pose))
         stretch.append(edge_stretch(character, result.U, pose))
@@ -189,10 +186,7 @@ def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=
     area_cases = [*stretch_poses(skeleton), ("filter jump", filter_jump(character))]
     area_change = 0.0
     for _, pose in area_cases:
-        t0 = time.perf_counter()
-        result = deformer.deform(pose)
-        pose_ms.append((time.perf_counter() - t0) * 1e3)
-        iterations.append(result.iterations)
+        result = timed_solve(deformer, pose, pose_ms, iterations)
         area_change = max(area_change, abs(float(triangle_areas(result.U, F).sum()) / rest_area - 1))
         stretch.append(edge_stretch(character, result.U, pose))
     return {
@@ -222,6 +216,15 @@ def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=
         "joint_gap_px": round(float(gaps.mean()), 3),
         "joint_gap_max_px": round(float(gaps.max()), 2),
     }
+
+
+def timed_solve(deformer, pose, pose_ms, iterations):
+    """``deformer.deform(pose)`` from stage one, its time and iterations appended to the lists."""
+    t0 = time.perf_counter()
+    result = deformer.deform(pose)
+    pose_ms.append((time.perf_counter() - t0) * 1e3)
+    iterations.append(result.iterations)
+    return result
 
 
 def edge_stretch(character, U, pose):
