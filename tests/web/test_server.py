@@ -13,10 +13,12 @@ from starlette.websockets import WebSocketDisconnect
 
 from tests.web.slow_work import slow_work
 from toonmotion import api
-from toonmotion.errors import ProjectError
+from toonmotion.errors import MeshError, ProjectError
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.samples import sample_character
+from toonmotion.web import session
 from toonmotion.web.server import MAX_MESSAGE_BYTES, create_app
+from toonmotion.web.session import Editing
 
 TOKEN = "secret-token"
 ORIGIN = "http://127.0.0.1:8000"
@@ -1044,3 +1046,37 @@ def test_opening_a_drawing_needs_one_sent_first(editable):
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         reply, _ = _opened(socket, {"type": "open_drawing", "skeleton": "new"})
     assert "no drawing to open yet" in reply["message"]
+
+
+def test_the_editor_prepares_its_compiled_deformer_before_the_first_drag(project):
+    editing = Editing.open(project)
+    editing.prepare_deformer()
+    prepared = editing._deformer
+    assert prepared is not None and prepared.settings.compiled
+    assert editing.deformer is prepared
+
+
+def test_a_deformer_prepared_for_a_character_replaced_meanwhile_is_not_kept(project, monkeypatch):
+    editing = Editing.open(project)
+    build = session._deformer_for
+
+    def rigged_again_meanwhile(character):
+        editing.character = api.load_project(project)
+        return build(character)
+
+    monkeypatch.setattr(session, "_deformer_for", rigged_again_meanwhile)
+    editing.prepare_deformer()
+    assert editing._deformer is None
+
+
+def test_a_deformer_that_cannot_be_prepared_is_left_to_the_first_drag(project, monkeypatch):
+    editing = Editing.open(project)
+
+    def broken(character):
+        raise MeshError("the mesh is degenerate")
+
+    monkeypatch.setattr(session, "_deformer_for", broken)
+    editing.prepare_deformer()  # nothing raised, nothing printed: the drag reports it
+    assert editing._deformer is None
+    with pytest.raises(MeshError, match="degenerate"):
+        editing.deformer  # noqa: B018

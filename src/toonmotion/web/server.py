@@ -100,6 +100,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         origin is refused. Requests without an ``Origin`` header (not from a page) are allowed.
     """
     editing = Editing.open(project)
+    threading.Thread(target=editing.prepare_deformer, name="toonmotion-prepare", daemon=True).start()
     app = FastAPI(title="toonmotion editor", docs_url=None, redoc_url=None, openapi_url=None)
 
     def authorised(token_given: str | None, origin: str | None) -> str | None:

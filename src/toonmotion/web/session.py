@@ -153,6 +153,11 @@ MAX_MESSAGE_BYTES = 1_000_000
 log = logging.getLogger("toonmotion.web")
 
 
+def _deformer_for(character: api.Character) -> Deformer:
+    """The editor's deformer: every drag is a solve, so it runs the compiled loop."""
+    return Deformer(character, DeformSettings(compiled=True))
+
+
 @dataclass
 class Editing:
     """The open project, its key-frames and what is built once for them, shared by every client."""
@@ -194,9 +199,29 @@ class Editing:
     def deformer(self) -> Deformer:
         with self.lock:
             if self._deformer is None:
-                # Every drag is a solve: the compiled loop pays its one-off load here.
-                self._deformer = Deformer(self.character, DeformSettings(compiled=True))
+                self._deformer = _deformer_for(self.character)
             return self._deformer
+
+    def prepare_deformer(self) -> None:
+        """Build the deformer ahead of the first drag (the server does it in a thread at start).
+
+        The build loads Numba and the compiled loop, about 1.6 s the first time in a process, so it
+        runs outside the lock, and edits made meanwhile do not wait for it; it is kept only if the
+        character has not changed since. A failure leaves it to be built on demand, where the
+        error reaches the page as every other does.
+        """
+        with self.lock:
+            character = self.character
+            if self._deformer is not None:
+                return
+        try:
+            deformer = _deformer_for(character)
+        except Exception as error:  # said again, to the page, when a drag builds it
+            log.debug("the deformer was not prepared: %s", error)
+            return
+        with self.lock:
+            if self._deformer is None and self.character is character:
+                self._deformer = deformer
 
     @property
     def animation(self) -> api.Animation:
