@@ -308,10 +308,10 @@ class Deformer:
         joint area, the last solve's result and solver, whether it converged, and the iterations."""
         s, iterations = self.settings, 0
         for round_ in range(s.unfold + 1):
-            solver = self._solver_for(free, held)
+            solver = self._solver_for(free)
             result = solver.solve(U1, initial=initial, max_iterations=s.max_iterations, tolerance=s.tolerance,
                                   shape=shape if solver is self.solver else self._shape_for(solver, maps),
-                                  area=area, acceleration=s.acceleration)
+                                  area=area, acceleration=s.acceleration, held=held)
             U, iterations = result.U, iterations + result.iterations
             areas = triangle_areas(U, self._F)
             crushed = areas <= _CRUSHED * self._rest_triangle_areas
@@ -343,18 +343,18 @@ class Deformer:
         near = rings_round(self._F, crushed, len(self.free))
         return np.isin(self._cell, np.unique(self._cell[near]))
 
-    def _solver_for(self, free, held):
-        """A JointSolver for the joint area ``free``, widened or not, holding the anchors ``held``;
-        the last few others than the deformer's own are kept."""
-        if not (free != self.free).any() and held.all():
+    def _solver_for(self, free):
+        """A JointSolver for the joint area ``free``, widened or not (anchors let go are taken
+        out of its solves, not of its factorisation); the last few others than the deformer's own
+        are kept."""
+        if not (free != self.free).any():
             return self.solver
-        key = np.packbits(free).tobytes() + np.packbits(held).tobytes()
+        key = np.packbits(free).tobytes()
         if key not in self._unfold_solvers:
             if len(self._unfold_solvers) >= _UNFOLD_SOLVERS:
                 self._unfold_solvers.pop(next(iter(self._unfold_solvers)))
             self._unfold_solvers[key] = JointSolver(self.character.mesh, free, weights=self.settings.weights,
-                                                    edge_term=self.settings.edge_term,
-                                                    anchors=self.anchors.subset(held),
+                                                    edge_term=self.settings.edge_term, anchors=self.anchors,
                                                     compiled=self.settings.compiled)
         return self._unfold_solvers[key]
 

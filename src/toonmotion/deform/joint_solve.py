@@ -36,7 +36,10 @@ then solves exactly for the positions, so the energy never goes up.
 The thesis' energy lets a wide joint area settle as a block, away from the joint the skeleton
 puts it round; a solve may therefore be given *anchors* (:class:`Anchors`): the skeleton's
 joints, each held near where stage one puts it (at the joint) by a fourth term ``E4``, linear
-like E1 and E2, so it only adds to the normal matrix and the right-hand side.
+like E1 and E2, so it only adds to the normal matrix and the right-hand side. A solve may let
+some of them go (``held``): each anchor is a rank-one term of the normal matrix, so the solver
+keeps its one factorisation and takes the released anchors out of each solve by the
+Sherman-Morrison-Woodbury identity (:meth:`JointSolver._release`), a few dot products.
 
 Points are complex numbers ``x + iy`` here: the RSI Laplacian's rotation-and-scale factor is
 then one complex coefficient and the whole system is one ``m x m`` complex solve.
@@ -301,6 +304,10 @@ class JointSolver:
         A4 = None if anchors is None else _anchor_rows(anchors, len(mesh.V))
         self._A4, self._anchor_weight = A4, 0.0 if anchors is None else anchors.weight
         self._anchor_target = np.zeros(0, complex)
+        # Each anchor's weight in this solve: w4 where held, 0 where let go (:meth:`_set_held`).
+        self._anchor_weights = np.full(0 if A4 is None else A4.shape[0], self._anchor_weight)
+        self._releases: dict[bytes, tuple[Any, ...]] = {}
+        self._release_now: tuple[Any, ...] | None = None
         self._compiled: tuple[Any, dict[str, Any]] | None = None
         if len(self.free) == 0:
             return
@@ -319,10 +326,14 @@ class JointSolver:
         except RuntimeError:  # "Factor is exactly singular": no sound mesh gives that
             raise MeshError("the mesh's joint-area system cannot be solved: the mesh is degenerate "
                             "(rig the drawing again)") from None
-        self._from_fixed = (-(Ff.conj().T @ Fx)).tocsr()
+        # The fixed vertices' pull, E4's apart: an anchor's may be let go (its target is then 0).
+        k = sum(r.shape[0] for r in rows[:2])
+        self._from_fixed = (-(Ff[:k].conj().T @ Fx[:k])).tocsr()
         self._from_edges = (w3 * A3[:, self.free].conj().T).tocsr()
         if A4 is not None:
             self._from_anchors = (self._anchor_weight * A4[:, self.free].conj().T).tocsr()
+            self._anchor_rows = A4[:, self.free].tocsr()
+            self._anchor_fixed = A4[:, self.fixed].tocsr()
         self._compiled = self._kernel_operands() if compiled and edge_term == "rigid" else None
 
     def _kernel_operands(self):
@@ -354,10 +365,18 @@ class JointSolver:
         """The compiled loop from ``z`` (modified in place): ``(iterations, energy, converged)``."""
         return kernels.iterate(
             z, op["free"], base, op["linear"], op["anchors"],
-            np.ascontiguousarray(self._anchor_target, dtype=complex), float(self._anchor_weight),
+            np.ascontiguousarray(self._anchor_target, dtype=complex), self._anchor_weights,
             op["corners"], np.ascontiguousarray(self._rest), op["w3"], op["from_edges"], op["factor"],
-            op["area_form"], 0.0 if area is None else float(area), area is not None,
+            self._kernel_release(), op["area_form"], 0.0 if area is None else float(area), area is not None,
             int(max_iterations), float(tolerance), ENERGY_FLOOR, int(acceleration))
+
+    def _kernel_release(self):
+        """The released anchors' Woodbury operands as the compiled loop takes them (empty when
+        every anchor is held)."""
+        if self._release_now is None:
+            return (np.zeros((0, 3), np.int64), np.zeros((0, 3), complex), np.zeros((len(self.free), 0), complex),
+                    np.zeros((0, 0), complex))
+        return self._release_now[3]
 
     @property
     def triangles(self) -> NDArray[np.int64]:
@@ -373,12 +392,56 @@ class JointSolver:
         (default ``U``) puts them."""
         self._set_shape(shape)
         self._set_anchor_target(U if stage_one is None else stage_one)
-        z = as_complex(U)
-        energy = self._energy(z)
-        if self._A4 is not None and held is not None:
-            off = (self._A4 @ z - self._anchor_target)[~np.asarray(held, dtype=bool)]
-            energy -= self._anchor_weight * float(np.vdot(off, off).real)
-        return energy
+        self._set_held(held)
+        return self._energy(as_complex(U))
+
+    def _set_held(self, held):
+        """The anchors this solve holds (``(a,) bool``, None: all): their weights, and the
+        Woodbury operands that take the others out of the factorisation."""
+        if self._A4 is None:
+            return
+        held = np.ones(self._A4.shape[0], bool) if held is None else np.asarray(held, dtype=bool)
+        if held.shape != (self._A4.shape[0],):
+            raise ValueError(f"held must be ({self._A4.shape[0]},) bool, got {held.shape}")
+        self._anchor_weights = np.where(held, self._anchor_weight, 0.0)
+        self._release_now = None if held.all() or len(self.free) == 0 else self._release(held)
+
+    def _release(self, held):
+        """Woodbury operands for the normal matrix without the anchors not ``held``.
+
+        Anchor ``k`` adds ``c_k^H c_k`` to the normal matrix, ``c_k`` its E4 row over the free
+        vertices times ``sqrt(w4)``. With ``C`` the released rows, ``Y = N^-1 C^H`` and
+        ``S = I - C Y``, ``(N - C^H C)^-1 b = x + Y S^-1 C x`` for ``x = N^-1 b``. Returns
+        ``(C, Y, S^-1, kernel operands)``, kept per set of released anchors; None when no
+        released anchor touches a free vertex.
+        """
+        key = np.packbits(held).tobytes()
+        if key not in self._releases:
+            rows = self._anchor_rows[np.flatnonzero(~held)]
+            rows = rows[np.flatnonzero(np.diff(rows.indptr))]  # anchors on a free vertex
+            if rows.shape[0] == 0:
+                self._releases[key] = None
+            else:
+                C = (np.sqrt(self._anchor_weight) * rows).toarray()
+                Y = self._factor.solve(np.ascontiguousarray(C.conj().T))
+                inverse = np.linalg.inv(np.eye(len(C)) - C @ Y)
+                # The kernel's form: each row's (at most three) columns and values.
+                cols = np.zeros((len(C), 3), np.int64)
+                vals = np.zeros((len(C), 3), complex)
+                for r in range(len(C)):
+                    nz = np.flatnonzero(C[r])
+                    cols[r, :len(nz)], vals[r, :len(nz)] = nz, C[r, nz]
+                self._releases[key] = (C, Y, inverse,
+                                       (cols, vals, np.ascontiguousarray(Y), np.ascontiguousarray(inverse)))
+        return self._releases[key]
+
+    def _factor_solve(self, rhs):
+        """``N^-1 rhs`` (one column or several) for the normal matrix of the anchors held."""
+        x = self._factor.solve(rhs)
+        if self._release_now is not None:
+            C, Y, inverse, _ = self._release_now
+            x = x + Y @ (inverse @ (C @ x))
+        return x
 
     def _set_anchor_target(self, U):
         """Where the anchored points are held: where stage one (``U``) puts them."""
@@ -406,7 +469,7 @@ class JointSolver:
     def solve(self, U: NDArray[np.float64], *, initial: NDArray[np.float64] | None = None,
               max_iterations: int = 50, tolerance: float = 1e-3,
               shape: NDArray[np.complex128] | None = None, area: float | None = None,
-              acceleration: int = 0) -> SolveResult:
+              acceleration: int = 0, held: NDArray[np.bool_] | None = None) -> SolveResult:
         """Solve for the free vertices, the others fixed at ``U`` (the stage-one result).
 
         Parameters
@@ -435,9 +498,13 @@ class JointSolver:
             Anderson acceleration over this many past iterations (:class:`_Anderson`); 0 runs the
             plain local-global iterations. Either way the energy never goes up, and both reach
             the same minimum.
+        held : (a,) bool, optional
+            Which anchors this solve holds; the others add nothing to the energy (the module
+            docstring: the factorisation is kept). None: all.
         """
         self._set_shape(shape)
         self._set_anchor_target(U)
+        self._set_held(held)
         z = as_complex(U).copy()
         start = self._energy(z)
         if initial is not None and len(self.free):
@@ -450,8 +517,9 @@ class JointSolver:
             return SolveResult(U=np.array(U, dtype=float), iterations=0, energy_start=start,
                                energy=start, converged=True)
         base = self._from_fixed @ z[self.fixed] + self._epsilon * z[self.free]
-        if self._A4 is not None:
-            base = base + self._from_anchors @ self._anchor_target
+        if self._A4 is not None:  # each held anchor pulls its free corners to its target
+            pull = self._anchor_target - self._anchor_fixed @ z[self.fixed]
+            base = base + self._from_anchors @ np.where(self._anchor_weights > 0, pull, 0)
         if area is not None:
             # The moving triangles' share of the target: the others keep their area in ``U``.
             area = float(area) - float(triangle_areas(as_points(z), np.asarray(self._all_F)).sum()) \
@@ -496,10 +564,10 @@ class JointSolver:
         corrected to keep the linearised ``area`` (None: no constraint): ``(m,)`` complex."""
         rhs = base + self._from_edges @ targets
         if area is None:
-            return self._factor.solve(rhs)
+            return self._factor_solve(rhs)
         # One solve for the step and for the correction's direction, N^-1 g, with the area's
         # gradient at the last iterate (it moves little in one iteration).
-        both = self._factor.solve(np.stack([rhs, self._moving_area(z)[1]], axis=1))
+        both = self._factor_solve(np.stack([rhs, self._moving_area(z)[1]], axis=1))
         step, direction = both[:, 0], both[:, 1]
         moved = z.copy()
         moved[self.free] = step
@@ -514,7 +582,7 @@ class JointSolver:
             return self._local(z)[1]
         kernels, op = self._compiled
         target = np.ascontiguousarray(self._anchor_target, dtype=complex)
-        return float(kernels.energy(z, op["linear"], op["anchors"], target, float(self._anchor_weight),
+        return float(kernels.energy(z, op["linear"], op["anchors"], target, self._anchor_weights,
                                     op["corners"], np.ascontiguousarray(self._rest), op["w3"]))
 
     def _moving_area(self, z):
@@ -534,7 +602,7 @@ class JointSolver:
         energy = np.vdot(linear, linear).real
         if self._A4 is not None:
             off = self._A4 @ z - self._anchor_target
-            energy += self._anchor_weight * np.vdot(off, off).real
+            energy += np.dot(self._anchor_weights, off.real ** 2 + off.imag ** 2)
         if self._corners is None:
             e = z[self.edges[:, 0]] - z[self.edges[:, 1]]
             length = np.abs(e)

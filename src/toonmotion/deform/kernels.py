@@ -75,9 +75,10 @@ def _solve(factor, a, b, work_a, work_b, two):
 
 
 @njit(cache=True)
-def _local(z, linear, anchors, anchor_target, anchor_weight, corners, rest, w3, targets, scratch):
+def _local(z, linear, anchors, anchor_target, anchor_weights, corners, rest, w3, targets, scratch):
     """The local step at ``z``: every joint triangle's rest edges turned by its best rotation into
-    ``targets`` (``(3t,)``), and eq. 3.8's energy at ``z`` (plus the anchors' term)."""
+    ``targets`` (``(3t,)``), and eq. 3.8's energy at ``z`` (plus the anchors' term, each anchor
+    weighted by ``anchor_weights``: 0 for one let go)."""
     lp, li, lv = linear
     _matvec(lp, li, lv, z, scratch[0])
     energy = 0.0
@@ -87,11 +88,9 @@ def _local(z, linear, anchors, anchor_target, anchor_weight, corners, rest, w3, 
     if len(ap) > 1:
         off = scratch[1][: len(ap) - 1]
         _matvec(ap, ai, av, z, off)
-        total = 0.0
         for k in range(len(off)):
             d = off[k] - anchor_target[k]
-            total += d.real * d.real + d.imag * d.imag
-        energy += anchor_weight * total
+            energy += anchor_weights[k] * (d.real * d.real + d.imag * d.imag)
     edges = 0.0
     for t in range(len(corners)):
         c0, c1, c2 = z[corners[t, 0]], z[corners[t, 1]], z[corners[t, 2]]
@@ -106,6 +105,30 @@ def _local(z, linear, anchors, anchor_target, anchor_weight, corners, rest, w3, 
         edges += (d0.real * d0.real + d0.imag * d0.imag + d1.real * d1.real + d1.imag * d1.imag
                   + d2.real * d2.real + d2.imag * d2.imag)
     return energy + w3 * edges
+
+
+@njit(cache=True)
+def _release(release, x, small):
+    """``x`` (the normal matrix's solve) corrected in place for the anchors let go, by the
+    Woodbury identity: ``x += Y S^-1 (C x)``; ``release`` is ``(C columns, C values, Y, S^-1)``
+    (``JointSolver._release``), C with at most three entries a row."""
+    cols, vals, Y, inverse = release
+    r = cols.shape[0]
+    for a in range(r):
+        total = 0j
+        for k in range(3):
+            total += vals[a, k] * x[cols[a, k]]
+        small[a] = total
+    for a in range(r):
+        total = 0j
+        for b in range(r):
+            total += inverse[a, b] * small[b]
+        small[r + a] = total
+    for i in range(len(x)):
+        total = 0j
+        for a in range(r):
+            total += Y[i, a] * small[r + a]
+        x[i] += total
 
 
 @njit(cache=True)
@@ -181,25 +204,26 @@ def _small_solve(A, b):
 
 
 @njit(cache=True)
-def energy(z, linear, anchors, anchor_target, anchor_weight, corners, rest, w3):
+def energy(z, linear, anchors, anchor_target, anchor_weights, corners, rest, w3):
     """Eq. 3.8 at ``z`` (plus the anchors' term): the local step's energy alone."""
     targets = np.empty(3 * len(corners), np.complex128)
     scratch = (np.empty(linear[0].shape[0] - 1, np.complex128),
                np.empty(max(anchors[0].shape[0] - 1, 1), np.complex128))
-    return _local(z, linear, anchors, anchor_target, anchor_weight, corners, rest, w3, targets, scratch)
+    return _local(z, linear, anchors, anchor_target, anchor_weights, corners, rest, w3, targets, scratch)
 
 
 @njit(cache=True)
-def iterate(z, free, base, linear, anchors, anchor_target, anchor_weight, corners, rest, w3,
-            from_edges, factor, area_form, area, has_area, max_iterations, tolerance, floor, depth):
+def iterate(z, free, base, linear, anchors, anchor_target, anchor_weights, corners, rest, w3,
+            from_edges, factor, release, area_form, area, has_area, max_iterations, tolerance, floor, depth):
     """Stage two's iterations from ``z`` (modified in place): the NumPy loop of
     ``JointSolver.solve`` after its start: it has converged when a plain step changes the energy by
-    at most ``tolerance`` of it plus ``floor``. Returns ``(iterations, energy, converged)``."""
+    at most ``tolerance`` of it plus ``floor``. ``release``: the anchors let go (:func:`_release`).
+    Returns ``(iterations, energy, converged)``."""
     n, m = len(z), len(free)
     targets = np.empty(3 * len(corners), np.complex128)
     scratch = (np.empty(linear[0].shape[0] - 1, np.complex128),
                np.empty(max(anchors[0].shape[0] - 1, 1), np.complex128))
-    energy = _local(z, linear, anchors, anchor_target, anchor_weight, corners, rest, w3, targets, scratch)
+    energy = _local(z, linear, anchors, anchor_target, anchor_weights, corners, rest, w3, targets, scratch)
     rhs, step, direction = np.empty(m, np.complex128), np.empty(m, np.complex128), np.empty(m, np.complex128)
     work, work_b = np.empty(m, np.complex128), np.empty(m, np.complex128)
     Mz, moved = np.empty(n, np.complex128), np.empty(n, np.complex128)
@@ -210,6 +234,8 @@ def iterate(z, free, base, linear, anchors, anchor_target, anchor_weight, corner
     last_f, last_g = np.empty(m, np.complex128), np.empty(m, np.complex128)
     count, has_last, mixing = 0, False, depth > 0
     ep, ei, ev = from_edges
+    released = release[0].shape[0] > 0
+    small = np.empty(2 * release[0].shape[0], np.complex128)
     iterations, converged = 0, False
     while iterations < max_iterations and not converged:
         iterations += 1
@@ -222,6 +248,9 @@ def iterate(z, free, base, linear, anchors, anchor_target, anchor_weight, corner
             for i in range(m):
                 direction[i] = Mz[free[i]]
             _solve(factor, step, direction, work, work_b, True)
+            if released:
+                _release(release, step, small)
+                _release(release, direction, small)
             moved[:] = z
             for i in range(m):
                 moved[free[i]] = step[i]
@@ -234,6 +263,8 @@ def iterate(z, free, base, linear, anchors, anchor_target, anchor_weight, corner
         else:
             step[:] = rhs
             _solve(factor, step, direction, work, work_b, False)
+            if released:
+                _release(release, step, small)
         if depth > 0 and mixing:
             for i in range(m):
                 x[i] = z[free[i]]
@@ -241,7 +272,7 @@ def iterate(z, free, base, linear, anchors, anchor_target, anchor_weight, corner
             tried[:] = z
             for i in range(m):
                 tried[free[i]] = mixed[i]
-            tried_energy = _local(tried, linear, anchors, anchor_target, anchor_weight, corners, rest, w3,
+            tried_energy = _local(tried, linear, anchors, anchor_target, anchor_weights, corners, rest, w3,
                                   tried_targets, scratch)
             if tried_energy < energy:
                 z[:] = tried
@@ -255,7 +286,7 @@ def iterate(z, free, base, linear, anchors, anchor_target, anchor_weight, corner
             count, has_last, mixing = 0, False, True
         for i in range(m):
             z[free[i]] = step[i]
-        new_energy = _local(z, linear, anchors, anchor_target, anchor_weight, corners, rest, w3, targets,
+        new_energy = _local(z, linear, anchors, anchor_target, anchor_weights, corners, rest, w3, targets,
                             scratch)
         converged = abs(energy - new_energy) <= tolerance * energy + floor
         energy = new_energy
