@@ -47,6 +47,7 @@ then one complex coefficient and the whole system is one ``m x m`` complex solve
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -286,13 +287,18 @@ class JointSolver:
         self._all_V = mesh.V
         self._area_form = _area_form(np.asarray(mesh.F)[free[mesh.F].any(axis=1)], len(free))
         rest = as_complex(mesh.V)
-        A1 = _laplacian_rows(mesh, rest, free)
-        A2 = _mean_value_rows(mesh, free)
+        every = _every_row(mesh)
+        A1 = every.laplacian[free[every.laplacian_vertex]]
+        A2 = every.mean_value[free[every.mean_value_vertex]]
         if edge_term == "length":
-            self.edges, A3 = _edge_rows(mesh, free)
+            touching = free[every.edges].any(axis=1)
+            self.edges, A3 = every.edges[touching], every.edge_rows[touching]
             self._corners = None
         else:
-            self.edges, A3, self._corners = _triangle_edge_rows(mesh, free)
+            touching = free[mesh.F].any(axis=1)
+            self._corners = np.asarray(mesh.F)[touching]
+            self.edges = every.triangle_edges.reshape(-1, 3, 2)[touching].reshape(-1, 2)
+            A3 = every.triangle_edge_rows[np.repeat(touching, 3)]
         self.rest_edge = rest[self.edges[:, 0]] - rest[self.edges[:, 1]]
         self.rest_length = np.abs(self.rest_edge)
         self._set_shape(None)
@@ -671,6 +677,40 @@ class _Anderson:
             self.restart()
             return np.array(step)
         return (g - np.stack(self._dg, axis=1) @ gamma).view(np.complex128)
+
+
+@dataclass(frozen=True, eq=False)
+class _EveryRow:
+    """Eq. 3.8's rows with every vertex free: a solver for any joint area takes its rows from
+    these (the rows of a free vertex, or of a triangle or edge touching one, do not depend on
+    which others are free), so a widened joint area costs a factorisation, not a rebuild."""
+
+    laplacian: sp.csr_matrix  # E1, a row per outline vertex, loop by loop
+    laplacian_vertex: NDArray[np.int64]
+    mean_value: sp.csr_matrix  # E2, a row per inner vertex
+    mean_value_vertex: NDArray[np.int64]
+    triangle_edges: NDArray[np.int64]  # (3t, 2): E3 rigid, three rows per triangle
+    triangle_edge_rows: sp.csr_matrix
+    edges: NDArray[np.int64]  # (e, 2): E3 length, a row per edge
+    edge_rows: sp.csr_matrix
+
+
+_EVERY_ROW: weakref.WeakKeyDictionary[Mesh, _EveryRow] = weakref.WeakKeyDictionary()
+
+
+def _every_row(mesh):
+    """The mesh's :class:`_EveryRow`, built on first use and kept while the mesh lives."""
+    if mesh not in _EVERY_ROW:
+        every = np.ones(len(mesh.V), bool)
+        inner = np.arange(mesh.n_outline, len(mesh.V))
+        triangle_edges, triangle_rows, _ = _triangle_edge_rows(mesh, every)
+        edges, edge_rows = _edge_rows(mesh, every)
+        _EVERY_ROW[mesh] = _EveryRow(
+            _laplacian_rows(mesh, as_complex(mesh.V), every).tocsr(),
+            np.concatenate(mesh.boundary) if mesh.boundary else np.zeros(0, np.int64),
+            _mean_value_rows(mesh, every).tocsr(), inner,
+            triangle_edges, triangle_rows.tocsr(), edges, edge_rows.tocsr())
+    return _EVERY_ROW[mesh]
 
 
 def _anchor_rows(anchors, n):
