@@ -2,7 +2,7 @@
 speed; JSON lines.
 
     python benchmarks/deform.py [DRAWING_DIR|sample ...] [--decomposition straight|geodesic]
-                                [--skinning one-bone|weights ...] [--joint-anchor W] [--exact]
+                                [--skinning one-bone|weights ...] [--joint-anchor W] [--joint-width W] [--exact]
                                 [--compiled] [--no-table]
 
 Each drawing folder (texture.png, mask.png, char_cfg.yaml; default: every drawing in
@@ -49,7 +49,7 @@ Keys, one line per drawing and binding (--skinning one-bone weights, both by def
   edge_stretch_max               the largest factor by which a mesh edge grows beyond the stretch
                                  of the bones its ends follow, over the sequence, the extreme set
                                  and the stretch set: spikes (goal: at most 4)
-  joint_anchor                   stage two's joint anchor weight (DeformSettings.joint_anchor)
+  joint_anchor, joint_width      stage two's joint anchor weight and joint area width (DeformSettings)
   joint_gap_px, joint_gap_max_px how far the drawing carries its joints from the skeleton's (the
                                  point of the drawing at each joint in the rest pose, against the
                                  pose's joint), mean and largest over the sequence's frames and the
@@ -118,7 +118,8 @@ def rig_for(folder, decomposition):
     return folder.name, rig_drawing_folder(folder, settings=settings)
 
 
-def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=False, compiled=False):
+def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=False, compiled=False,
+                  joint_width=None):
     import igl  # the benchmark extra
 
     skeleton, mesh = character.skeleton, character.mesh
@@ -127,6 +128,8 @@ def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=
     options = {"skinning": skinning, "compiled": compiled}
     if joint_anchor is not None:
         options["joint_anchor"] = joint_anchor
+    if joint_width is not None:
+        options["joint_width"] = joint_width
     if exact:  # iterated to convergence: eq. 3.8's minimum over the same joint areas
         options.update(tolerance=1e-10, max_iterations=5000)
     settings = DeformSettings(**options)
@@ -213,6 +216,7 @@ def bench_drawing(name, character, decomposition, skinning, joint_anchor, exact=
         "area_change_max": round(area_change, 4),
         "edge_stretch_max": round(max(stretch), 2),
         "joint_anchor": deformer.settings.joint_anchor,
+        "joint_width": deformer.settings.joint_width,
         "joint_gap_px": round(float(gaps.mean()), 3),
         "joint_gap_max_px": round(float(gaps.max()), 2),
     }
@@ -313,6 +317,8 @@ def main(argv=None):
                         help="the bindings to measure, a line each (default: both)")
     parser.add_argument("--joint-anchor", type=float, default=None, metavar="W",
                         help="stage two's joint anchor weight (default: DeformSettings' default)")
+    parser.add_argument("--joint-width", type=float, default=None, metavar="W",
+                        help="stage two's joint area width (default: DeformSettings' default)")
     parser.add_argument("--exact", action="store_true",
                         help="also measure stage two iterated to convergence (tolerance 1e-10), a line each")
     parser.add_argument("--compiled", action="store_true",
@@ -332,11 +338,11 @@ def main(argv=None):
         name, character = rig_for(folder, args.decomposition)
         for skinning in args.skinning:
             line = bench_drawing(name, character, args.decomposition, skinning, args.joint_anchor,
-                                 compiled=args.compiled)
+                                 compiled=args.compiled, joint_width=args.joint_width)
             print(json.dumps(line), flush=True)
             if args.exact:
                 line = bench_drawing(name, character, args.decomposition, skinning, args.joint_anchor,
-                                     exact=True, compiled=args.compiled)
+                                     exact=True, compiled=args.compiled, joint_width=args.joint_width)
                 print(json.dumps(line), flush=True)
         if args.table:
             print(json.dumps(bench_full_mesh(name, character, args.compiled)), flush=True)

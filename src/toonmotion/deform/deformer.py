@@ -39,6 +39,11 @@ _CELL = 4.0
 # for 666 free of char2's 1,504): the benchmark's sequence widens through 10-20 of them, and a cache
 # of 8 refactorised them on every pass.
 _UNFOLD_SOLVERS = 32
+# An anchor that folds the drawing gives way in steps: its hold is multiplied by this, up to
+# this many times, then let go. Let go at once, char2's and the sample's joints drifted up to 100
+# and 40 px from the skeleton's where a quarter of the hold (a sixteenth) unfolded them (20, 18).
+_GIVE = 0.25
+_GIVE_STEPS = 3
 
 
 @dataclass(frozen=True)
@@ -89,8 +94,9 @@ class DeformSettings:
         puts it (``w4`` of :class:`~toonmotion.deform.joint_solve.Anchors`, against eq. 3.8's
         weights summing to 1); 0 is the thesis, which let the drawn knees of the bundled
         character's crouch settle 20-24 px from the skeleton's. Where holding the joints leaves a
-        triangle inverted that a solve holding none does not, the anchors give way one at a time,
-        nearest the fold first (with ``unfold`` > 0).
+        triangle inverted that a solve holding none does not, the anchors give way a step at a
+        time (their weight quartered, three times, then let go), nearest the fold first (with
+        ``unfold`` > 0).
 
     Construction raises :class:`SettingsError` for a value out of range.
     """
@@ -274,25 +280,24 @@ class Deformer:
         # places frame after frame, and one widened solve costs less than a plain one and another.
         free = previous.free if previous is not None and previous.free is not None and s.unfold \
             else self.free
-        held = np.ones(len(self.anchors.points), dtype=bool)
+        held = np.ones(len(self.anchors.points))  # how firmly each anchor is held
         iterations, start = 0, None
         while True:
-            U, free, result, solver, converged, spent = self._solve(U1, maps, shape, area, free, initial,
-                                                                    held)
+            U, free, result, solver, folded, spent = self._solve(U1, maps, shape, area, free, initial, held)
             iterations += spent
             if start is None:  # eq. 3.8 at the start; the anchors' term is 0 there
                 start = result.energy_start if solver is self.solver else self.solver.energy(U1, shape=shape)
-            folded = triangle_areas(U, self._F) <= 0
-            if not (s.unfold and folded.any() and self.solver.anchors is not None and held.any()):
+            if not (s.unfold and folded.any() and self.solver.anchors is not None and (held > 0).any()):
                 break
-            if held.all():  # whether the anchors fold it: the solve holding none tells
-                loose = self._solve(U1, maps, shape, area, free, initial, ~held)
+            if (held == 1).all():  # whether the anchors fold it: the solve holding none tells
+                loose = self._solve(U1, maps, shape, area, free, initial, np.zeros_like(held))
                 iterations += loose[-1]
-                if (triangle_areas(loose[0], self._F) <= 0).any():
+                if loose[4].any():
                     break  # it folds without them too: they are kept
-            # Holding a joint there folds the drawing: the anchor nearest the fold gives way, and
-            # the next solve starts from this one's result (a joint less held moves it little).
-            held[self._nearest_anchor(folded, held)] = False
+            # Holding a joint there folds the drawing: the anchor nearest the fold gives way a
+            # step, and the next solve starts from this one's result (it moves the joint little).
+            k = self._nearest_anchor(folded, held)
+            held[k] = held[k] * _GIVE if held[k] > _GIVE ** _GIVE_STEPS else 0.0
             initial = U
         # Energies are eq. 3.8 (plus the anchors held) over the deformer's own joint area, whichever
         # solve ran (the start: the plain solve's, warm or not, or stage one's when the first solve
@@ -300,12 +305,13 @@ class Deformer:
         plain = solver is self.solver and U is result.U
         energy = result.energy if plain else self.solver.energy(U, shape=shape, stage_one=U1, held=held)
         return Deformation(U=U, stage_one=U1, iterations=iterations, energy_start=start,
-                           energy=energy, converged=converged, free=free)
+                           energy=energy, converged=result.converged, free=free)
 
     def _solve(self, U1, maps, shape, area, free, initial, held):
         """Stage two from stage one ``U1`` over joint area ``free``, with the anchors ``held``:
         widened where it folds, up to ``unfold`` times, then untangled. Returns the vertices, the
-        joint area, the last solve's result and solver, whether it converged, and the iterations."""
+        joint area, the last solve's result and solver, which triangles are still folded, and the
+        iterations."""
         s, iterations = self.settings, 0
         for round_ in range(s.unfold + 1):
             solver = self._solver_for(free)
@@ -321,11 +327,13 @@ class Deformer:
             if not (wider != free).any():
                 break
             free, initial = wider, U
-        if s.unfold and (areas <= 0).any():
+        folded = areas <= 0
+        if s.unfold and folded.any():
             if self._topology is None:
                 self._topology = topology(self._F, len(U))
             U = untangle(U, self._F, free, self._topology)
-        return U, free, result, solver, result.converged, iterations
+            folded = triangle_areas(U, self._F) <= 0
+        return U, free, result, solver, folded, iterations
 
     def _nearest_anchor(self, folded, held):
         """The held anchor whose joint lies nearest a ``folded`` triangle, at rest."""
@@ -333,7 +341,7 @@ class Deformer:
         centres = self.character.mesh.V[self._F[folded]].mean(axis=1)
         joints = self.character.skeleton.positions[a.points]
         gap = np.hypot(*(centres[:, None] - joints[None]).transpose(2, 0, 1)).min(axis=0)
-        return int(np.argmin(np.where(held, gap, np.inf)))
+        return int(np.argmin(np.where(held > 0, gap, np.inf)))
 
     def _cells_round(self, crushed):
         """Every vertex in a cell of :data:`_CELL` mesh spacings that holds a vertex of a

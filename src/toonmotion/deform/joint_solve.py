@@ -83,6 +83,9 @@ _REGULARISE = 1e-9
 
 EDGE_TERMS = ("rigid", "length")
 
+# Sets of anchors let go whose Woodbury operands a solver keeps (each a few solves to make).
+_RELEASES = 64
+
 
 @dataclass(frozen=True, eq=False)
 class SolveResult:
@@ -283,9 +286,10 @@ class JointSolver:
         self.fixed = np.flatnonzero(~free)
         # The area of the triangles that touch a free vertex (the only ones a solve changes) is
         # the Hermitian form area(z) = Re(z^H M z) / 2, its gradient M z.
-        self._all_F = mesh.F
         self._all_V = mesh.V
-        self._area_form = _area_form(np.asarray(mesh.F)[free[mesh.F].any(axis=1)], len(free))
+        moving = free[mesh.F].any(axis=1)
+        self._area_form = _area_form(np.asarray(mesh.F)[moving], len(free))
+        self._still_F = np.asarray(mesh.F)[~moving]  # triangles no solve changes
         rest = as_complex(mesh.V)
         every = _every_row(mesh)
         A1 = every.laplacian[free[every.laplacian_vertex]]
@@ -392,7 +396,7 @@ class JointSolver:
 
     def energy(self, U: NDArray[np.float64], *, shape: NDArray[np.complex128] | None = None,
                stage_one: NDArray[np.float64] | None = None,
-               held: NDArray[np.bool_] | None = None) -> float:
+               held: NDArray[np.float64] | None = None) -> float:
         """Eq. 3.8 at vertices ``U`` (``(n, 2)``), with ``shape`` as for :meth:`solve`; with
         anchors, plus their term (those ``held``, default all), measured from where ``stage_one``
         (default ``U``) puts them."""
@@ -402,33 +406,38 @@ class JointSolver:
         return self._energy(as_complex(U))
 
     def _set_held(self, held):
-        """The anchors this solve holds (``(a,) bool``, None: all): their weights, and the
-        Woodbury operands that take the others out of the factorisation."""
+        """How firmly this solve holds each anchor (``(a,)``, a fraction of ``w4`` from 0, let go, to
+        1; booleans: held or not; None: all fully): their weights, and the Woodbury operands that
+        take the difference out of the factorisation."""
         if self._A4 is None:
             return
-        held = np.ones(self._A4.shape[0], bool) if held is None else np.asarray(held, dtype=bool)
-        if held.shape != (self._A4.shape[0],):
-            raise ValueError(f"held must be ({self._A4.shape[0]},) bool, got {held.shape}")
-        self._anchor_weights = np.where(held, self._anchor_weight, 0.0)
-        self._release_now = None if held.all() or len(self.free) == 0 else self._release(held)
+        held = np.ones(self._A4.shape[0]) if held is None else np.asarray(held, dtype=float)
+        if held.shape != (self._A4.shape[0],) or not ((held >= 0) & (held <= 1)).all():
+            raise ValueError(f"held must be ({self._A4.shape[0]},) fractions from 0 to 1, got {held}")
+        self._anchor_weights = self._anchor_weight * held
+        self._release_now = None if (held == 1).all() or len(self.free) == 0 else self._release(held)
 
     def _release(self, held):
-        """Woodbury operands for the normal matrix without the anchors not ``held``.
+        """Woodbury operands for the normal matrix with each anchor held by the fraction ``held``.
 
-        Anchor ``k`` adds ``c_k^H c_k`` to the normal matrix, ``c_k`` its E4 row over the free
-        vertices times ``sqrt(w4)``. With ``C`` the released rows, ``Y = N^-1 C^H`` and
-        ``S = I - C Y``, ``(N - C^H C)^-1 b = x + Y S^-1 C x`` for ``x = N^-1 b``. Returns
-        ``(C, Y, S^-1, kernel operands)``, kept per set of released anchors; None when no
-        released anchor touches a free vertex.
+        Anchor ``k`` adds ``w4 a_k^H a_k`` to the normal matrix, ``a_k`` its E4 row over the free
+        vertices. With ``C`` the rows ``sqrt(w4 (1 - held_k)) a_k`` of the anchors not fully held,
+        ``Y = N^-1 C^H`` and ``S = I - C Y``, ``(N - C^H C)^-1 b = x + Y S^-1 C x`` for
+        ``x = N^-1 b``. Returns ``(C, Y, S^-1, kernel operands)``, kept per ``held``; None when
+        no anchor let go (even in part) touches a free vertex.
         """
-        key = np.packbits(held).tobytes()
+        key = held.tobytes()
         if key not in self._releases:
-            rows = self._anchor_rows[np.flatnonzero(~held)]
+            if len(self._releases) >= _RELEASES:
+                self._releases.pop(next(iter(self._releases)))
+            loose = np.flatnonzero(held < 1)
+            rows = sp.diags(np.sqrt(self._anchor_weight * (1 - held[loose]))) @ self._anchor_rows[loose]
+            rows = sp.csr_matrix(rows)
             rows = rows[np.flatnonzero(np.diff(rows.indptr))]  # anchors on a free vertex
             if rows.shape[0] == 0:
                 self._releases[key] = None
             else:
-                C = (np.sqrt(self._anchor_weight) * rows).toarray()
+                C = rows.toarray()
                 Y = self._factor.solve(np.ascontiguousarray(C.conj().T))
                 inverse = np.linalg.inv(np.eye(len(C)) - C @ Y)
                 # The kernel's form: each row's (at most three) columns and values.
@@ -475,7 +484,7 @@ class JointSolver:
     def solve(self, U: NDArray[np.float64], *, initial: NDArray[np.float64] | None = None,
               max_iterations: int = 50, tolerance: float = 1e-3,
               shape: NDArray[np.complex128] | None = None, area: float | None = None,
-              acceleration: int = 0, held: NDArray[np.bool_] | None = None) -> SolveResult:
+              acceleration: int = 0, held: NDArray[np.float64] | None = None) -> SolveResult:
         """Solve for the free vertices, the others fixed at ``U`` (the stage-one result).
 
         Parameters
@@ -504,9 +513,10 @@ class JointSolver:
             Anderson acceleration over this many past iterations (:class:`_Anderson`); 0 runs the
             plain local-global iterations. Either way the energy never goes up, and both reach
             the same minimum.
-        held : (a,) bool, optional
-            Which anchors this solve holds; the others add nothing to the energy (the module
-            docstring: the factorisation is kept). None: all.
+        held : (a,) bool or float, optional
+            How firmly this solve holds each anchor: a fraction of their weight, from 1 (held,
+            True) to 0 (let go, False); the factorisation is kept (module docstring). None:
+            all held.
         """
         self._set_shape(shape)
         self._set_anchor_target(U)
@@ -525,11 +535,10 @@ class JointSolver:
         base = self._from_fixed @ z[self.fixed] + self._epsilon * z[self.free]
         if self._A4 is not None:  # each held anchor pulls its free corners to its target
             pull = self._anchor_target - self._anchor_fixed @ z[self.fixed]
-            base = base + self._from_anchors @ np.where(self._anchor_weights > 0, pull, 0)
+            base = base + self._from_anchors @ (self._anchor_weights / self._anchor_weight * pull)
         if area is not None:
             # The moving triangles' share of the target: the others keep their area in ``U``.
-            area = float(area) - float(triangle_areas(as_points(z), np.asarray(self._all_F)).sum()) \
-                + self._moving_area(z)[0]
+            area = float(area) - float(triangle_areas(np.asarray(U, dtype=float), self._still_F).sum())
         if self._compiled is not None:
             kernels, operands = self._compiled
             iterations, energy, converged = self._iterate(kernels, operands, z, base, area, max_iterations,

@@ -171,7 +171,11 @@ def triangle_shapes(maps: NDArray[np.complex128], bone: NDArray[np.integer], cor
     :func:`stretch_maps`, ``(k, 2)`` for ``corners`` ``(k, c)``; with ``keep_area`` scaled to
     determinant 1, since a mean of area-keeping maps of different directions grows area a little.
     """
-    mean = maps[bone[corners]].mean(axis=1)
+    index = np.asarray(bone)[corners]
+    mean = maps[index[:, 0]]  # summed corner by corner: NumPy's sum over a middle axis is slow
+    for k in range(1, index.shape[1]):
+        mean += maps[index[:, k]]
+    mean /= index.shape[1]
     if keep_area:
         det = np.abs(mean[:, 0]) ** 2 - np.abs(mean[:, 1]) ** 2
         mean = mean / np.sqrt(np.maximum(det, 1e-300))[:, None]
