@@ -79,13 +79,14 @@ def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bo
     U = np.array(U, dtype=float)
     F = np.asarray(F)
     incident, neighbours = mesh_topology if mesh_topology is not None else topology(F, len(U))
+    reachable = np.flatnonzero(np.asarray(movable)[F].any(axis=1))  # a pass can move no others
     for _ in range(_PASSES):
-        folded = np.flatnonzero(triangle_areas(U, F) <= 0)
+        folded = reachable[triangle_areas(U, F[reachable]) <= 0]
         if len(folded) == 0:
             break
         mended = False
         for t in folded:
-            if triangle_areas(U, F[t:t + 1])[0] > 0:
+            if _area(U, F[t]) > 0:
                 continue  # mended by a move earlier in this pass
             for k in range(3):
                 v = F[t, k]
@@ -94,19 +95,13 @@ def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bo
                 a, b = U[F[t, (k + 1) % 3]], U[F[t, (k + 2) % 3]]
                 mirror = _mirror(U[v], a, b)
                 middle = 0.5 * (a + b)
-                candidates = [U[neighbours[v]].mean(axis=0), mirror, middle + 0.5 * (mirror - middle)]
-                around = F[incident[v]]
-                best, best_score = None, triangle_areas(U, around).min()
-                for c in candidates:
-                    trial = U.copy()
-                    trial[v] = c
-                    score = triangle_areas(trial, around).min()
-                    if score > best_score:
-                        best, best_score = c, score
-                if best is not None:
-                    U[v] = best
+                candidates = np.array([U[neighbours[v]].mean(axis=0), mirror, middle + 0.5 * (mirror - middle)])
+                scores = _smallest_areas(U, F[incident[v]], v, candidates)
+                best = _first_best(scores)
+                if best > 0:
+                    U[v] = candidates[best - 1]
                     mended = True
-                    if best_score > 0:
+                    if scores[best] > 0:
                         break
         if not mended:
             break
@@ -133,21 +128,48 @@ def _tutte_patch(U, F, t, movable, incident, neighbours):
             continue
         where = np.full(len(U), -1)
         where[inner] = np.arange(len(inner))
+        counts = np.array([len(neighbours[v]) for v in inner])
+        row = np.repeat(np.arange(len(inner)), counts)
+        other = np.concatenate([neighbours[v] for v in inner])
+        inside = where[other] >= 0
         L = np.zeros((len(inner), len(inner)))
+        L[np.arange(len(inner)), np.arange(len(inner))] = counts
+        np.add.at(L, (row[inside], where[other[inside]]), -1)
         b = np.zeros((len(inner), 2))
-        for i, v in enumerate(inner):
-            L[i, i] = len(neighbours[v])
-            for w in neighbours[v]:
-                if where[w] >= 0:
-                    L[i, where[w]] -= 1
-                else:
-                    b[i] += U[w]
+        np.add.at(b, row[~inside], U[other[~inside]])  # in order, as a loop would add them
         trial = U.copy()
         trial[inner] = np.linalg.solve(L, b)
         around = F[np.unique(np.concatenate([incident[v] for v in inner]))]
         if (triangle_areas(trial, around) > 0).all():
             return trial
     return U
+
+
+def _area(U, corners):
+    """One triangle's signed area, as :func:`triangle_areas` computes it."""
+    a, b, c = U[corners[0]], U[corners[1]], U[corners[2]]
+    return -0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+
+def _smallest_areas(U, around, v, candidates):
+    """The smallest signed area of the triangles ``around`` (``(k, 3)``, all with corner ``v``)
+    with ``v`` where it is and at each of ``candidates`` (``(c, 2)``): ``(1 + c,)``, computed as
+    :func:`triangle_areas` does."""
+    P = np.broadcast_to(U[around], (len(candidates) + 1, *around.shape, 2)).copy()  # (1 + c, k, 3, 2)
+    at = around == v
+    P[1:, at] = candidates[:, None, :]
+    ab, ac = P[:, :, 1] - P[:, :, 0], P[:, :, 2] - P[:, :, 0]
+    return (-0.5 * (ab[..., 0] * ac[..., 1] - ab[..., 1] * ac[..., 0])).min(axis=1)
+
+
+def _first_best(scores):
+    """Which of ``scores[1:]`` to take (1-based), 0 for none: the first to beat every score before
+    it, ``scores[0]`` included, the way a scan keeping the best so far would take it."""
+    best, best_score = 0, scores[0]
+    for i in range(1, len(scores)):
+        if scores[i] > best_score:
+            best, best_score = i, scores[i]
+    return best
 
 
 def _mirror(p, a, b):
