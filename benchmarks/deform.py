@@ -2,8 +2,8 @@
 speed; JSON lines.
 
     python benchmarks/deform.py [DRAWING_DIR|sample ...] [--decomposition straight|geodesic]
-                                [--skinning one-bone|weights ...] [--joint-anchor W] [--joint-width W] [--exact]
-                                [--compiled] [--no-table]
+                                [--skinning one-bone|weights ...] [--joint-anchor W] [--joint-width W]
+                                [--exact] [--compiled] [--no-table]
 
 Each drawing folder (texture.png, mask.png, char_cfg.yaml; default: every drawing in
 ../shared/data/drawings, then the bundled sample character, named ``sample``) is rigged to about

@@ -41,6 +41,10 @@ class ProjectVersionError(ProjectError):
     """A project file was written by a version of toonmotion this one cannot read."""
 
 
+class LinkError(ProjectError):
+    """A project holds a symbolic link where the editor would read, write or delete through it."""
+
+
 class SettingsError(ToonmotionError):
     """An option has a value outside its valid range."""
 

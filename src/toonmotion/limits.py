@@ -50,6 +50,9 @@ class Limits:
         Pixels of the frames of a GIF, APNG or WebP written, which are held in memory to write it.
     file_bytes : int
         Size of a JSON, YAML or BVH file read.
+    skeleton_bytes : int
+        Size of a skeleton file read (a char_cfg YAML or a toonmotion JSON): the joints limit's
+        skeleton takes a few hundred kB.
     upload_bytes : int
         Size of a file sent to the editor (footage).
     """
@@ -65,6 +68,7 @@ class Limits:
     mesh_vertices: int = 50_000
     held_pixels: int = 250_000_000
     file_bytes: int = 256_000_000
+    skeleton_bytes: int = 2_000_000
     upload_bytes: int = 500_000_000
 
     def __post_init__(self) -> None:

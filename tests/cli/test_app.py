@@ -126,6 +126,36 @@ def test_edit_refuses_a_missing_project_and_a_busy_port_in_one_line(capsys, tmp_
     assert code == 2 and "toonmotion: error: cannot serve on 127.0.0.1:" in err and err.count("\n") == 1
 
 
+@pytest.mark.parametrize("host", ["0.0.0.0", "::", "192.168.1.9", "example.org"])
+def test_edit_refuses_an_address_other_machines_reach_and_says_how_to_forward_one(capsys, tmp_path, host):
+    code, out, err = _run(["edit", tmp_path / "nothing", "--host", host], capsys)
+    assert code == 2 and err.count("\n") == 1
+    assert err.startswith(f"toonmotion: error: --host {host}: the editor serves this machine only")
+    assert "ssh -L" in err
+
+
+def test_edit_opens_the_browser_with_a_one_time_code_not_the_token(capsys, tmp_path, monkeypatch):
+    """The browser's command line (visible in ps) carries a sign-in code good once; the token is
+    printed to the terminal only."""
+    import uvicorn
+
+    from toonmotion.io.project import save_project
+    from toonmotion.rig.pipeline import rig_drawing
+    from toonmotion.samples import sample_character
+
+    drawing, skeleton = sample_character(scale=0.4)
+    save_project(tmp_path / "hero", rig_drawing(drawing, skeleton=skeleton))
+    opened, served = [], []
+    monkeypatch.setattr("webbrowser.open", opened.append)
+    monkeypatch.setattr(uvicorn.Server, "run", lambda server, sockets: served.append(server.config.app))
+    code, out, err = _run(["edit", tmp_path / "hero", "--open"], capsys)
+    assert code == 0 and len(opened) == 1 and len(served) == 1
+    token = re.search(r"\?token=(\S+)", out).group(1)
+    assert "?code=" in opened[0] and token not in opened[0]
+    code_given = opened[0].split("?code=")[1]
+    assert code_given in served[0].state.sign_in_codes
+
+
 def test_edit_rigs_a_drawing_into_a_project_beside_it_once(capsys, tmp_path):
     import socket
 

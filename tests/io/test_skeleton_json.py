@@ -202,3 +202,16 @@ def test_skeleton_problems_name_the_file(tmp_path):
 def test_skeleton_from_dict_refuses_a_non_string_name():
     with pytest.raises(SkeletonError, match=r"^here: \[0\]\.name: Input should be a valid string$"):
         skeleton_from_dict([{"name": 1, "parent": None, "position": [0, 0]}], where="here")
+
+
+@pytest.mark.parametrize("suffix", [".yaml", ".json"])
+def test_a_skeleton_file_over_its_size_limit_is_refused_before_it_is_read(tmp_path, suffix):
+    from toonmotion import limits
+    from toonmotion.errors import LimitError
+
+    path = tmp_path / f"huge{suffix}"
+    path.write_text("#" * 3000 if suffix == ".yaml" else " " * 3000)
+    with limits.using(skeleton_bytes=2000), pytest.raises(LimitError) as refused:
+        load_skeleton_file(path)
+    assert str(refused.value) == (f"huge{suffix}'s size in bytes is over the limit skeleton_bytes=2,000 "
+                                  "(it is 3,000); raise the limit with --limit skeleton_bytes=N")

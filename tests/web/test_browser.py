@@ -156,6 +156,29 @@ def test_dragging_a_joint_deforms_the_drawing_live(page, editor):
     )
 
 
+def test_a_text_selection_on_the_page_does_not_turn_a_joint_drag_into_drag_and_drop(page, editor):
+    """Issue 44: after Ctrl+A (or a stroke that left the stage) a joint drag became the browser's
+    drag-and-drop of the selection: the joint moved 3-4 px and the drag was cancelled."""
+    page.click("#pose-reset")
+    page.wait_for_timeout(300)
+    page.keyboard.press("Control+A")
+    assert page.evaluate("String(window.getSelection())") != ""  # the page's text is selected
+    x, y = _joint_on_screen(page, "right_hand")
+    page.mouse.move(x, y)
+    page.mouse.down()
+    for step in range(1, 13):
+        page.mouse.move(x + 5 * step, y - 10 * step)
+        page.wait_for_timeout(20)
+    page.mouse.up()
+    page.wait_for_timeout(300)
+    names = page.evaluate("window.toonmotion.project.joints.map((j) => j.name)")
+    hand = page.evaluate("window.toonmotion.pose")[names.index("right_hand")]
+    ended = _on_screen(page, [hand])[0]
+    assert abs(ended[0] - (x + 60)) < 2 and abs(ended[1] - (y - 120)) < 2  # the whole drag, in CSS px
+    page.click("#pose-reset")
+    page.wait_for_timeout(300)
+
+
 def _on_screen(page, points) -> list[tuple[float, float]]:
     """Drawing pixels to the page's CSS pixels."""
     return [tuple(xy) for xy in page.evaluate(
@@ -489,7 +512,15 @@ def test_rig_move_a_joint_and_rig_again(page, editor):
     page.click("nav button[data-panel=rig]")
     page.wait_for_function("document.getElementById('status').textContent === 'place the joints'")
     _close_to_golden(_stage(page), "rig.png")
-    page.mouse.click(40, 200)  # an empty spot: a new joint, which the key-frames do not name
+    joints = page.evaluate("window.toonmotion.draft.length")
+    page.mouse.click(40, 200)  # an empty spot, no joint selected: nothing added (a second root, before)
+    assert page.evaluate("window.toonmotion.draft.length") == joints
+    assert page.locator("#status").text_content().startswith("select a joint first")
+    x, y = _joint_on_screen(page, "head")
+    page.mouse.click(x, y)  # select the head
+    page.mouse.click(x + 15, y)  # an empty spot: a new joint under the head, which the key-frames do not name
+    assert page.evaluate("window.toonmotion.draft.length") == joints + 1
+    assert page.evaluate("window.toonmotion.draft.at(-1).parent") == "head"
     page.click("#rig-go")
     page.wait_for_function("!document.getElementById('error').hidden")
     assert "keep their names" in page.locator("#error").text_content()
@@ -783,3 +814,42 @@ def test_rig_load_a_skeleton_file_open_a_redrawn_drawing_and_undo_it(page, edito
     page.wait_for_function("window.toonmotion?.project?.history?.redo === 1", timeout=30_000)
     np.testing.assert_array_equal(api.load_project(folder).texture, character.texture)
     assert page.errors == [] and page.locator("#error").is_hidden()
+
+
+def test_a_sign_in_code_opens_the_editor_and_leaves_no_token_in_the_address(page, tmp_path):
+    """What ``toonmotion edit --open`` gives the browser: a code good once. The page it opens
+    works on the cookie alone (the project, the texture, a live drag), its address carries neither
+    the code nor the token, and the page's script cannot read the cookie."""
+    import uvicorn
+
+    from toonmotion.web.server import sign_in_code
+
+    drawing, skeleton = sample_character(scale=0.5)
+    folder = tmp_path / "hero"
+    api.save_project(folder, rig_drawing(drawing, skeleton=skeleton))
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(16)
+    port = listener.getsockname()[1]
+    token = new_token()
+    app = create_app(folder, token=token, origins=(f"http://127.0.0.1:{port}",))
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning"))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
+    thread.start()
+    while not server.started:
+        time.sleep(0.05)
+    try:
+        fresh = page.context.browser.new_page(viewport={"width": 1280, "height": 800})  # its own cookies
+        fresh.goto(f"http://127.0.0.1:{port}/?code={sign_in_code(app)}")
+        fresh.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=30_000)
+        assert fresh.url == f"http://127.0.0.1:{port}/"
+        assert token not in fresh.evaluate("document.cookie")
+        reply = fresh.evaluate("""async () => {
+            const c = window.toonmotion;
+            return await c.live.request({type: "pose", positions: c.project.joints.map((j) => j.position)});
+        }""")
+        assert reply["type"] == "mesh"
+        fresh.close()
+    finally:
+        server.should_exit = True
+        thread.join(timeout=10)

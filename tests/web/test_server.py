@@ -22,6 +22,9 @@ from toonmotion.web.session import Editing
 
 TOKEN = "secret-token"
 ORIGIN = "http://127.0.0.1:8000"
+# The editor's origins in these tests: the test client names the host "testserver" (its WebSocket
+# always does), so that name is the editor's own here.
+ORIGINS = (ORIGIN, "http://testserver")
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +37,7 @@ def project(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def client(project):
-    return TestClient(create_app(project, token=TOKEN, origins=(ORIGIN,)))
+    return TestClient(create_app(project, token=TOKEN, origins=ORIGINS))
 
 
 def _get(client, path, **headers):
@@ -191,7 +194,7 @@ def editable(tmp_path, project):
 
     folder = tmp_path / "hero"
     shutil.copytree(project, folder)
-    return folder, TestClient(create_app(folder, token=TOKEN, origins=(ORIGIN,)))
+    return folder, TestClient(create_app(folder, token=TOKEN, origins=ORIGINS))
 
 
 def _send(socket, message):
@@ -214,7 +217,8 @@ def test_region_edits_are_saved_at_once_and_undo_and_redo_survive_a_reload(edita
         assert fixed["edits"] == len(saved.edits) == 2
         assert fixed["vertex_bone"] == saved.binding.bone.tolist() != character.binding.bone.tolist()
         assert _send(socket, {"type": "undo"})["edits"] == 1
-    reloaded = TestClient(create_app(folder, token=TOKEN))  # a new server on the saved project
+    # a new server on the saved project
+    reloaded = TestClient(create_app(folder, token=TOKEN, origins=ORIGINS))
     with reloaded.websocket_connect(f"/ws?token={TOKEN}") as socket:
         again = _send(socket, {"type": "redo"})
     assert (again["edits"], again["undone"]) == (2, 0)
@@ -242,7 +246,8 @@ def test_undo_and_redo_take_back_every_kind_of_edit_newest_first_and_survive_a_r
         assert (one_key["kind"], [k["frame"] for k in one_key["keys"]["keys"]]) == ("keys", [0])
         assert json.loads((folder / "keys.json").read_text())["keys"][0]["frame"] == 0
         assert len(json.loads((folder / "keys.json").read_text())["keys"]) == 1  # saved as it happened
-    restarted = TestClient(create_app(folder, token=TOKEN))  # a new server: the history is on disk
+    # a new server: the history is on disk
+    restarted = TestClient(create_app(folder, token=TOKEN, origins=ORIGINS))
     with restarted.websocket_connect(f"/ws?token={TOKEN}") as socket:
         assert _send(socket, {"type": "undo"})["keys"] is None and not (folder / "keys.json").exists()
         region = _send(socket, {"type": "undo"})
@@ -374,7 +379,7 @@ def test_the_editor_opens_with_the_projects_keys(editable):
     character = api.load_project(folder)
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         _send(socket, {"type": "set_key", "frame": 5, "positions": character.skeleton.positions.tolist()})
-    again = TestClient(create_app(folder, token=TOKEN))
+    again = TestClient(create_app(folder, token=TOKEN, origins=ORIGINS))
     data = again.get("/api/project", headers={"X-Toonmotion-Token": TOKEN}).json()
     assert [k["frame"] for k in data["keys"]["keys"]] == [5]
 
@@ -1080,3 +1085,132 @@ def test_a_deformer_that_cannot_be_prepared_is_left_to_the_first_drag(project, m
     assert editing._deformer is None
     with pytest.raises(MeshError, match="degenerate"):
         editing.deformer  # noqa: B018
+
+
+# Links and hosts (issue 44): nothing is read, written or deleted through a symbolic link under
+# the project, and a request must name the editor's own host.
+
+
+def _outside(tmp_path):
+    """A folder outside the project with a file in it, and the file's text."""
+    secret = tmp_path / "elsewhere"
+    secret.mkdir()
+    (secret / "private.txt").write_text("not the project's")
+    return secret
+
+
+def test_an_export_that_is_a_link_is_not_served(editable, tmp_path):
+    folder, client = editable
+    secret = _outside(tmp_path)
+    (folder / "exports").mkdir(exist_ok=True)
+    (folder / "exports" / "leak.gif").symlink_to(secret / "private.txt")
+    reply = _get(client, "/api/exports/leak.gif")
+    assert reply.status_code == 403 and "not the project's" not in reply.text
+    assert reply.json()["error"].startswith("exports/leak.gif in the project is a symbolic link")
+
+
+def test_a_folder_of_frames_that_is_a_link_is_not_emptied(editable, tmp_path):
+    folder, client = editable
+    secret = _outside(tmp_path)
+    (folder / "footage").mkdir(exist_ok=True)
+    (folder / "footage" / "frames").symlink_to(secret, target_is_directory=True)
+    reply = client.put(f"/api/footage/frames/0?count=2&suffix=png&token={TOKEN}",
+                       content=_png(np.zeros((8, 8, 3), np.uint8)))
+    assert reply.status_code == 403
+    assert "footage/frames in the project is a symbolic link" in reply.json()["error"]
+    assert sorted(p.name for p in secret.iterdir()) == ["private.txt"]  # nothing deleted or written there
+
+
+@pytest.mark.parametrize("link", ["uploads/skeleton.json", "uploads"])
+def test_an_upload_is_not_written_through_a_link(editable, tmp_path, link):
+    folder, client = editable
+    secret = _outside(tmp_path)
+    target = secret / "private.txt" if link.endswith(".json") else secret
+    (folder / link).parent.mkdir(exist_ok=True)
+    (folder / link).symlink_to(target, target_is_directory=target.is_dir())
+    reply = client.put(f"/api/uploads/skeleton?format=json&token={TOKEN}", content=b'{"joints": []}')
+    assert reply.status_code == 403 and f"{link} in the project is a symbolic link" in reply.json()["error"]
+    assert (secret / "private.txt").read_text() == "not the project's"
+    assert sorted(p.name for p in secret.iterdir()) == ["private.txt"]
+
+
+def test_a_link_made_while_the_editor_runs_stops_what_touches_files_but_not_a_drag(editable, tmp_path):
+    """A key is saved in keys.json: with a link anywhere in the project the message is refused in
+    one line and nothing is written; a drag, answered from memory, still is."""
+    folder, client = editable
+    secret = _outside(tmp_path)
+    character = api.load_project(folder)
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        (folder / "keys.json").symlink_to(secret / "private.txt")
+        refused = _send(socket, {"id": 1, "type": "set_key", "frame": 0,
+                                 "positions": character.skeleton.positions.tolist()})
+        assert refused["type"] == "error"
+        assert "keys.json in the project is a symbolic link" in refused["message"]
+        dragged = _send(socket, {"id": 2, "type": "pose", "positions": character.skeleton.positions.tolist()})
+        assert dragged["type"] == "mesh"
+    assert (secret / "private.txt").read_text() == "not the project's"
+
+
+def test_a_project_holding_a_link_is_not_opened(editable, tmp_path):
+    from toonmotion.errors import LinkError
+
+    folder, _ = editable
+    (folder / "history").mkdir(exist_ok=True)
+    (folder / "history" / "old").symlink_to(_outside(tmp_path), target_is_directory=True)
+    with pytest.raises(LinkError, match=r"^history/old in the project is a symbolic link; the editor reads"):
+        create_app(folder, token=TOKEN, origins=ORIGINS)
+
+
+@pytest.mark.parametrize("host", ["evil.example", "evil.example:8000", "127.0.0.1.evil.example",
+                                  "192.168.1.9:8000"])
+def test_a_request_for_another_host_is_refused(client, host):
+    """DNS rebinding: a page on another name that resolves to this machine sends its own name."""
+    reply = _get(client, "/api/project", Host=host)
+    assert reply.status_code == 403 and reply.json()["error"].startswith("requests for the host")
+    with pytest.raises(WebSocketDisconnect) as refused:
+        with client.websocket_connect(f"/ws?token={TOKEN}", headers={"Host": host}) as socket:
+            socket.receive_json()
+    assert refused.value.code == 1008
+
+
+@pytest.mark.parametrize("host", ["127.0.0.1:8000", "localhost:8000", "[::1]:8000", "LOCALHOST"])
+def test_this_machines_names_are_its_hosts(client, host):
+    assert _get(client, "/api/project", Host=host).status_code == 200
+
+
+def test_a_sign_in_code_is_exchanged_once_for_the_token_as_a_cookie(project):
+    from toonmotion.web.server import TOKEN_COOKIE, sign_in_code
+
+    app = create_app(project, token=TOKEN, origins=ORIGINS)
+    client = TestClient(app)
+    code = sign_in_code(app)
+    signed = client.get(f"/?code={code}", follow_redirects=False)
+    assert signed.status_code == 303 and signed.headers["location"] == "/"
+    cookie = signed.headers["set-cookie"]
+    assert f"{TOKEN_COOKIE}={TOKEN}" in cookie and "HttpOnly" in cookie and "SameSite=strict" in cookie
+    assert client.get("/api/project").status_code == 200  # the cookie carries the token
+    with client.websocket_connect("/ws") as socket:
+        assert _send(socket, {"id": 1, "type": "undo"})["id"] == 1
+    again = TestClient(app).get(f"/?code={code}", follow_redirects=False)
+    assert again.status_code == 403 and "used already or has expired" in again.json()["error"]
+    assert TestClient(app).get("/?code=made-up", follow_redirects=False).status_code == 403
+    assert TestClient(app).get("/api/project").status_code == 403  # no cookie, no token
+
+
+def test_a_skeleton_file_over_its_limit_is_refused_as_it_streams_in(editable):
+    """A skeleton file has its own, small limit (a 200 MB one was read whole, 746 MB, before it
+    was refused): the upload stops at the limit, and nothing is kept."""
+    from toonmotion import limits
+
+    folder, client = editable
+
+    def body():  # a stream: the server must stop reading it, not receive it whole first
+        for _ in range(100):
+            yield b" " * 1000
+
+    with limits.using(skeleton_bytes=5_000):
+        reply = client.put(f"/api/uploads/skeleton?format=json&token={TOKEN}", content=body())
+    assert reply.status_code == 413
+    assert reply.json()["error"] == ("the file is over the limit skeleton_bytes=5,000; make it smaller "
+                                     "(or raise the limit with --limit)")
+    assert not list((folder / "uploads").glob("*")) if (folder / "uploads").is_dir() else True

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ipaddress
 import os
 import socket
 import webbrowser
@@ -25,13 +26,19 @@ def edit(
     port: Annotated[int, typer.Option("--port", help="Port to serve on \\[default: a free one].", min=0,
                                       max=65535)] = 0,
     host: Annotated[str, typer.Option(
-        "--host", help="Address to bind; anything but 127.0.0.1 lets other machines in.")] = "127.0.0.1",
-    open_browser: Annotated[bool, typer.Option("--open", help="Open the editor in the web browser.")] = False,
+        "--host", help="This machine's address to serve on: 127.0.0.1, localhost or ::1. The editor serves "
+        "this machine only; to edit from another, forward its port over SSH.")]
+    = "127.0.0.1",
+    open_browser: Annotated[bool, typer.Option(
+        "--open", help="Open the editor in the web browser (with a one-time sign-in code, not the token).")]
+    = False,
 ) -> None:
     """Edit a project in the browser: rig, pose, regions, key-frames, exaggerate, capture, export."""
     import uvicorn
 
-    from toonmotion.web.server import create_app, new_token
+    from toonmotion.web.server import create_app, new_token, sign_in_code
+
+    _check_host(host)
 
     # imageio-ffmpeg starts ffmpeg with preexec_fn (to keep Ctrl+C from it); started from the
     # server's worker threads, Python prints an "Exception ignored in _after_fork" traceback for
@@ -42,13 +49,14 @@ def edit(
     listener = _listen(host, port)
     bound = listener.getsockname()[1]
     token = new_token()
-    shown = "127.0.0.1" if host in ("0.0.0.0", "::") else host
-    origins = tuple(f"http://{name}:{bound}" for name in {shown, "127.0.0.1", "localhost"})
+    shown = f"[{host}]" if ":" in host else host
+    names = dict.fromkeys((shown, "127.0.0.1", "localhost", "[::1]"))
+    origins = tuple(f"http://{name}:{bound}" for name in names)
     server_app = create_app(Path(project), token=token, origins=origins)
     url = f"http://{shown}:{bound}/?token={token}"
     typer.echo(f"toonmotion editor for {project}: {url}")
-    if open_browser:
-        webbrowser.open(url)
+    if open_browser:  # a code good once, for two minutes: the token itself is on no command line
+        webbrowser.open(f"http://{shown}:{bound}/?code={sign_in_code(server_app)}")
     config = uvicorn.Config(server_app, log_level="warning", ws_max_size=2_000_000)
     uvicorn.Server(config).run(sockets=[listener])
 
@@ -66,6 +74,20 @@ def _project_for(target: Path) -> Path:
     typer.echo(f"rigged {target.name}: {len(character.mesh.V)} vertices, {len(character.skeleton)} joints "
                f"-> {project}")
     return project
+
+
+def _check_host(host: str) -> None:
+    """Refuse an address other than this machine's loopback: the editor's token and origin checks
+    are made for a browser on this machine, and it has no TLS to carry the token across a network."""
+    try:
+        loopback = host == "localhost" or ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        loopback = False
+    if not loopback:
+        raise SettingsError(
+            f"--host {host}: the editor serves this machine only (127.0.0.1, localhost or ::1); to edit from "
+            "another machine, forward the port over SSH (ssh -L 8000:127.0.0.1:8000 THIS-MACHINE, with "
+            "--port 8000 here) and open the printed address there")
 
 
 def _listen(host: str, port: int) -> socket.socket:

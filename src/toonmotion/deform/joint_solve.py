@@ -384,7 +384,8 @@ class JointSolver:
         """The released anchors' Woodbury operands as the compiled loop takes them (empty when
         every anchor is held)."""
         if self._release_now is None:
-            return (np.zeros((0, 3), np.int64), np.zeros((0, 3), complex), np.zeros((len(self.free), 0), complex),
+            m = len(self.free)
+            return (np.zeros((0, 3), np.int64), np.zeros((0, 3), complex), np.zeros((m, 0), complex),
                     np.zeros((0, 0), complex))
         return self._release_now[3]
 

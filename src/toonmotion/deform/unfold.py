@@ -95,7 +95,8 @@ def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bo
                 a, b = U[F[t, (k + 1) % 3]], U[F[t, (k + 2) % 3]]
                 mirror = _mirror(U[v], a, b)
                 middle = 0.5 * (a + b)
-                candidates = np.array([U[neighbours[v]].mean(axis=0), mirror, middle + 0.5 * (mirror - middle)])
+                halfway = middle + 0.5 * (mirror - middle)
+                candidates = np.array([U[neighbours[v]].mean(axis=0), mirror, halfway])
                 scores = _smallest_areas(U, F[incident[v]], v, candidates)
                 best = _first_best(scores)
                 if best > 0:

@@ -15,6 +15,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, model_validator
 from pydantic_core import PydanticCustomError
 
+from toonmotion import limits
 from toonmotion.errors import SkeletonError, ToonmotionError
 from toonmotion.io.atomic import write_text
 from toonmotion.io.schema import Int, Joint, Joints, JsonFormat, Model, explained, read_versioned, validate
@@ -104,6 +105,8 @@ def load_skeleton_file(path: str | Path, *, image_size: tuple[int, int] | None =
 
     path = Path(path)
     suffix = path.suffix.lower()
+    if path.is_file():  # a missing file is the readers' to tell
+        limits.check("skeleton_bytes", path.stat().st_size, f"{path.name}'s size in bytes")
     if suffix in (".yaml", ".yml"):
         skeleton, size = load_char_cfg(path)
     elif suffix == ".json":

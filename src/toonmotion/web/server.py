@@ -1,9 +1,12 @@
 """The editor's server: the page, the open project's data, and live posing over a WebSocket.
 
-Security, as notebook servers do it: the server binds 127.0.0.1; every request carries the
-random per-launch token (``?token=`` or the ``X-Toonmotion-Token`` header); a request from a
-browser page must come from the editor's own origin. Files are named by the server, never by the
-request: nothing outside the package's page and the project folder is read.
+Security, as notebook servers do it: the server binds this machine's loopback address only; every
+request carries the random per-launch token (``?token=``, the ``X-Toonmotion-Token`` header, or
+the cookie a one-time sign-in code is exchanged for: :func:`sign_in_code`); a request must name
+the editor's own host (``Host``: a page on another name that resolves here, DNS rebinding, is
+refused) and, from a browser page, come from the editor's own origin. Files are named by the
+server, never by the request: nothing outside the package's page and the project folder is read,
+and nothing is read, written or deleted through a symbolic link (:mod:`toonmotion.io.links`).
 
 Errors come back as one line: a 4xx reply ``{"error": "..."}`` over HTTP, a
 ``{"type": "error", "message": "..."}`` message over the WebSocket; a malformed message never
@@ -22,18 +25,20 @@ import json
 import logging
 import secrets
 import threading
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit
 
 import numpy as np
 from fastapi import FastAPI, Request, WebSocket, WebSocketDisconnect
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import FileResponse, JSONResponse, Response
+from fastapi.responses import FileResponse, JSONResponse, RedirectResponse, Response
 from starlette.exceptions import HTTPException
 
 from toonmotion import api, limits
-from toonmotion.errors import Cancelled, ToonmotionError
+from toonmotion.errors import Cancelled, LinkError, ToonmotionError
 from toonmotion.io.atomic import atomic_path
 from toonmotion.io.frames import load_frames
 from toonmotion.io.image import load_image, png_bytes
@@ -58,7 +63,7 @@ from toonmotion.web.session import (
     track,
 )
 
-__all__ = ["MAX_MESSAGE_BYTES", "PAGE_FILES", "create_app", "new_token"]
+__all__ = ["MAX_MESSAGE_BYTES", "PAGE_FILES", "create_app", "new_token", "sign_in_code"]
 
 STATIC = Path(__file__).parent / "static"
 # The page's own files: nothing else under STATIC, and nothing outside it, is served.
@@ -80,10 +85,25 @@ FOOTAGE_SUFFIXES = ("mp4", "mov", "avi", "mkv", "webm", "gif", "png", "apng", "w
 
 log = logging.getLogger("toonmotion.web")
 
+# The cookie a sign-in code is exchanged for, and how long a code is good for (seconds).
+TOKEN_COOKIE = "toonmotion_token"
+SIGN_IN_SECONDS = 120.0
+# Names of this machine a request may give as its Host (with any port).
+LOOPBACK_NAMES = ("127.0.0.1", "localhost", "[::1]")
+
 
 def new_token() -> str:
     """A random per-launch token."""
     return secrets.token_urlsafe(24)
+
+
+def sign_in_code(app: FastAPI) -> str:
+    """A new one-time code for ``app``: the page's address with ``?code=`` (good once, for
+    :data:`SIGN_IN_SECONDS`) sets the token as a cookie and leaves the address without it. What
+    ``toonmotion edit --open`` gives the browser, so that the token is on no command line."""
+    code = secrets.token_urlsafe(24)
+    app.state.sign_in_codes[code] = time.monotonic() + SIGN_IN_SECONDS
+    return code
 
 
 def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()) -> FastAPI:
@@ -98,28 +118,61 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     origins : tuple of str
         The page's own origins (``http://127.0.0.1:PORT``); a browser request from any other
         origin is refused. Requests without an ``Origin`` header (not from a page) are allowed.
+        A request's ``Host`` must be one of :data:`LOOPBACK_NAMES` or an origin's host name.
     """
     editing = Editing.open(project)
+    hosts = {*LOOPBACK_NAMES, *(urlsplit(origin).hostname or "" for origin in origins)}
+    hosts |= {f"[{name}]" for name in hosts if ":" in name}
     threading.Thread(target=editing.prepare_deformer, name="toonmotion-prepare", daemon=True).start()
     app = FastAPI(title="toonmotion editor", docs_url=None, redoc_url=None, openapi_url=None)
+    app.state.sign_in_codes = {}
 
-    def authorised(token_given: str | None, origin: str | None) -> str | None:
+    def authorised(token_given: str | None, origin: str | None, host: str | None) -> str | None:
         """Why a request is refused, or None."""
+        name = _host_name(host)
+        if name not in hosts:
+            return (f"requests for the host {str(host)[:60]!r} are not allowed: open the address "
+                    "'toonmotion edit' printed")
         if not token_given or not hmac.compare_digest(token_given.encode(), token.encode()):
             return "missing or wrong token: open the address 'toonmotion edit' printed"
         if origin is not None and origin not in origins:
             return f"requests from {origin} are not allowed"
         return None
 
+    def given_token(connection: Request | WebSocket) -> str | None:
+        return (connection.headers.get("x-toonmotion-token") or connection.query_params.get("token")
+                or connection.cookies.get(TOKEN_COOKIE))
+
     @app.middleware("http")
     async def check_token(request: Request, call_next):
-        given = request.headers.get("x-toonmotion-token") or request.query_params.get("token")
-        if request.url.path in ("/", "/favicon.ico") or request.url.path.startswith("/static/"):
+        given = given_token(request)
+        path = request.url.path
+        if path in ("/", "/favicon.ico") or path.startswith("/static/"):
             given = token  # the page's own code holds no data: only the project needs the token
-        refused = authorised(given, request.headers.get("origin"))
+        refused = authorised(given, request.headers.get("origin"), request.headers.get("host"))
         if refused is not None:
             return JSONResponse({"error": refused}, status_code=403)
+        code = request.query_params.get("code")
+        if path == "/" and code is not None:
+            return sign_in(code)
         return await call_next(request)
+
+    def sign_in(code: str) -> Response:
+        """The page's address with a sign-in code: the token as a cookie, and the address again
+        without the code; a used, expired or unknown code is refused."""
+        codes = app.state.sign_in_codes
+        for old in [c for c, until in codes.items() if until < time.monotonic()]:
+            del codes[old]
+        if codes.pop(code, None) is None:
+            return JSONResponse({"error": "this sign-in address was used already or has expired: open the "
+                                          "address 'toonmotion edit' printed"}, status_code=403)
+        reply = RedirectResponse("/", status_code=303)
+        reply.set_cookie(TOKEN_COOKIE, token, httponly=True, samesite="strict", path="/")
+        return reply
+
+    @app.exception_handler(LinkError)
+    async def link_refused(request: Request, error: LinkError) -> JSONResponse:
+        return JSONResponse({"error": one_line(str(error))}, status_code=403)
 
     @app.exception_handler(ToonmotionError)
     async def user_error(request: Request, error: ToonmotionError) -> JSONResponse:
@@ -168,7 +221,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         (errors name it ``name``, the file the user sent)."""
         if suffix.lower() not in FOOTAGE_SUFFIXES:
             raise HTTPException(400, f"send footage as {', '.join(FOOTAGE_SUFFIXES)}, not {suffix[:10]!r}")
-        file = editing.folder / FOOTAGE / f"clip.{suffix.lower()}"
+        file = editing.path(FOOTAGE, f"clip.{suffix.lower()}")
         await _receive(request, file, "the footage")
         with _as_sent(file, name or "the footage sent"):
             return await footage_read(file)
@@ -183,7 +236,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         if not 1 <= count <= most or not 0 <= index < count:
             raise HTTPException(400, f"frames are numbered 0 to count - 1, count 1 to {most:,} "
                                      "(the footage_frames limit)")
-        folder = editing.folder / FOOTAGE / "frames"
+        folder = editing.path(FOOTAGE, "frames")
         if index == 0 and folder.is_dir():  # a new folder of frames replaces the last one
             for old in folder.iterdir():
                 old.unlink()
@@ -222,8 +275,9 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         if part == "skeleton" and format not in ("yaml", "json"):
             raise HTTPException(400, "say the skeleton file's format: ?format=yaml (a char_cfg) "
                                      "or ?format=json")
-        file = editing.folder / UPLOADS / (f"skeleton.{format}" if part == "skeleton" else part)
-        await _receive(request, file, "the file")
+        file = editing.path(UPLOADS, f"skeleton.{format}" if part == "skeleton" else part)
+        limit = "skeleton_bytes" if part == "skeleton" else "upload_bytes"
+        await _receive(request, file, "the file", limit=limit)
         with _as_sent(file, name or f"the {part} file sent"):
             return await read_upload(part, file)
 
@@ -256,15 +310,16 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     @app.get("/api/exports/{name}")
     def exported(name: str) -> FileResponse:
         allowed = EXPORT_FILE.fullmatch(name)
-        file = editing.folder / EXPORTS / name
-        if allowed is None or not file.is_file():
+        if allowed is None:
+            raise HTTPException(404, f"no export {name!r}")
+        file = editing.path(EXPORTS, name)
+        if not file.is_file():
             raise HTTPException(404, f"no export {name!r}")
         return FileResponse(file, media_type=EXPORT_MEDIA_TYPES[allowed["suffix"]], filename=name)
 
     @app.websocket("/ws")
     async def live(socket: WebSocket) -> None:
-        given = socket.query_params.get("token")
-        refused = authorised(given, socket.headers.get("origin"))
+        refused = authorised(given_token(socket), socket.headers.get("origin"), socket.headers.get("host"))
         if refused is not None:
             await socket.close(code=1008, reason=refused[:120])
             return
@@ -356,18 +411,28 @@ def _as_sent(file: Path, name: str) -> Iterator[None]:
         raise HTTPException(400, message) from None
 
 
-async def _receive(request: Request, file: Path, what: str, *, already: int = 0) -> None:
-    """Stream the request's body into ``file`` (atomically), within the upload_bytes limit
-    (``already``: bytes sent before it that count too)."""
-    limit = limits.current().upload_bytes
+async def _receive(request: Request, file: Path, what: str, *, already: int = 0,
+                   limit: str = "upload_bytes") -> None:
+    """Stream the request's body into ``file`` (atomically), refused as soon as it passes the
+    limit named ``limit`` (``already``: bytes sent before it that count too): a body over it is
+    never held whole, nor read."""
+    most = getattr(limits.current(), limit)
     received = already
     with atomic_path(file) as partial, open(partial, "wb") as out:
         async for chunk in request.stream():
             received += len(chunk)
-            if received > limit:
-                raise HTTPException(413, f"{what} is over the limit upload_bytes={limit:,}; make it "
+            if received > most:
+                raise HTTPException(413, f"{what} is over the limit {limit}={most:,}; make it "
                                          "smaller (or raise the limit with --limit)")
             out.write(chunk)
+
+
+def _host_name(host: str | None) -> str:
+    """The name in a ``Host`` header, without its port (``[::1]:8000`` -> ``[::1]``)."""
+    host = (host or "").strip().lower()
+    if host.startswith("["):
+        return host[: host.find("]") + 1] if "]" in host else host
+    return host.rsplit(":", 1)[0] if host.count(":") == 1 else host
 
 
 def _progress(socket: WebSocket, loop: asyncio.AbstractEventLoop, ident: Any,

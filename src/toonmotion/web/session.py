@@ -118,6 +118,7 @@ from toonmotion.errors import (
 )
 from toonmotion.io.atomic import write_text
 from toonmotion.io.image import load_image, load_mask
+from toonmotion.io.links import confined, no_links
 from toonmotion.io.motion_json import save_motion
 from toonmotion.io.pose_json import edits_from_json, edits_to_json, load_keyframes, save_keyframes
 from toonmotion.io.project import PROJECT_FILE
@@ -188,12 +189,22 @@ class Editing:
 
     @classmethod
     def open(cls, folder: str | Path) -> Editing:
-        """The project in ``folder`` and its ``keys.json`` if it has one (errors name the file)."""
+        """The project in ``folder`` and its ``keys.json`` if it has one (errors name the file); a
+        project holding a symbolic link is refused (:mod:`toonmotion.io.links`)."""
         folder = Path(folder)
+        if folder.is_dir():
+            no_links(folder)
         character = api.load_project(folder)
         keys = folder / KEYS_FILE
         timeline = load_keyframes(keys, character.skeleton) if keys.is_file() else None
         return cls(folder=folder, character=character, timeline=timeline)
+
+    def path(self, *parts: str) -> Path:
+        """The project's file or folder ``parts``, to read, write or delete, once checked: nothing
+        under the project is a symbolic link (:func:`~toonmotion.io.links.no_links`, each time:
+        one may have been made since), nor is any part of this path."""
+        no_links(self.folder)
+        return confined(self.folder, self.folder.joinpath(*parts))
 
     @property
     def deformer(self) -> Deformer:
@@ -251,13 +262,13 @@ class Editing:
 
     def keys_text(self) -> str | None:
         """The key-frames file as saved, or None when there are no keys."""
-        file = self.folder / KEYS_FILE
+        file = self.path(KEYS_FILE)
         return file.read_text(encoding="utf-8") if file.is_file() else None
 
     def restore_keys(self, text: str | None) -> None:
         """Put back the key-frames file ``text`` (None: no keys) as it was saved."""
         with self.lock:
-            file = self.folder / KEYS_FILE
+            file = self.path(KEYS_FILE)
             if text is None:
                 file.unlink(missing_ok=True)
                 timeline = None
@@ -269,7 +280,7 @@ class Editing:
     def keyed(self, timeline: Timeline | None) -> None:
         """Save the key-frames (none: the file goes), then make them the ones edited."""
         with self.lock:
-            file = self.folder / KEYS_FILE
+            file = self.path(KEYS_FILE)
             if timeline is None:
                 file.unlink(missing_ok=True)
             else:
@@ -345,6 +356,8 @@ def answer(editing: Editing, text: str) -> dict[str, Any]:
         if kind not in _HANDLERS:
             sent = ", ".join(map(repr, _HANDLERS))
             raise PoseError(f"unknown message type {kind!r}; the editor sends {sent}")
+        if kind not in _IN_MEMORY:
+            editing.path()  # a request that touches files: refused while the project holds a link
         return {"id": ident, **_HANDLERS[kind](editing, message)}
     except ToonmotionError as error:
         return {"id": ident, "type": "error", "message": one_line(str(error))}
@@ -368,6 +381,7 @@ def _off_loop(verb: str) -> Callable[[SlowHandler], SlowReply]:
             try:
                 message = json.loads(text)
                 ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
+                editing.path()  # it reads or writes files: refused while the project holds a link
                 return {"id": ident, **handler(editing, message, progress)}
             except Cancelled:
                 return {"id": ident, "type": "error", "cancelled": True,
@@ -402,6 +416,7 @@ def export(editing: Editing, message: dict[str, Any],
     with editing.lock:
         character, animation = editing.character, editing.animated(exaggeration_of(message))
     relative = f"{EXPORTS}/{name}{EXPORT_FORMATS[kind]}"
+    target = editing.path(EXPORTS, f"{name}{EXPORT_FORMATS[kind]}")
     overlays = check_overlays(_names(message.get("overlays", [])))
     size, background = _export_size(message.get("size")), _export_background(message.get("background"))
 
@@ -409,13 +424,13 @@ def export(editing: Editing, message: dict[str, Any],
         progress(index, total)
 
     if overlays and kind in ("gif", "mp4", "png"):
-        count, out_size = api.write_animation(editing.folder / relative, character, animation, size=size,
+        count, out_size = api.write_animation(target, character, animation, size=size,
                                               background=background, overlays=overlays, progress=report)
         return {"type": "exported", "file": relative, "files": [relative], "frames": count,
                 "size": list(out_size)}
     if overlays:
         raise KeyframeError("overlays are drawn on GIF, MP4 and PNG frames only")
-    done = api.export_animation(editing.folder / relative, character, animation, format=kind,
+    done = api.export_animation(target, character, animation, format=kind,
                                 settings=editing.deformer.settings, size=size, background=background,
                                 progress=report)
     files = [f"{EXPORTS}/{path.name}" for path in done.files]
@@ -428,7 +443,7 @@ def open_drawing(editing: Editing, message: dict[str, Any],
                  progress: Callable[[int, int], None]) -> dict[str, Any]:
     """The reply to an ``open_drawing`` message (module docstring), calling ``progress(index,
     count)`` through the rigging stages; meant to run off the server's event loop."""
-    uploads = editing.folder / UPLOADS
+    uploads = editing.path(UPLOADS)
     if not (uploads / "drawing").is_file():
         raise ProjectError("there is no drawing to open yet: send one first")
     keep, with_mask = message.get("skeleton", "keep"), message.get("mask", False)
@@ -486,7 +501,7 @@ def _check_on_figure(character: api.Character) -> None:
 
 def _snapshot_folder(editing: Editing) -> Path:
     """A new folder under the project's ``history/`` for the projects around one opened drawing."""
-    root = editing.folder / SNAPSHOTS
+    root = editing.path(SNAPSHOTS)
     taken = {p.name for p in root.iterdir()} if root.is_dir() else set()
     n = 1
     while f"drawing-{n}" in taken:
@@ -562,7 +577,7 @@ def track(editing: Editing, message: dict[str, Any],
     capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
                                 corrections=corrections, at=at, settings=settings, background=background,
                                 progress=lambda stage, index, total: progress(index, total))
-    save_motion(editing.folder / CAPTURED, capture.motion)
+    save_motion(editing.path(*CAPTURED.split("/")), capture.motion)
     confidence = capture.motion.confidence
     assert confidence is not None  # tracking always says how sure it is
     # What may have gone wrong from the start (rectangles too small, joints on one another).
@@ -760,8 +775,8 @@ def _step(editing: Editing, *, undo: bool) -> dict[str, Any]:
                 editing.restore_keys(then)
             elif kind == "drawing":
                 now, then = (entry["after"], entry["before"]) if undo else (entry["before"], entry["after"])
-                snapshots = editing.folder / SNAPSHOTS
-                saved = (editing.folder / PROJECT_FILE).read_text(encoding="utf-8")
+                snapshots = editing.path(SNAPSHOTS)
+                saved = editing.path(PROJECT_FILE).read_text(encoding="utf-8")
                 if saved != (snapshots / now / PROJECT_FILE).read_text(encoding="utf-8"):
                     _stale(history)
                 editing.edited(api.load_project(snapshots / then))
@@ -836,6 +851,9 @@ def _frame_of_animation(editing: Editing, message: dict[str, Any]) -> dict[str, 
 
 
 Handler = Callable[[Editing, dict[str, Any]], dict[str, Any]]
+
+# Messages answered from memory alone (a drag is one), which need no check of the project's files.
+_IN_MEMORY = frozenset({"pose", "sketch", "overlaps", "frame"})
 
 _HANDLERS: dict[str, Handler] = {
     "pose": _pose,

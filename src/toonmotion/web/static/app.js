@@ -215,4 +215,14 @@ function mountPanels(ctx) {
   start.click();
 }
 
+// A text selection on the page (Ctrl+A, a stroke that left the stage) must not turn a drag on
+// the stage into the browser's drag-and-drop of that selection, which cancels the drag after a
+// few pixels: a press on the stage drops the selection, and the stage starts no drag-and-drop.
+function keepDragsOnTheStage() {
+  const stage = document.getElementById("stage");
+  stage.addEventListener("pointerdown", () => window.getSelection()?.removeAllRanges(), { capture: true });
+  stage.addEventListener("dragstart", (event) => event.preventDefault());
+}
+
+keepDragsOnTheStage();
 start();

@@ -1,7 +1,7 @@
 // The Rig panel (thesis 6.1): the silhouette (blue), the curve skeleton (grey) and the joints it
 // suggests (orange dots) guide the animation skeleton. Drag a joint to move it (it snaps to a
 // suggestion nearby, else to the curve skeleton); click an empty spot to add a joint, a child
-// of the selected one; rename, re-parent or delete the selected joint in the side panel, or load
+// of the selected one (with none selected, a click adds nothing: a skeleton has one root); rename, re-parent or delete the selected joint in the side panel, or load
 // a char_cfg.yaml / skeleton .json. "Rig with this skeleton" rigs the drawing again (region
 // edits are replayed) and saves the project; the page then reloads on the new rig. A new
 // drawing (PNG or JPEG, with or without a mask) can be opened or dropped on the stage: it is
@@ -34,7 +34,7 @@ export function mount(ctx) {
 
   side.innerHTML = `<h2>Rig</h2>
     <p>Drag joints (they snap to the orange suggestions, then to the grey curve skeleton); click an
-    empty spot to add a joint under the selected one.</p>
+    empty spot to add a joint under the selected one (<kbd>Esc</kbd>: select none).</p>
     <div id="rig-joint"></div>
     <p><label>Load a skeleton <input type="file" id="rig-skeleton-file" accept=".yaml,.yml,.json"></label></p>
     <p><button id="rig-go">Rig with this skeleton</button></p>
@@ -150,6 +150,11 @@ export function mount(ctx) {
       selected = hit;
       dragging = true;
       overlay.setPointerCapture(event.pointerId);
+    } else if (selected < 0 && draft.length) {
+      // A skeleton has one root: a click with no joint selected adds nothing (it added a second
+      // root, and rigging then failed), and says how to add one.
+      status("select a joint first (click it): a click on an empty spot adds a joint under it");
+      return;
     } else {
       let n = draft.length + 1;
       while (draft.some((j) => j.name === `joint${n}`)) n++;
@@ -168,7 +173,13 @@ export function mount(ctx) {
   };
   const up = () => { dragging = false; };
   const keys = (event) => {
-    if ((event.key === "Delete" || event.key === "Backspace") && document.activeElement === document.body) remove();
+    if (document.activeElement !== document.body) return;
+    if (event.key === "Delete" || event.key === "Backspace") remove();
+    if (event.key === "Escape" && selected >= 0) {  // nothing selected: a click adds no joint
+      selected = -1;
+      showJoint();
+      view.draw();
+    }
   };
   const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up }),
                     listen(window, { keydown: keys })];
