@@ -129,10 +129,11 @@ def test_the_page_shows_the_drawing_with_its_joints(page):
 def test_dragging_a_joint_deforms_the_drawing_live(page, editor):
     before = _stage(page)
     x, y = _joint_on_screen(page, "right_hand")
+    hx, hy = _joint_on_screen(page, "head")
     page.mouse.move(x, y)
     page.mouse.down()
-    for step in range(1, 13):
-        page.mouse.move(x + 5 * step, y - 10 * step)
+    for step in range(1, 13):  # towards the head: the forearm turns to point at it (FK)
+        page.mouse.move(x + (hx - x) * step / 12, y + (hy - y) * step / 12)
         page.wait_for_timeout(20)
     page.mouse.up()
     page.wait_for_function("document.getElementById('pose-timing').textContent !== ''")
@@ -172,12 +173,101 @@ def test_a_text_selection_on_the_page_does_not_turn_a_joint_drag_into_drag_and_d
     page.mouse.up()
     page.wait_for_timeout(300)
     names = page.evaluate("window.toonmotion.project.joints.map((j) => j.name)")
-    hand = page.evaluate("window.toonmotion.pose")[names.index("right_hand")]
-    ended = _on_screen(page, [hand])[0]
-    assert abs(ended[0] - (x + 60)) < 2 and abs(ended[1] - (y - 120)) < 2  # the whole drag, in CSS px
+    pose = page.evaluate("window.toonmotion.pose")
+    hand, elbow = (_on_screen(page, [pose[names.index(n)]])[0] for n in ("right_hand", "right_elbow"))
+    # The whole drag: the forearm turned to point at where the pointer ended (a cancelled drag
+    # left it pointing at the pointer 5 px from the start).
+    towards, now = np.subtract((x + 60, y - 120), elbow), np.subtract(hand, elbow)
+    assert abs(np.arctan2(towards[1], towards[0]) - np.arctan2(now[1], now[0])) < 0.02
     page.click("#pose-reset")
     page.wait_for_timeout(300)
 
+
+
+
+def _drag(page, joint, dx, dy, *, shift=False):
+    """Drag ``joint`` by (dx, dy) CSS px in small steps; returns where the pointer ended."""
+    x, y = _joint_on_screen(page, joint)
+    page.mouse.move(x, y)
+    if shift:
+        page.keyboard.down("Shift")
+    page.mouse.down()
+    for step in range(1, 11):
+        page.mouse.move(x + dx * step / 10, y + dy * step / 10)
+        page.wait_for_timeout(20)
+    page.mouse.up()
+    if shift:
+        page.keyboard.up("Shift")
+    page.wait_for_timeout(400)  # the last reply
+    return x + dx, y + dy
+
+
+def _pose_now(page):
+    names = page.evaluate("window.toonmotion.project.joints.map((j) => j.name)")
+    parents = page.evaluate("window.toonmotion.project.joints.map((j) => j.parent)")
+    return names, parents, np.array(page.evaluate("window.toonmotion.pose"), dtype=float)
+
+
+def test_a_dragged_joint_turns_its_bone_reaches_with_ik_pins_and_stretches_on_shift(page, editor):
+    """Issue 44: a drag moved the joint alone (its bone stretched, the joints below stayed). Now:
+    FK by default, IK with I (up to a pinned joint), a stretch with Shift."""
+    page.click("#pose-reset")
+    page.wait_for_timeout(300)
+    names, parents, rest = _pose_now(page)
+    bones = [(p, c) for c, p in enumerate(parents) if p >= 0]
+
+    def lengths(P):
+        return np.array([np.hypot(*(P[c] - P[p])) for p, c in bones])
+
+    hand, elbow, shoulder = (names.index(n) for n in ("right_hand", "right_elbow", "right_shoulder"))
+    # FK: the forearm turns about the elbow; nothing else moves, no bone stretches.
+    _drag(page, "right_hand", 40, -60)
+    _, _, P = _pose_now(page)
+    np.testing.assert_allclose(lengths(P), lengths(rest), atol=1e-2)
+    assert np.hypot(*(P[hand] - rest[hand])) > 5
+    np.testing.assert_allclose(np.delete(P, hand, axis=0), np.delete(rest, hand, axis=0), atol=1e-6)
+    # IK: the hand reaches the pointer, the elbow bends, the shoulder stays.
+    page.click("#pose-reset")
+    page.keyboard.press("i")
+    assert page.is_checked("input[name=pose-bones][value=reach]")
+    ended = _drag(page, "right_hand", 30, -40)
+    _, _, P = _pose_now(page)
+    np.testing.assert_allclose(lengths(P), lengths(rest), atol=1e-2)
+    np.testing.assert_allclose(_on_screen(page, [P[hand]])[0], ended, atol=1.5)
+    assert np.hypot(*(P[elbow] - rest[elbow])) > 1 and np.allclose(P[shoulder], rest[shoulder])
+    # A pinned elbow stops the chain: the forearm alone turns.
+    page.click("#pose-reset")
+    page.mouse.dblclick(*_joint_on_screen(page, "right_elbow"))
+    _drag(page, "right_hand", 30, -40)
+    _, _, P = _pose_now(page)
+    np.testing.assert_allclose(P[elbow], rest[elbow], atol=1e-6)
+    page.mouse.dblclick(*_joint_on_screen(page, "right_elbow"))  # unpinned
+    page.keyboard.press("i")  # back to FK
+    # Shift: the hand goes to the pointer, the forearm stretches.
+    page.click("#pose-reset")
+    ended = _drag(page, "right_hand", 25, 10, shift=True)
+    _, _, P = _pose_now(page)
+    np.testing.assert_allclose(_on_screen(page, [P[hand]])[0], ended, atol=1.5)
+    assert abs(np.hypot(*(P[hand] - P[elbow])) - np.hypot(*(rest[hand] - rest[elbow]))) > 1
+    assert page.errors == [] and page.locator("#error").is_hidden()
+    page.click("#pose-reset")
+    page.wait_for_timeout(300)
+
+def test_a_panel_that_draws_nothing_on_the_stage_leaves_no_handles_there(page):
+    """Issue 44: the Pose panel's joint handles stayed on the stage in the Export panel."""
+    inked = """() => {
+        const o = window.toonmotion.view.overlay;
+        const d = o.getContext("2d").getImageData(0, 0, o.width, o.height).data;
+        let n = 0;
+        for (let i = 3; i < d.length; i += 4) if (d[i] > 0) n++;
+        return n;
+    }"""
+    page.click("nav button[data-panel=pose]")
+    assert page.evaluate(inked) > 0  # the handles
+    page.click("nav button[data-panel=export]")
+    assert page.evaluate(inked) == 0
+    page.click("nav button[data-panel=pose]")
+    assert page.evaluate(inked) > 0
 
 def _on_screen(page, points) -> list[tuple[float, float]]:
     """Drawing pixels to the page's CSS pixels."""

@@ -1214,3 +1214,28 @@ def test_a_skeleton_file_over_its_limit_is_refused_as_it_streams_in(editable):
     assert reply.json()["error"] == ("the file is over the limit skeleton_bytes=5,000; make it smaller "
                                      "(or raise the limit with --limit)")
     assert not list((folder / "uploads").glob("*")) if (folder / "uploads").is_dir() else True
+
+
+def test_a_drag_is_the_librarys_drag_and_its_mesh(client, project):
+    """A dragged joint's pose is made by api.drag_joint from the pose at the press, and its mesh is
+    the library's; a bad drag is one line and changes nothing."""
+    from toonmotion.rig.pose import Pose
+
+    character = api.load_project(project)
+    rest = character.skeleton.positions
+    hand = character.skeleton.index("right_hand")
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        for mode in ("turn", "reach", "stretch"):
+            to = (rest[hand] + (15, -40)).tolist()
+            reply = _send(socket, {"id": 1, "type": "drag", "positions": rest.tolist(), "joint": "right_hand",
+                                   "to": to, "mode": mode, "pinned": []})
+            expected = api.drag_joint(character, Pose(rest), "right_hand", to, mode=mode)
+            np.testing.assert_allclose(reply["positions"], expected.positions, atol=1e-9)
+            U = api.pose_character(Editing.open(project).deformer, expected).deformation.U
+            np.testing.assert_allclose(np.reshape(reply["U"], (-1, 2)), U, atol=2e-3)
+        refused = _send(socket, {"id": 2, "type": "drag", "positions": rest.tolist(), "joint": "tail",
+                                 "to": [0, 0]})
+        assert refused["type"] == "error" and refused["message"].startswith("no joint is called 'tail'")
+        refused = _send(socket, {"id": 3, "type": "drag", "positions": rest.tolist(), "joint": "right_hand",
+                                 "to": [0, 0], "pinned": "right_elbow"})
+        assert refused["message"] == "'pinned' must list the names of the pinned joints"

@@ -50,6 +50,7 @@ from toonmotion.api.keyshapes import (
 )
 from toonmotion.api.posing import (
     PosedFrame,
+    drag_joint,
     pose_character,
     pose_view,
     render_pose,
@@ -119,6 +120,7 @@ __all__ = [
     "composite_scene",
     "correct_regions",
     "delete_key",
+    "drag_joint",
     "exaggerate",
     "export_animation",
     "export_format",

@@ -14,7 +14,8 @@ from toonmotion.deform.deformer import Deformation, Deformer, DeformSettings
 from toonmotion.deform.tuning import TuningEdit, apply_tuning
 from toonmotion.render.frame import fit_view, render_frame
 from toonmotion.rig.character import Character
-from toonmotion.rig.pose import Pose, rotate_about
+from toonmotion.rig.dragging import drag_joint as rig_drag_joint
+from toonmotion.rig.pose import Pose, check_pose, rotate_about
 from toonmotion.rig.sketch import SketchMatch, match_sketch
 
 
@@ -61,6 +62,52 @@ def rotate_joint(character: Character, joint: str, angle: float) -> Pose:
     """
     skeleton = character.skeleton
     return Pose(rotate_about(skeleton, skeleton.positions, joint, angle))
+
+
+def drag_joint(
+    character: Character, pose: Pose, joint: str, target: ArrayLike, *, mode: str = "turn",
+    pinned: Sequence[str] = (), bones: int = 2,
+) -> Pose:
+    """``pose`` with ``joint`` dragged to ``target`` (drawing pixels), as the editor's Pose panel
+    drags: ``"turn"`` its bone about its parent, carrying the joints below (forward kinematics);
+    ``"reach"`` by bending up to ``bones`` bones above it (inverse kinematics), stopping at a
+    ``pinned`` joint; or ``"stretch"`` its bone (:mod:`toonmotion.rig.dragging`). Raises
+    :class:`~toonmotion.errors.PoseError` for a bad drag, or a pose a stretch squashed.
+
+    Parameters
+    ----------
+    character : Character
+    pose : Pose
+        The pose at the press (each move of a drag is made from it: nothing drifts).
+    joint : str
+        The joint dragged.
+    target : (2,) float
+        Where the pointer is, drawing pixels.
+    mode : {"turn", "reach", "stretch"}
+        Forward kinematics (the default), inverse kinematics, or a stretch.
+    pinned : sequence of str
+        Joints an IK chain stops at (and that a drag of their own does not move).
+    bones : int
+        The longest IK chain, in bones (2: a hand moves the forearm and the upper arm).
+
+    Returns
+    -------
+    Pose
+
+    Examples
+    --------
+    >>> from toonmotion.samples import sample_rig
+    >>> hero = sample_rig()
+    >>> rest = Pose(hero.skeleton.positions)
+    >>> hand = hero.skeleton.index("right_hand")
+    >>> up = drag_joint(hero, rest, "right_hand", rest.positions[hand] + (0, -200), mode="reach")
+    >>> bool(up.positions[hand, 1] < rest.positions[hand, 1])  # the arm bends up
+    True
+    """
+    skeleton = character.skeleton
+    moved = rig_drag_joint(skeleton, check_pose(skeleton, pose).positions, joint, target, mode=mode,
+                           pinned=pinned, bones=bones)
+    return check_pose(skeleton, Pose(moved), where="the dragged pose")
 
 
 def sketch_pose(

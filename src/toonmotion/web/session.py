@@ -8,6 +8,11 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   form, ``{"kind": "curve", "points": [...]}`` or ``{"kind": "drag", "from": [...], "to":
   [...]}``. Reply: ``{"type": "mesh", "U": [x0, y0, x1, y1, ...]}``, the deformed vertices (the
   needle model, then the joint-area solve).
+* ``{"type": "drag", "positions": [...], "joint": name, "to": [x, y], "mode": "turn" | "reach" |
+  "stretch", "pinned": [names], "edits": [...]}``: ``joint`` of the pose ``positions`` (the one
+  at the press) dragged to ``to`` (:func:`toonmotion.api.drag_joint`: its bone turns and carries
+  the joints below, or the chain above it reaches, or its bone stretches). Reply: ``{"type":
+  "mesh", "U": [...], "positions": [...]}``, the pose made and its deformed vertices.
 * ``{"type": "sketch", "strokes": [[[x, y], ...], ...], "positions": [...]}``: the strokes of a
   sketched skeleton, matched to the bones (:func:`toonmotion.api.sketch_pose`), starting from
   ``positions``. Reply: ``{"type": "sketched", "positions": [...], "bones": [...],
@@ -639,6 +644,21 @@ def _pose(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
             "positions": frame.pose.positions.tolist()}
 
 
+def _drag(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
+    joint, mode, pinned = message.get("joint"), message.get("mode", "turn"), message.get("pinned", [])
+    if not isinstance(joint, str):
+        raise PoseError("'joint' must name the joint dragged")
+    if not isinstance(mode, str):
+        raise PoseError("'mode' must be turn, reach or stretch")
+    if not isinstance(pinned, list) or not all(isinstance(name, str) for name in pinned):
+        raise PoseError("'pinned' must list the names of the pinned joints")
+    start = Pose(_positions(editing, message.get("positions")))
+    pose = api.drag_joint(editing.character, start, joint, _point(message.get("to"), "'to'"), mode=mode,
+                          pinned=pinned)
+    U = api.pose_character(editing.deformer, pose, edits=_tuning(message)).deformation.U
+    return {"type": "mesh", "U": np.round(U, 3).ravel().tolist(), "positions": pose.positions.tolist()}
+
+
 def _sketch(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     strokes = message.get("strokes")
     if not isinstance(strokes, list) or not all(isinstance(stroke, list) for stroke in strokes):
@@ -853,10 +873,11 @@ def _frame_of_animation(editing: Editing, message: dict[str, Any]) -> dict[str, 
 Handler = Callable[[Editing, dict[str, Any]], dict[str, Any]]
 
 # Messages answered from memory alone (a drag is one), which need no check of the project's files.
-_IN_MEMORY = frozenset({"pose", "sketch", "overlaps", "frame"})
+_IN_MEMORY = frozenset({"pose", "drag", "sketch", "overlaps", "frame"})
 
 _HANDLERS: dict[str, Handler] = {
     "pose": _pose,
+    "drag": _drag,
     "sketch": _sketch,
     "overlaps": _overlaps,
     "depth": _region_edit(_depth),

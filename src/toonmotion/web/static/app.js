@@ -199,6 +199,7 @@ function mountPanels(ctx) {
       ctx.side.replaceChildren();
       current = panel.mount(ctx);
       currentName = panel.name;
+      ctx.view.draw(); // the stage as this panel shows it: no handles left from the last one
       memory.keep(currentName);
     };
     nav.append(button);

@@ -24,7 +24,7 @@ export function nearest(view, points, event, reach) {
 }
 
 // send(message) through live, one at a time; a message sent while another is answered replaces
-// any that was waiting. Replies go to onReply, errors to onError.
+// any that was waiting. Replies go to onReply(reply, message), errors to onError.
 export function newest(live, onReply, onError) {
   let busy = false, queued = null;
   async function next() {
@@ -33,7 +33,7 @@ export function newest(live, onReply, onError) {
     const message = queued;
     queued = null;
     try {
-      onReply(await live.request(message));
+      onReply(await live.request(message), message);
     } catch (error) {
       onError(error);
     } finally {

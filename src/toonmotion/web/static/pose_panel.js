@@ -1,5 +1,8 @@
 // The Pose panel. Four ways to pose, each a mode (and a key):
-//  D  drag a joint and the drawing follows live (needle model + joint-area solve on the server);
+//  D  drag a joint and the drawing follows live (needle model + joint-area solve on the server):
+//     its bone turns and carries the joints below (FK), or with I the bones above it reach for the
+//     pointer (IK, stopping at a pinned joint: double-click one to pin it); Shift stretches the
+//     bone instead. The server makes the pose (toonmotion.api.drag_joint), from the pose at the press;
 //  S  sketch the skeleton with strokes (mouse or pen): the server matches them to the bones
 //     (thesis 6.2a);
 //  T  tune the outline with a sketch curve (thesis 3.5, fig. 3.11);
@@ -17,7 +20,9 @@ export const title = "Pose";
 const HANDLE = 7; // joint handle radius, CSS pixels
 const SKETCH_PAUSE = 900; // ms after the last stroke before a sketch is matched
 const MODES = {
-  drag: ["Drag joints", "d", "Drag a joint: the drawing follows. Red lines are the rest bones, from each posed parent."],
+  drag: ["Drag joints", "d", "Drag a joint: its bone turns and the joints below follow (or, reaching, the bones " +
+         "above it bend). Shift-drag stretches the bone. Double-click a joint to pin it. Red lines are the rest " +
+         "bones, from each posed parent."],
   sketch: ["Sketch the skeleton", "s", "Draw bones, chains or a whole stick figure, over the drawing or beside it: a " +
            "corner is a joint. Strokes are matched when you pause (Enter: now, Escape: drop them)."],
   tune: ["Tune the outline", "t", "Draw a curve beside the outline: the stretch of outline between the points " +
@@ -32,7 +37,10 @@ export function mount(ctx) {
   ctx.pose = ctx.pose || rest.map((p) => p.slice());
   ctx.tuning = ctx.tuning || [];
   const positions = ctx.pose;
+  ctx.pinned = ctx.pinned || new Set(); // joints (names) an IK reach stops at
+  ctx.reach = ctx.reach || false; // a drag reaches with the bones above (IK) instead of turning one (FK)
   let dragging = -1, started = 0, mode = "drag";
+  let pressed = null, generation = 0; // the pose at the press a drag is made from; which drag is current
   const strokes = []; // the sketch being drawn: [{points: [[x, y], ...], widths: [...]}, ...]
   let drawing = null, pause = 0, pulled = null;
 
@@ -41,6 +49,9 @@ export function mount(ctx) {
       `<label><input type="radio" name="pose-mode" value="${value}"> ${label} <kbd>${key.toUpperCase()}</kbd></label>`)
       .join("<br>")}</p>
     <p id="pose-help"></p>
+    <p id="pose-bones" role="radiogroup" aria-label="what a dragged joint does">
+      <label><input type="radio" name="pose-bones" value="turn"> turn its bone (FK)</label><br>
+      <label><input type="radio" name="pose-bones" value="reach"> reach with the bones above (IK) <kbd>I</kbd></label></p>
     <p id="pose-matched"></p>
     <p id="pose-tuning"></p>
     <p><button id="pose-untune">Drop the last tuning</button>
@@ -70,14 +81,19 @@ export function mount(ctx) {
       const [x, y] = view.toCanvas(p);
       pen.beginPath();
       pen.arc(x, y, HANDLE * ratio, 0, 2 * Math.PI);
-      pen.fillStyle = i === dragging ? "#f6ad55" : "#fff";
+      pen.fillStyle = i === dragging ? "#f6ad55" : ctx.pinned.has(project.joints[i].name) ? "#3182ce" : "#fff";
       pen.fill();
       pen.strokeStyle = "#222";
       pen.stroke();
     });
   };
 
-  const send = newest(live, (reply) => {
+  const send = newest(live, (reply, message) => {
+    // A drag's reply is the pose it made, unless the pose was changed since (reset, another drag).
+    if (reply.positions && message.type === "drag" && message.generation === generation) {
+      reply.positions.forEach((p, i) => { positions[i] = p; });
+      view.draw();
+    }
     view.setVertices(reply.U);
     document.getElementById("pose-timing").textContent = `last update ${(performance.now() - started).toFixed(1)} ms`;
     showError("");
@@ -91,6 +107,20 @@ export function mount(ctx) {
     showTuning();
     view.draw();
   }
+
+  // The joint under the pointer dragged to it, from the pose at the press.
+  function dragged(event) {
+    started = performance.now();
+    send({ type: "drag", positions: pressed, joint: project.joints[dragging].name, to: view.toDrawing(event),
+           mode: event.shiftKey ? "stretch" : ctx.reach ? "reach" : "turn", pinned: [...ctx.pinned],
+           edits: ctx.tuning, generation });
+  }
+
+  function setReach(reach) {
+    ctx.reach = reach;
+    for (const input of side.querySelectorAll("input[name=pose-bones]")) input.checked = (input.value === "reach") === reach;
+  }
+  for (const input of side.querySelectorAll("input[name=pose-bones]")) input.onchange = () => setReach(input.value === "reach");
 
   function showTuning() {
     const count = ctx.tuning.length;
@@ -115,6 +145,7 @@ export function mount(ctx) {
     status("matching the sketch…");
     try {
       const reply = await live.request({ type: "sketch", strokes: sent, positions });
+      generation++; // a drag's reply still to come is not this pose
       reply.positions.forEach((p, i) => { positions[i] = p; });
       view.setVertices(reply.U);
       document.getElementById("pose-matched").textContent =
@@ -156,7 +187,18 @@ export function mount(ctx) {
     }
     dragging = nearest(view, positions, event, HANDLE + 4);
     if (dragging < 0) return;
+    pressed = positions.map((p) => p.slice());
+    generation++;
     capture(overlay, event);
+    view.draw();
+  };
+  const pin = (event) => { // double-click: pin or unpin the joint under the pointer
+    if (mode !== "drag") return;
+    const at = nearest(view, positions, event, HANDLE + 4);
+    if (at < 0) return;
+    const joint = project.joints[at].name;
+    if (!ctx.pinned.delete(joint)) ctx.pinned.add(joint);
+    status(ctx.pinned.size ? `pinned: ${[...ctx.pinned].join(", ")}` : "no joint pinned");
     view.draw();
   };
   const move = (event) => {
@@ -175,8 +217,7 @@ export function mount(ctx) {
       return;
     }
     if (dragging < 0) return;
-    positions[dragging] = view.toDrawing(event);
-    posed();
+    dragged(event);
   };
   const up = () => {
     if (drawing) {
@@ -230,12 +271,15 @@ export function mount(ctx) {
     const key = event.key.toLowerCase();
     const chosen = Object.entries(MODES).find(([, [, shortcut]]) => shortcut === key);
     if (chosen) setMode(chosen[0]);
+    else if (key === "i") setReach(!ctx.reach);
     else if (key === "enter" && mode === "sketch") match();
     else if (key === "escape" && mode === "sketch") setMode("sketch");
   };
-  const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up, pointercancel: up }),
+  const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up, pointercancel: up,
+                                      dblclick: pin }),
                     listen(window, { keydown: keys })];
   document.getElementById("pose-reset").onclick = () => {
+    generation++; // a drag's reply still to come is not this pose
     rest.forEach((p, i) => { positions[i] = p.slice(); });
     ctx.tuning.length = 0;
     posed();
@@ -246,6 +290,7 @@ export function mount(ctx) {
     posed();
   };
   setMode("drag");
+  setReach(ctx.reach);
   status("drag a joint");
   posed();
 
