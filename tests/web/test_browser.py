@@ -485,6 +485,31 @@ def test_timeline_key_two_poses_scrub_the_inbetween_and_play(page, editor):
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 
+
+def test_two_tabs_stay_in_step_and_undo_says_what_it_undid(page, editor):
+    """Issue 44: two tabs edited one server state but never saw each other's changes (a key
+    deleted in one was still listed in the other). Now a key set in one appears in the other's
+    timeline, and undoing it there takes it out of the first, each saying what was done."""
+    other = page.context.browser.new_page(viewport={"width": 1280, "height": 800})
+    other.goto(editor[0])
+    other.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=30_000)
+    for tab in (page, other):
+        tab.click("nav button[data-panel=timeline]")
+    frames = "[...document.querySelectorAll('#timeline-keys li')].map((li) => Number(li.dataset.frame))"
+    before = page.evaluate(frames)
+    assert other.evaluate(frames) == before
+    _set_frame(page, 7)
+    page.click("#timeline-key")
+    other.wait_for_function(f"{frames}.includes(7)")
+    assert other.locator("#status").text_content() == "another page: the key at frame 7 set"
+    other.click("#undo")
+    page.wait_for_function(f"!{frames}.includes(7)")
+    assert page.evaluate(frames) == before
+    assert page.locator("#status").text_content() == "another page undid: the key at frame 7 set"
+    assert other.locator("#status").text_content() == "undid: the key at frame 7 set"
+    other.close()
+    assert page.errors == [] and page.locator("#error").is_hidden()
+
 def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
     folder = editor[1]
     page.click("nav button[data-panel=export]")

@@ -370,7 +370,8 @@ def test_keys_are_saved_in_the_project_folder_and_frames_are_the_librarys_animat
     np.testing.assert_allclose(np.reshape(middle["U"], (-1, 2)), expected.meshes[4][1], atol=1e-3)
     np.testing.assert_allclose(middle["positions"], expected.motion.positions[4], atol=1e-9)
     assert beyond["frame"] == 8  # clamped to the keys' span
-    assert last == {"id": None, "type": "keys", "keys": None, "history": {"undo": 5, "redo": 0}}
+    assert last == {"id": None, "type": "keys", "keys": None, "history": {"undo": 5, "redo": 0},
+                    "says": "the key at frame 0 deleted"}
     assert not (folder / "keys.json").exists()
 
 
@@ -579,7 +580,7 @@ def test_rig_again_with_an_edited_skeleton_replays_the_region_edits(editable):
         reply = _send(socket, {"type": "rig", "joints": joints})
         data = _get(client, "/api/project").json()
     saved = api.load_project(folder)
-    assert reply == {"id": None, "type": "rigged", "skipped": 0}
+    assert reply == {"id": None, "type": "rigged", "skipped": 0, "says": "the drawing rigged again"}
     assert "hat" in saved.skeleton.names and len(saved.edits) == 1 and saved.depth.max() == 1
     assert [j["name"] for j in data["joints"]] == list(saved.skeleton.names)  # the server serves the new rig
     assert data["suggestions"] and data["curve_skeleton"]
@@ -1239,3 +1240,29 @@ def test_a_drag_is_the_librarys_drag_and_its_mesh(client, project):
         refused = _send(socket, {"id": 3, "type": "drag", "positions": rest.tolist(), "joint": "right_hand",
                                  "to": [0, 0], "pinned": "right_elbow"})
         assert refused["message"] == "'pinned' must list the names of the pinned joints"
+
+
+def test_every_page_is_told_of_another_pages_change_and_undo_says_what_it_undid(editable):
+    """Two tabs on one project: a key set in one is announced to the other (which fetches the
+    project again), and the other's undo says what it took back."""
+    folder, client = editable
+    character = api.load_project(folder)
+    positions = character.skeleton.positions.tolist()
+    with client.websocket_connect(f"/ws?token={TOKEN}") as one, \
+            client.websocket_connect(f"/ws?token={TOKEN}") as two:
+        keyed = _send(one, {"id": 1, "type": "set_key", "frame": 12, "positions": positions})
+        assert keyed["type"] == "keys" and keyed["says"] == "the key at frame 12 set"
+        told = two.receive_json()
+        assert told == {"type": "changed", "kind": "keys", "step": None, "says": "the key at frame 12 set",
+                        "history": keyed["history"]}
+        assert _get(client, "/api/project").json()["keys"]["keys"][0]["frame"] == 12  # what it fetches
+        undone = _send(two, {"id": 2, "type": "undo"})
+        assert undone["type"] == "undone" and undone["says"] == "the key at frame 12 set"
+        told = one.receive_json()
+        assert (told["type"], told["kind"], told["step"], told["says"]) == \
+            ("changed", "undone", "keys", "the key at frame 12 set")
+        dragged = _send(one, {"id": 3, "type": "pose", "positions": positions})  # not a change: nobody told
+        assert dragged["type"] == "mesh"
+        redone = _send(two, {"id": 4, "type": "redo"})
+        assert redone["says"] == "the key at frame 12 set"
+        assert one.receive_json()["kind"] == "redone"  # the next message one gets: the pose told nothing

@@ -13,6 +13,9 @@ Errors come back as one line: a 4xx reply ``{"error": "..."}`` over HTTP, a
 closes the connection and never shows a traceback.
 
 What the WebSocket carries, and the open project's state, are :mod:`toonmotion.web.session`'s.
+Every page open on the project sees the others' changes: after a reply that changed the project
+(:data:`CHANGES`), every other live connection gets ``{"type": "changed", "kind": ..., "step":
+..., "says": "...", "history": {...}}`` and the page fetches the project again.
 """
 
 from __future__ import annotations
@@ -85,6 +88,9 @@ FOOTAGE_SUFFIXES = ("mp4", "mov", "avi", "mkv", "webm", "gif", "png", "apng", "w
 
 log = logging.getLogger("toonmotion.web")
 
+# Replies that say the project changed: the other pages are told (module docstring).
+CHANGES = frozenset({"regions", "keys", "undone", "redone", "rigged", "opened"})
+
 # The cookie a sign-in code is exchanged for, and how long a code is good for (seconds).
 TOKEN_COOKIE = "toonmotion_token"
 SIGN_IN_SECONDS = 120.0
@@ -126,6 +132,18 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     threading.Thread(target=editing.prepare_deformer, name="toonmotion-prepare", daemon=True).start()
     app = FastAPI(title="toonmotion editor", docs_url=None, redoc_url=None, openapi_url=None)
     app.state.sign_in_codes = {}
+    pages: set[WebSocket] = set()  # every live connection, to tell each of the others' changes
+
+    async def tell_the_others(socket: WebSocket, reply: dict[str, Any]) -> None:
+        """After ``reply`` to ``socket`` changed the project, every other page is told."""
+        if reply.get("type") not in CHANGES:
+            return
+        note = json.dumps({"type": "changed", "kind": reply["type"], "step": reply.get("kind"),
+                           "says": reply.get("says"), "history": reply.get("history")})
+        for other in list(pages):
+            if other is not socket:
+                with contextlib.suppress(Exception):  # a page going away is its own connection's business
+                    await other.send_text(note)
 
     def authorised(token_given: str | None, origin: str | None, host: str | None) -> str | None:
         """Why a request is refused, or None."""
@@ -324,6 +342,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
             await socket.close(code=1008, reason=refused[:120])
             return
         await socket.accept()
+        pages.add(socket)
         loop = asyncio.get_running_loop()
         # Messages are read as they come, into a queue (None: the page went away), so that a
         # cancel can reach a slow request while it runs; other messages wait for it, in order.
@@ -379,9 +398,11 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                 else:
                     reply = answer(editing, text)
                 await socket.send_text(json.dumps(reply))
+                await tell_the_others(socket, reply)
         except WebSocketDisconnect:
             return
         finally:  # the page went away, or the server stops: so does what runs for it
+            pages.discard(socket)
             stop.set()
             reader.cancel()
             if broken:

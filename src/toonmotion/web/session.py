@@ -485,9 +485,9 @@ def open_drawing(editing: Editing, message: dict[str, Any],
         api.save_project(snapshot / "after", character)
         editing.edited(character)
         editing.history.record({"kind": "drawing", "before": f"{snapshot.name}/before",
-                                "after": f"{snapshot.name}/after"})
+                                "after": f"{snapshot.name}/after", "says": "a new drawing opened"})
     return {"type": "opened", "width": character.size[0], "height": character.size[1],
-            "joints": len(character.skeleton)}
+            "joints": len(character.skeleton), "says": "a new drawing opened"}
 
 
 def _check_on_figure(character: api.Character) -> None:
@@ -677,12 +677,16 @@ def _overlaps(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     return {"type": "overlaps", "pairs": pairs}
 
 
-def _region_edit(change: Callable[[api.Character, dict[str, Any]], api.Character]) -> Handler:
+def _region_edit(change: Callable[[api.Character, dict[str, Any]], api.Character],
+                 says: Callable[[dict[str, Any]], str]) -> Handler:
+    """A region edit's handler; ``says`` tells what a message did, for undo and the other pages."""
     def handle(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
         with editing.lock:
             editing.edited(change(editing.character, message))
-            editing.history.record({"kind": "regions", "count": len(editing.character.edits)})
-            return {"type": "regions", **regions(editing.character), "history": editing.history.counts()}
+            told = says(message)
+            editing.history.record({"kind": "regions", "count": len(editing.character.edits), "says": told})
+            return {"type": "regions", **regions(editing.character), "history": editing.history.counts(),
+                    "says": told}
 
     return handle
 
@@ -703,15 +707,19 @@ def _correct(character: api.Character, message: dict[str, Any]) -> api.Character
     return api.correct_regions(character, bone, [_point(p, "a curve point") for p in curve])
 
 
-def _key_edit(change: Callable[[Editing, dict[str, Any]], Timeline | None]) -> Handler:
+def _key_edit(change: Callable[[Editing, dict[str, Any]], Timeline | None],
+              says: Callable[[dict[str, Any]], str]) -> Handler:
+    """A key edit's handler; ``says`` tells what a message did, for undo and the other pages."""
     def handle(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
         with editing.lock:
             before = editing.keys_text()
             editing.keyed(change(editing, message))
             after = editing.keys_text()
+            told = says(message)
             if after != before:  # an edit that changed nothing is no step to undo
-                editing.history.record({"kind": "keys", "before": before, "after": after})
-            return {"type": "keys", "keys": keys(editing.timeline), "history": editing.history.counts()}
+                editing.history.record({"kind": "keys", "before": before, "after": after, "says": told})
+            return {"type": "keys", "keys": keys(editing.timeline), "history": editing.history.counts(),
+                    "says": told}
 
     return handle
 
@@ -755,8 +763,9 @@ def _rig(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
         if carried is not None:
             editing.keyed(carried)
         editing.history.record({"kind": "rig", "before": before, "after": _joints(character.skeleton),
-                                "keys_before": keys_before, "keys_after": editing.keys_text()})
-    return {"type": "rigged", "skipped": len(skipped)}
+                                "keys_before": keys_before, "keys_after": editing.keys_text(),
+                                "says": "the drawing rigged again"})
+    return {"type": "rigged", "skipped": len(skipped), "says": "the drawing rigged again"}
 
 
 def _joints(skeleton: Skeleton) -> list[list[Any]]:
@@ -774,16 +783,17 @@ def _step(editing: Editing, *, undo: bool) -> dict[str, Any]:
             if not editing.character.edits:
                 raise EditError("there are no edits to undo")
             editing.edited(api.undo_edits(editing.character))
-            kind = "regions"
+            kind, says = "regions", "a region edit made outside the editor"
         else:
             entry = stack[-1]
-            kind = entry["kind"]
+            kind, says = entry["kind"], entry.get("says")
             if kind == "regions":
                 count = len(editing.character.edits)
                 if undo and count > entry["count"]:  # edits the history missed (a kill, the CLI) go first
                     editing.edited(api.undo_edits(editing.character))
                     return {"type": "undone", "kind": kind, **regions(editing.character),
-                            "keys": keys(editing.timeline), "history": history.counts()}
+                            "keys": keys(editing.timeline), "history": history.counts(),
+                            "says": "a region edit made outside the editor"}
                 if count != (entry["count"] if undo else entry["count"] - 1):
                     _stale(history)
                 step = api.undo_edits if undo else api.redo_edits
@@ -814,7 +824,8 @@ def _step(editing: Editing, *, undo: bool) -> dict[str, Any]:
                     editing.restore_keys(keys_then)
             history.moved(entry, undo=undo)
         return {"type": "undone" if undo else "redone", "kind": kind, **regions(editing.character),
-                "keys": keys(editing.timeline), "history": history.counts()}
+                "keys": keys(editing.timeline), "history": history.counts(),
+                "says": says or _EDIT_KINDS.get(kind, "an edit")}
 
 
 def _stale(history: History) -> None:
@@ -872,6 +883,10 @@ def _frame_of_animation(editing: Editing, message: dict[str, Any]) -> dict[str, 
 
 Handler = Callable[[Editing, dict[str, Any]], dict[str, Any]]
 
+# What an undo of each kind of edit says when its entry does not (one recorded before it did).
+_EDIT_KINDS = {"regions": "a region edit", "keys": "a key-frame edit", "rig": "a rigging",
+               "drawing": "a new drawing opened"}
+
 # Messages answered from memory alone (a drag is one), which need no check of the project's files.
 _IN_MEMORY = frozenset({"pose", "drag", "sketch", "overlaps", "frame"})
 
@@ -880,14 +895,15 @@ _HANDLERS: dict[str, Handler] = {
     "drag": _drag,
     "sketch": _sketch,
     "overlaps": _overlaps,
-    "depth": _region_edit(_depth),
-    "correct": _region_edit(_correct),
+    "depth": _region_edit(_depth, lambda m: "a region brought forward" if m.get("by") == 1
+                          else "a region sent back"),
+    "correct": _region_edit(_correct, lambda m: f"vertices lassoed to {m.get('bone')}"),
     "undo": lambda editing, message: _step(editing, undo=True),
     "redo": lambda editing, message: _step(editing, undo=False),
-    "set_key": _key_edit(_set_key),
-    "delete_key": _key_edit(_delete_key),
-    "move_key": _key_edit(_move_key),
-    "timing": _key_edit(_timing),
+    "set_key": _key_edit(_set_key, lambda m: f"the key at frame {m.get('frame')} set"),
+    "delete_key": _key_edit(_delete_key, lambda m: f"the key at frame {m.get('frame')} deleted"),
+    "move_key": _key_edit(_move_key, lambda m: f"the key at frame {m.get('frame')} moved to {m.get('to')}"),
+    "timing": _key_edit(_timing, lambda m: "the key-frames' rate and easing changed"),
     "frame": _frame_of_animation,
     "rig": _rig,
     "retarget": _retarget,

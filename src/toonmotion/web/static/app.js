@@ -60,6 +60,10 @@ class Live {
     });
     this.socket.onmessage = (event) => {
       const reply = JSON.parse(event.data);
+      if (reply.type === "changed") { // another page changed the project
+        if (this.onChanged) this.onChanged(reply);
+        return;
+      }
       if (reply.history && this.onHistory) this.onHistory(reply.history);
       const pending = this.waiting.get(reply.id);
       if (!pending) return;
@@ -159,11 +163,27 @@ function history(ctx) {
       show(reply.history);
       ctx.remount();
       showError("");
-      status(`${type === "undo" ? "undid" : "redid"} a ${reply.kind === "keys" ? "key-frame" : "region"} edit`);
+      status(`${type === "undo" ? "undid" : "redid"}: ${reply.says}`);
     } catch (error) {
       showError(error.message);
     }
   }
+  // Another page (a second tab) changed the project: this one fetches it again and shows it.
+  ctx.live.onChanged = async (note) => {
+    const rigged = note.kind === "rigged" || note.kind === "opened" || note.step === "rig" || note.step === "drawing";
+    if (rigged) return location.reload(); // a new rig: the page starts again on it
+    try {
+      const project = await getJSON("api/project");
+      Object.assign(ctx.project, project);
+      ctx.view.setTriangles(project.triangles);
+      show(project.history);
+      ctx.remount();
+      const verb = { undone: "undid", redone: "redid" }[note.kind];
+      status(`another page${verb ? ` ${verb}` : ""}: ${note.says || "changed the project"}`);
+    } catch (error) {
+      showError(error.message);
+    }
+  };
   ctx.undo = () => step("undo");
   ctx.redo = () => step("redo");
   ctx.live.onHistory = show;
