@@ -777,6 +777,7 @@ def _step(editing: Editing, *, undo: bool) -> dict[str, Any]:
     with editing.lock:
         history = editing.history
         stack = history.done if undo else history.undone
+        says: str | None  # what the step takes back or makes again
         if not stack:  # region edits made outside the editor are still in the project's history
             if not undo:
                 raise EditError("there is nothing to redo")
