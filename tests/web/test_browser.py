@@ -510,6 +510,21 @@ def test_two_tabs_stay_in_step_and_undo_says_what_it_undid(page, editor):
     other.close()
     assert page.errors == [] and page.locator("#error").is_hidden()
 
+
+def test_the_timeline_reaches_past_its_last_key(page, editor):
+    """Issue 44: the timeline ended 12 frames past the last key, so a key could not be set
+    further on. Stepping right now always finds a frame beyond."""
+    page.click("nav button[data-panel=timeline]")
+    last = max(page.evaluate("window.toonmotion.project.keys.keys.map((k) => k.frame)"))
+    _set_frame(page, last)
+    page.locator("#stage").click(position={"x": 5, "y": 5})  # the keys go to the page, not a field
+    for _ in range(40):
+        page.keyboard.press("ArrowRight")
+    page.wait_for_function(
+        "(f) => document.getElementById('timeline-frame').textContent === String(f)", arg=last + 40)
+    assert int(page.get_attribute("#timeline-scrub", "max")) >= last + 40 + 12
+    _set_frame(page, 0)
+
 def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
     folder = editor[1]
     page.click("nav button[data-panel=export]")

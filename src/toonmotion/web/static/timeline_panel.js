@@ -59,7 +59,7 @@ export function mount(ctx) {
       item.querySelector(".delete").onclick = () => change({ type: "delete_key", frame: key.frame });
       list.append(item);
     }
-    scrub.max = String(Math.max(24, lastFrame() + 12));
+    scrub.max = String(span());
     drawRuler();
     if (project.keys) {
       document.getElementById("timeline-fps").value = project.keys.fps;
@@ -99,8 +99,15 @@ export function mount(ctx) {
     }
   }
 
+  // The frames the ruler shows: past the last key and the current frame by 12, so that stepping
+  // right (or dragging a key right) always finds frames beyond (it ended 12 past the last key).
+  function span() {
+    return Math.max(24, lastFrame() + 12, ctx.frame + 12);
+  }
+
   function mark(at) {
     ctx.frame = at;
+    scrub.max = String(span());
     scrub.value = String(at);
     document.getElementById("timeline-frame").textContent = String(at);
     drawRuler();
@@ -183,7 +190,7 @@ export function mount(ctx) {
         || event.target instanceof HTMLSelectElement) return;
     if (event.key === "ArrowLeft" || event.key === "ArrowRight") {
       event.preventDefault();
-      const next = Math.max(0, Math.min(Number(scrub.max), ctx.frame + (event.key === "ArrowLeft" ? -1 : 1)));
+      const next = Math.max(0, ctx.frame + (event.key === "ArrowLeft" ? -1 : 1)); // the ruler grows to the right
       show(next).catch((error) => showError(error.message));
     } else if (event.key.toLowerCase() === "k") {
       document.getElementById("timeline-key").click();
