@@ -525,6 +525,32 @@ def test_the_timeline_reaches_past_its_last_key(page, editor):
     assert int(page.get_attribute("#timeline-scrub", "max")) >= last + 40 + 12
     _set_frame(page, 0)
 
+
+def test_a_pose_not_yet_keyed_survives_a_reload_and_scrubbing(page, editor):
+    """Issue 44: a pose made and not keyed was lost on reload (the Pose panel showed the rest
+    pose), and scrubbing replaced it without a word. Now it is kept at its frame: a reload opens
+    on it, and the Timeline says it is kept when scrubbing away and shows it again there."""
+    page.click("nav button[data-panel=timeline]")
+    _set_frame(page, 3)
+    page.click("nav button[data-panel=pose]")
+    _drag(page, "left_hand", -30, -50)
+    made = np.array(page.evaluate("window.toonmotion.pose"))
+    page.reload()
+    page.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=30_000)
+    np.testing.assert_allclose(page.evaluate("window.toonmotion.pose"), made, atol=1e-9)
+    assert page.evaluate("window.toonmotion.frame") == 3
+    page.click("nav button[data-panel=timeline]")
+    _set_frame(page, 9)
+    assert page.locator("#status").text_content() == \
+        "the pose made at frame 3 is not keyed: it is kept there (K keys it)"
+    assert not np.allclose(page.evaluate("window.toonmotion.pose"), made)
+    _set_frame(page, 3)
+    np.testing.assert_allclose(page.evaluate("window.toonmotion.pose"), made, atol=1e-9)
+    assert page.locator("#status").text_content() == "the pose made at frame 3, not keyed yet (K keys it)"
+    page.evaluate("() => { window.toonmotion.unkeyed = null; window.toonmotion.remember(); }")  # as found
+    _set_frame(page, 0)
+    assert page.errors == [] and page.locator("#error").is_hidden()
+
 def test_export_the_keyed_animation_to_a_gif_with_progress(page, editor):
     folder = editor[1]
     page.click("nav button[data-panel=export]")

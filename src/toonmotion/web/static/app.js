@@ -109,7 +109,9 @@ async function start() {
     const view = new MeshView(document.getElementById("mesh"), document.getElementById("overlay"), project, texture);
     const ctx = { project, view, live, token, side: document.getElementById("side"), status, showError };
     window.toonmotion = ctx; // for tests and the console
-    mountPanels(ctx);
+    const memory = remembered(ctx);
+    await restorePose(ctx, memory.saved);
+    mountPanels(ctx, memory);
     history(ctx);
     status("ready");
   } catch (error) {
@@ -118,8 +120,9 @@ async function start() {
   }
 }
 
-// The editor reopens where the user left it: the panel and the frame, kept in the browser per
-// project (the project itself, its keys and its edit history are on disk).
+// The editor reopens where the user left it: the panel, the frame and a pose made but not keyed
+// yet (ctx.unkeyed: {frame, pose, tuning}), kept in the browser per project (the project itself,
+// its keys and its edit history are on disk).
 function remembered(ctx) {
   const key = `toonmotion:${ctx.project.name}:${ctx.project.width}x${ctx.project.height}`;
   let saved = {};
@@ -132,7 +135,7 @@ function remembered(ctx) {
     saved,
     keep: (panel) => {
       try {
-        localStorage.setItem(key, JSON.stringify({ panel, frame: ctx.frame || 0 }));
+        localStorage.setItem(key, JSON.stringify({ panel, frame: ctx.frame || 0, unkeyed: ctx.unkeyed || null }));
       } catch (error) {
         // storage full or off: reopening at the first panel is no loss
       }
@@ -203,10 +206,30 @@ function history(ctx) {
   show(ctx.project.history);
 }
 
-function mountPanels(ctx) {
+// The pose the Pose panel starts from after a reload: the one made at the remembered frame and
+// not keyed, else that frame's pose in the key-frames' animation, else the rest pose.
+async function restorePose(ctx, saved) {
+  ctx.frame = Number.isInteger(saved.frame) ? saved.frame : 0;
+  const unkeyed = saved.unkeyed;
+  const fits = (pose) => Array.isArray(pose) && pose.length === ctx.project.joints.length;
+  ctx.unkeyed = unkeyed && Number.isInteger(unkeyed.frame) && fits(unkeyed.pose) ? unkeyed : null;
+  if (ctx.unkeyed && ctx.unkeyed.frame === ctx.frame) {
+    ctx.pose = ctx.unkeyed.pose.map((p) => p.slice());
+    ctx.tuning = structuredClone(ctx.unkeyed.tuning || []);
+  } else if (ctx.project.keys) {
+    try {
+      const reply = await ctx.live.request({ type: "frame", frame: ctx.frame });
+      const key = ctx.project.keys.keys.find((k) => k.frame === reply.frame);
+      ctx.pose = reply.positions;
+      ctx.tuning = key ? structuredClone(key.edits) : [];
+    } catch (error) {
+      // the rest pose, then
+    }
+  }
+}
+
+function mountPanels(ctx, memory) {
   const nav = document.getElementById("panels");
-  const memory = remembered(ctx);
-  ctx.frame = Number.isInteger(memory.saved.frame) ? memory.saved.frame : 0;
   let current = null, currentName = null;
   for (const panel of PANELS) {
     const button = document.createElement("button");
@@ -225,6 +248,7 @@ function mountPanels(ctx) {
     nav.append(button);
   }
   window.addEventListener("pagehide", () => memory.keep(currentName));
+  ctx.remember = () => memory.keep(currentName);
   ctx.remount = () => nav.querySelector(`button[data-panel=${currentName}]`).click();
   // Keys 1 to 9 open the panels, in the order of the bar.
   window.addEventListener("keydown", (event) => {

@@ -92,6 +92,7 @@ export function mount(ctx) {
     // A drag's reply is the pose it made, unless the pose was changed since (reset, another drag).
     if (reply.positions && message.type === "drag" && message.generation === generation) {
       reply.positions.forEach((p, i) => { positions[i] = p; });
+      made();
       view.draw();
     }
     view.setVertices(reply.U);
@@ -99,8 +100,17 @@ export function mount(ctx) {
     showError("");
   }, (error) => showError(error.message));
 
-  // The pose with its tuning (and a drag of points under way) sent to be deformed.
-  function posed() {
+  // The pose was changed here: it is the frame's pose made and not keyed, kept over a reload and
+  // while the Timeline shows other frames, until it is keyed.
+  function made() {
+    ctx.unkeyed = { frame: ctx.frame || 0, pose: positions.map((p) => p.slice()), tuning: structuredClone(ctx.tuning) };
+    if (ctx.remember) ctx.remember();
+  }
+
+  // The pose with its tuning (and a drag of points under way) sent to be deformed; ``changed``:
+  // by the animator (not the panel opening on it).
+  function posed(changed = true) {
+    if (changed && !pulled) made();
     started = performance.now();
     const edits = pulled ? [...ctx.tuning, pulled] : ctx.tuning;
     send({ type: "pose", positions: positions.map((p) => p.slice()), edits });
@@ -150,6 +160,7 @@ export function mount(ctx) {
       view.setVertices(reply.U);
       document.getElementById("pose-matched").textContent =
         `Sketched ${reply.bones.join(", ")}${reply.elsewhere ? " (drawn beside the figure: scaled to it)" : ""}.`;
+      made();
       showError("");
       status("sketch matched");
       if (ctx.tuning.length) posed();
@@ -292,7 +303,7 @@ export function mount(ctx) {
   setMode("drag");
   setReach(ctx.reach);
   status("drag a joint");
-  posed();
+  posed(false);
 
   return {
     positions,

@@ -89,6 +89,10 @@ export function mount(ctx) {
     try {
       const reply = await live.request(message);
       project.keys = reply.keys;
+      if (message.type === "set_key" && ctx.unkeyed && ctx.unkeyed.frame === message.frame) {
+        ctx.unkeyed = null; // keyed now
+        if (ctx.remember) ctx.remember();
+      }
       showKeys();
       showError("");
       status("saved");
@@ -205,8 +209,20 @@ export function mount(ctx) {
                                     pointercancel: rulerUp }),
                     listen(window, { keydown: keyboard, resize: drawRuler })];
 
+  // Frame ``at``: the animation's pose there, or the pose made there and not keyed yet (which
+  // scrubbing keeps, and says so, instead of dropping it).
   async function show(at) {
     mark(at);
+    const unkeyed = ctx.unkeyed;
+    if (unkeyed && unkeyed.frame === at) {
+      ctx.pose = unkeyed.pose.map((p) => p.slice());
+      ctx.tuning = structuredClone(unkeyed.tuning || []);
+      const reply = await live.request({ type: "pose", positions: ctx.pose, edits: ctx.tuning });
+      view.setVertices(reply.U);
+      status(`the pose made at frame ${at}, not keyed yet (K keys it)`);
+      return;
+    }
+    if (unkeyed) status(`the pose made at frame ${unkeyed.frame} is not keyed: it is kept there (K keys it)`);
     if (!project.keys) return;
     const reply = await live.request({ type: "frame", frame: at });
     const key = project.keys.keys.find((k) => k.frame === reply.frame);
