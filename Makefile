@@ -16,7 +16,7 @@ export UV_PYTHON_DOWNLOADS := never
 # The shared motion-capture clips (../shared beside the checkout), for the 3D scene step of the demo.
 MOCAP ?= ../shared/data/mocap
 
-.PHONY: demo test test-latest lock lint bench fuzz browser validator clean
+.PHONY: demo test test-latest lock lint bench fuzz browser validator jscheck clean
 
 $(UV): $(LOCK)
 	test -x $(TOOLS)/bin/python || $(PYTHON) -m venv $(TOOLS)
@@ -58,7 +58,7 @@ demo: $(STAMP)
 	$(BIN)/toonmotion scene demo/proxy.json --project demo/hero --keys demo/keys.json \
 	  --balloon right_hand --balls left_foot,right_foot -o demo/demo_scene.mp4
 
-test: $(STAMP) browser validator
+test: $(STAMP) browser validator jscheck
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
 	$(BIN)/python -m pytest
@@ -92,6 +92,15 @@ validator:
 	  else echo "the glTF validator tests need Node.js and npm: sudo apt-get install nodejs npm"; fi; }
 	@if command -v npm >/dev/null 2>&1 && [ ! node_modules/.package-lock.json -nt package-lock.json ]; then \
 	  npm ci --no-audit --no-fund --loglevel=error; fi
+
+# The editor's page (src/toonmotion/web/static): ESLint's recommended rules and TypeScript's checker
+# over its JSDoc types (checkJs, tsconfig.json), both pinned in package.json; 0 problems. Without npm
+# (not root, not installed) it is skipped with a word, except under CI=true.
+jscheck: validator
+	@if command -v npx >/dev/null 2>&1; then \
+	  npx --no-install eslint src/toonmotion/web/static && npx --no-install tsc -p tsconfig.json; \
+	elif [ "$$CI" = true ]; then echo "the page's checks need Node.js and npm"; exit 1; \
+	else echo "skipping the page's checks (ESLint, TypeScript): they need Node.js and npm"; fi
 
 # The long profile of the generated-bad-input suite (tests/fuzz): FUZZ_EXAMPLES cases per test;
 # the runs per format and outcome go to fuzz-report.json.

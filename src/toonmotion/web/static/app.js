@@ -2,7 +2,7 @@
 // connection, and mounts the panels. A panel is one module exporting {name, title, mount(ctx)};
 // mount returns {unmount()}. Add a panel by importing it into PANELS.
 import { MeshView } from "./mesh_view.js";
-import { typingIn } from "./panel_kit.js";
+import { element, typingIn } from "./panel_kit.js";
 import * as posePanel from "./pose_panel.js";
 import * as rigPanel from "./rig_panel.js";
 import * as regionsPanel from "./regions_panel.js";
@@ -53,9 +53,13 @@ class Live {
   constructor(url) {
     this.next = 1;
     this.waiting = new Map();
+    /** @type {((note: any) => void) | null} another page changed the project */
+    this.onChanged = null;
+    /** @type {((counts: any) => void) | null} a reply carried the undo history's counts */
+    this.onHistory = null;
+    this.socket = new WebSocket(url);
     this.opened = new Promise((resolve, reject) => {
-      this.socket = new WebSocket(url);
-      this.socket.onopen = () => resolve();
+      this.socket.onopen = () => resolve(undefined);
       this.socket.onerror = () => reject(new Error("the live connection failed"));
     });
     this.socket.onmessage = (event) => {
@@ -84,10 +88,10 @@ class Live {
 
   request(message, progress = null) {
     const id = this.next++;
-    const reply = this.opened.then(() => new Promise((resolve, reject) => {
+    const reply = /** @type {Promise<any> & {id: number}} */ (this.opened.then(() => new Promise((resolve, reject) => {
       this.waiting.set(id, { resolve, reject, progress });
       this.socket.send(JSON.stringify({ ...message, id }));
-    }));
+    })));
     reply.id = id;
     return reply;
   }
@@ -106,9 +110,9 @@ async function start() {
     const wsURL = `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws?token=${encodeURIComponent(token)}`;
     const live = new Live(wsURL);
     await live.opened;
-    const view = new MeshView(document.getElementById("mesh"), document.getElementById("overlay"), project, texture);
+    const view = new MeshView(element("mesh", HTMLCanvasElement), element("overlay", HTMLCanvasElement), project, texture);
     const ctx = { project, view, live, token, side: document.getElementById("side"), status, showError };
-    window.toonmotion = ctx; // for tests and the console
+    /** @type {any} */ (window).toonmotion = ctx; // for tests and the console
     const memory = remembered(ctx);
     await restorePose(ctx, memory.saved);
     mountPanels(ctx, memory);
@@ -128,7 +132,7 @@ function remembered(ctx) {
   let saved = {};
   try {
     saved = JSON.parse(localStorage.getItem(key) || "{}");
-  } catch (error) {
+  } catch {
     saved = {};
   }
   return {
@@ -136,7 +140,7 @@ function remembered(ctx) {
     keep: (panel) => {
       try {
         localStorage.setItem(key, JSON.stringify({ panel, frame: ctx.frame || 0, unkeyed: ctx.unkeyed || null }));
-      } catch (error) {
+      } catch {
         // storage full or off: reopening at the first panel is no loss
       }
     },
@@ -147,7 +151,7 @@ function remembered(ctx) {
 // the server's, kept in the project folder, so it survives a reload. After a step the current
 // panel is mounted again on the project as it now is; undoing a rig reloads the page.
 function history(ctx) {
-  const undo = document.getElementById("undo"), redo = document.getElementById("redo");
+  const undo = element("undo", HTMLButtonElement), redo = element("redo", HTMLButtonElement);
   const show = (counts) => {
     ctx.project.history = counts;
     undo.disabled = counts.undo === 0 && ctx.project.edits === 0;
@@ -222,7 +226,7 @@ async function restorePose(ctx, saved) {
       const key = ctx.project.keys.keys.find((k) => k.frame === reply.frame);
       ctx.pose = reply.positions;
       ctx.tuning = key ? structuredClone(key.edits) : [];
-    } catch (error) {
+    } catch {
       // the rest pose, then
     }
   }
@@ -249,15 +253,15 @@ function mountPanels(ctx, memory) {
   }
   window.addEventListener("pagehide", () => memory.keep(currentName));
   ctx.remember = () => memory.keep(currentName);
-  ctx.remount = () => nav.querySelector(`button[data-panel=${currentName}]`).click();
+  ctx.remount = () => /** @type {HTMLButtonElement} */ (nav.querySelector(`button[data-panel=${currentName}]`)).click();
   // Keys 1 to 9 open the panels, in the order of the bar.
   window.addEventListener("keydown", (event) => {
     if (event.ctrlKey || event.metaKey || event.altKey || typingIn(event.target)) return;
-    const button = nav.children[Number(event.key) - 1];
+    const button = /** @type {HTMLButtonElement | undefined} */ (nav.children[Number(event.key) - 1]);
     if (/^[1-9]$/.test(event.key) && button) button.click();
   });
-  const start = [...nav.children].find((b) => b.dataset.panel === memory.saved.panel) || nav.firstChild;
-  start.click();
+  const buttons = [.../** @type {HTMLCollectionOf<HTMLButtonElement>} */ (nav.children)];
+  (buttons.find((b) => b.dataset.panel === memory.saved.panel) || buttons[0]).click();
 }
 
 // A text selection on the page (Ctrl+A, a stroke that left the stage) must not turn a drag on

@@ -6,7 +6,7 @@
 // was (green sure, red unsure); drag a joint that went astray at any frame and track again from
 // there (the frames before it are kept); then retarget the motion onto the character and play it.
 
-import { hexOf, listen, nearest, rgbOf } from "./panel_kit.js";
+import { element, hexOf, listen, nearest, rgbOf } from "./panel_kit.js";
 
 export const name = "capture";
 export const title = "Capture";
@@ -95,8 +95,8 @@ export function mount(ctx) {
     }
     if (at !== frame) corrected = {};
     frame = at;
-    document.getElementById("capture-retrack").disabled = Object.keys(corrected).length === 0;
-    document.getElementById("capture-scrub").value = String(at);
+    element("capture-retrack", HTMLButtonElement).disabled = Object.keys(corrected).length === 0;
+    element("capture-scrub", HTMLInputElement).value = String(at);
     document.getElementById("capture-info").textContent =
       `${footage.frames} frames of ${footage.width}×${footage.height} at ${Number(footage.fps.toFixed(2))} fps; frame ${at}`;
     if (!images[at]) {
@@ -113,8 +113,8 @@ export function mount(ctx) {
     if (!reply.ok) throw new Error(body.error);
     return body;
   }
-  document.getElementById("capture-file").onchange = async (event) => {
-    const file = event.target.files[0];
+  element("capture-file", HTMLInputElement).onchange = async (event) => {
+    const file = /** @type {HTMLInputElement} */ (event.target).files[0];
     if (!file) return;
     const suffix = file.name.split(".").pop().toLowerCase();
     status("sending the footage…");
@@ -126,11 +126,11 @@ export function mount(ctx) {
     }
   };
   // A folder of frames: its images in name order (frame_2 before frame_10), sent one by one.
-  document.getElementById("capture-frames").onchange = async (event) => {
-    const files = [...event.target.files].filter((f) => /\.(png|jpe?g|webp)$/i.test(f.name))
+  element("capture-frames", HTMLInputElement).onchange = async (event) => {
+    const files = [.../** @type {HTMLInputElement} */ (event.target).files].filter((f) => /\.(png|jpe?g|webp)$/i.test(f.name))
       .sort((a, b) => a.name.localeCompare(b.name, undefined, { numeric: true }));
     if (!files.length) return showError("the folder holds no PNG, JPEG or WebP frames");
-    const bar = document.getElementById("capture-progress");
+    const bar = element("capture-progress", HTMLProgressElement);
     bar.hidden = false;
     bar.max = files.length;
     try {
@@ -163,21 +163,21 @@ export function mount(ctx) {
     const side = sides.length ? Math.round(sides[Math.floor(sides.length / 2)]) : SIZE;
     joints = project.joints.map((j) => ({ name: j.name, parent: j.parent < 0 ? null : project.joints[j.parent].name,
                                            position: [j.position[0] * sx, j.position[1] * sy], size: [side, side] }));
-    document.getElementById("capture-scrub").max = String(footage.frames - 1);
-    document.getElementById("capture-track").disabled = false;
+    element("capture-scrub", HTMLInputElement).max = String(footage.frames - 1);
+    element("capture-track", HTMLButtonElement).disabled = false;
     show(0);
     status("place the joints on the first frame");
     showError("");
     if (paper()) suggestAgain(); // sent suggestions go by the border's colour
     else if (footage.border) { // show which colour the figure was told from
-      document.getElementById("capture-paper-colour").value = hexOf(footage.border);
+      element("capture-paper-colour", HTMLInputElement).value = hexOf(footage.border);
     }
   }
 
-  document.getElementById("capture-scrub").oninput = (event) => show(Number(event.target.value));
+  element("capture-scrub", HTMLInputElement).oninput = (event) => show(Number(/** @type {HTMLInputElement} */ (event.target).value));
 
   async function trackFrom(message) {
-    const bar = document.getElementById("capture-progress"), cancel = document.getElementById("capture-cancel");
+    const bar = element("capture-progress", HTMLProgressElement), cancel = element("capture-cancel", HTMLButtonElement);
     bar.hidden = false;
     status("tracking…");
     const job = live.request(message, ({ index, count }) => { bar.max = count; bar.value = index; });
@@ -206,7 +206,7 @@ export function mount(ctx) {
     // The motion lists the joints parents first: follow its order.
     joints = tracked.names.map((n) => joints.find((j) => j.name === n));
     corrected = {};
-    document.getElementById("capture-play").disabled = false;
+    element("capture-play", HTMLButtonElement).disabled = false;
     showPoorly(tracked.poorly);
     const notes = document.getElementById("capture-notes");
     notes.textContent = (tracked.notes || []).join(" ");
@@ -227,18 +227,18 @@ export function mount(ctx) {
       go.textContent = `${name}: ${Math.round(100 * fraction)}%, from frame ${start}`;
       go.title = `${name} matched poorly in ${Math.round(100 * fraction)}% of the frames; its longest stretch, ${length} frame${length > 1 ? "s" : ""}, starts at frame ${start}`;
       go.onclick = () => {
-        document.getElementById("capture-scrub").value = String(start);
+        element("capture-scrub", HTMLInputElement).value = String(start);
         show(start);
       };
       line.append(i ? " " : "", go);
     });
   }
   const paper = () => {
-    if (!document.getElementById("capture-paper").checked) return null;
-    return rgbOf(document.getElementById("capture-paper-colour").value);
+    if (!element("capture-paper", HTMLInputElement).checked) return null;
+    return rgbOf(element("capture-paper-colour", HTMLInputElement).value);
   };
-  document.getElementById("capture-paper-colour").addEventListener("input", () => {
-    document.getElementById("capture-paper").checked = true; // picking a colour means it
+  element("capture-paper-colour", HTMLInputElement).addEventListener("input", () => {
+    element("capture-paper", HTMLInputElement).checked = true; // picking a colour means it
   });
   // The orange suggestions follow the colour the footage is drawn on (once it is picked).
   async function suggestAgain() {
@@ -248,7 +248,7 @@ export function mount(ctx) {
       const reply = await live.request({ type: "suggest", background });
       if (footage !== asked) return; // other footage was sent meanwhile: it came with its own
       footage.joints = reply.joints;
-      const on = background ? document.getElementById("capture-paper-colour").value : "the border's colour";
+      const on = background ? element("capture-paper-colour", HTMLInputElement).value : "the border's colour";
       if (!tracked) status(`${reply.joints.length} joints suggested on the figure drawn on ${on}`);
       showError("");
       show(frame);
@@ -256,30 +256,30 @@ export function mount(ctx) {
       showError(error.message);
     }
   }
-  document.getElementById("capture-paper-colour").addEventListener("change", suggestAgain);
-  document.getElementById("capture-paper").addEventListener("change", suggestAgain);
-  const how = () => ({ free: document.getElementById("capture-free").checked,
-    frame_by_frame: document.getElementById("capture-frame-by-frame").checked,
-    both_ways: document.getElementById("capture-both-ways").checked,
-    full_resolution: document.getElementById("capture-full-resolution").checked, background: paper() });
+  element("capture-paper-colour", HTMLInputElement).addEventListener("change", suggestAgain);
+  element("capture-paper", HTMLInputElement).addEventListener("change", suggestAgain);
+  const how = () => ({ free: element("capture-free", HTMLInputElement).checked,
+    frame_by_frame: element("capture-frame-by-frame", HTMLInputElement).checked,
+    both_ways: element("capture-both-ways", HTMLInputElement).checked,
+    full_resolution: element("capture-full-resolution", HTMLInputElement).checked, background: paper() });
   // Both ways is a choice of paths over the whole clip: it and "each frame's own choice" exclude each other.
   for (const [id, other] of [["capture-both-ways", "capture-frame-by-frame"], ["capture-frame-by-frame", "capture-both-ways"]]) {
-    document.getElementById(id).addEventListener("change", (event) => {
-      if (event.target.checked) document.getElementById(other).checked = false;
+    element(id, HTMLInputElement).addEventListener("change", (event) => {
+      if (/** @type {HTMLInputElement} */ (event.target).checked) element(other, HTMLInputElement).checked = false;
     });
   }
-  document.getElementById("capture-track").onclick = () => { frame = 0; trackFrom({ type: "track", joints, ...how() }); };
-  document.getElementById("capture-retrack").onclick = () =>
+  element("capture-track", HTMLButtonElement).onclick = () => { frame = 0; trackFrom({ type: "track", joints, ...how() }); };
+  element("capture-retrack", HTMLButtonElement).onclick = () =>
     trackFrom({ type: "track", joints, at: frame, set: corrected, ...how() });
 
-  document.getElementById("capture-play").onclick = async () => {
+  element("capture-play", HTMLButtonElement).onclick = async () => {
     if (playing) return stop();
     try {
       const reply = await live.request({ type: "retarget" });
       view.canvas.style.visibility = "visible";
       view.drawOverlay = () => {};
       playing = true;
-      document.getElementById("capture-play").textContent = "Stop";
+      element("capture-play", HTMLButtonElement).textContent = "Stop";
       let at = reply.first;
       const next = async () => {
         if (!playing) return;
@@ -299,7 +299,7 @@ export function mount(ctx) {
   function stop() {
     playing = false;
     clearTimeout(timer);
-    document.getElementById("capture-play").textContent = "Retarget and play";
+    element("capture-play", HTMLButtonElement).textContent = "Retarget and play";
   }
 
   const unlisten = listen(view.overlay, {
@@ -326,7 +326,7 @@ export function mount(ctx) {
       if (dragging < 0) return;
       if (tracked) {  // a correction at this frame
         corrected[joints[dragging].name] = fromEvent(event);
-        document.getElementById("capture-retrack").disabled = false;
+        element("capture-retrack", HTMLButtonElement).disabled = false;
       } else {  // placing: snap to a suggested joint nearby
         const s = nearest({ toCanvas, toDrawing: fromEvent }, footage.joints.map((j) => j.position), event, SNAP);
         joints[dragging].position = s >= 0 ? footage.joints[s].position.slice() : fromEvent(event);

@@ -5,7 +5,7 @@
 // Pose and Timeline panels. For the animation: the filter's strength and width, and a preview
 // that plays the key-frames with and without it.
 
-import { listen, nearest, newest } from "./panel_kit.js";
+import { element, listen, nearest, newest } from "./panel_kit.js";
 
 export const name = "exaggerate";
 export const title = "Exaggerate";
@@ -108,11 +108,11 @@ export function mount(ctx) {
   const up = () => { dragging = false; };
   const unlisten = listen(overlay, { pointerdown: down, pointermove: move, pointerup: up });
 
-  document.getElementById("exaggerate-use").onclick = () => {
+  element("exaggerate-use", HTMLButtonElement).onclick = () => {
     ctx.pose = shown.map((p) => p.slice());
     status("the exaggerated pose is now the Pose panel's");
   };
-  document.getElementById("exaggerate-clear").onclick = () => {
+  element("exaggerate-clear", HTMLButtonElement).onclick = () => {
     arrow = null;
     fixed = new Set();
     exaggerate();
@@ -122,13 +122,13 @@ export function mount(ctx) {
     if (playing) return stop();
     if (!project.keys) return showError("key some poses in the Timeline panel first");
     playing = true;
-    document.getElementById("exaggerate-play").textContent = "Stop";
+    element("exaggerate-play", HTMLButtonElement).textContent = "Stop";
     const keys = project.keys.keys, first = keys[0].frame, last = keys[keys.length - 1].frame;
     let at = first;
     const next = async () => {
       if (!playing) return;
       const started = performance.now();
-      const on = document.getElementById("exaggerate-on").checked;
+      const on = element("exaggerate-on", HTMLInputElement).checked;
       const message = { type: "frame", frame: at };
       if (on) Object.assign(message, settings());
       try {
@@ -149,19 +149,19 @@ export function mount(ctx) {
 
   // The animation's filter settings, also what the Export panel uses for an exaggerated export.
   function settings() {
-    ctx.exaggeration = { strength: Number(document.getElementById("exaggerate-strength").value),
-                         sigma: Number(document.getElementById("exaggerate-sigma").value) };
+    ctx.exaggeration = { strength: Number(element("exaggerate-strength", HTMLInputElement).value),
+                         sigma: Number(element("exaggerate-sigma", HTMLInputElement).value) };
     return ctx.exaggeration;
   }
-  document.getElementById("exaggerate-strength").onchange = settings;
-  document.getElementById("exaggerate-sigma").onchange = settings;
+  element("exaggerate-strength", HTMLInputElement).onchange = settings;
+  element("exaggerate-sigma", HTMLInputElement).onchange = settings;
 
   function stop() {
     playing = false;
     clearTimeout(timer);
-    document.getElementById("exaggerate-play").textContent = "Preview";
+    element("exaggerate-play", HTMLButtonElement).textContent = "Preview";
   }
-  document.getElementById("exaggerate-play").onclick = preview;
+  element("exaggerate-play", HTMLButtonElement).onclick = preview;
   exaggerate();
   status("fix joints, then drag from the root");
 

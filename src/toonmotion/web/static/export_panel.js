@@ -2,7 +2,7 @@
 // bar: pictures (GIF, MP4, PNG frames, APNG, WebP, WebM, a sprite sheet) or rigs other tools replay
 // (glTF, Spine). Every file written can then be downloaded.
 
-import { rgbOf } from "./panel_kit.js";
+import { element, rgbOf } from "./panel_kit.js";
 
 export const name = "export";
 export const title = "Export";
@@ -43,36 +43,37 @@ export function mount(ctx) {
       <button id="export-cancel" hidden>Cancel</button></p>
     <p id="export-result"></p>
     <img id="export-preview" alt="the exported animation" hidden style="max-width: 100%">`;
-  const formatChoice = document.getElementById("export-format");
-  const pictureOnly = ["export-width", "export-height", "export-background"];
+  const formatChoice = element("export-format", HTMLSelectElement);
+  const pictureOnly = [element("export-width", HTMLInputElement), element("export-height", HTMLInputElement),
+                       element("export-background", HTMLSelectElement)];
   formatChoice.onchange = () => {
     const rig = ["glb", "spine"].includes(formatChoice.value);
     document.getElementById("export-rig-note").hidden = !rig;
-    for (const id of pictureOnly) document.getElementById(id).disabled = rig;
+    for (const field of pictureOnly) field.disabled = rig;
     for (const box of side.querySelectorAll("input[name=export-overlay]")) {
       box.disabled = !["gif", "mp4", "png"].includes(formatChoice.value);
     }
   };
-  const colourChoice = document.getElementById("export-background");
-  colourChoice.onchange = () => { document.getElementById("export-colour").hidden = colourChoice.value !== "custom"; };
-  const button = document.getElementById("export-go");
-  const bar = document.getElementById("export-progress");
-  const cancel = document.getElementById("export-cancel");
+  const colourChoice = element("export-background", HTMLSelectElement);
+  colourChoice.onchange = () => { element("export-colour", HTMLInputElement).hidden = colourChoice.value !== "custom"; };
+  const button = element("export-go", HTMLButtonElement);
+  const bar = element("export-progress", HTMLProgressElement);
+  const cancel = element("export-cancel", HTMLButtonElement);
   const result = document.getElementById("export-result");
 
   button.onclick = async () => {
-    const format = document.getElementById("export-format").value;
-    const message = { type: "export", format, name: document.getElementById("export-name").value };
+    const format = element("export-format", HTMLSelectElement).value;
+    const message = { type: "export", format, name: element("export-name", HTMLInputElement).value };
     if (!["glb", "spine"].includes(format)) {
-      const width = document.getElementById("export-width").value, height = document.getElementById("export-height").value;
+      const width = element("export-width", HTMLInputElement).value, height = element("export-height", HTMLInputElement).value;
       if (!width !== !height) return showError("give the size's width and height, or neither (the view's own)");
       if (width) message.size = [Number(width), Number(height)];
-      const hex = colourChoice.value === "custom" ? document.getElementById("export-colour").value : colourChoice.value;
+      const hex = colourChoice.value === "custom" ? element("export-colour", HTMLInputElement).value : colourChoice.value;
       if (hex) message.background = rgbOf(hex);
       message.overlays = [...side.querySelectorAll("input[name=export-overlay]:checked:not(:disabled)")]
         .map((box) => box.value);
     }
-    if (document.getElementById("export-exaggerated").checked) {
+    if (element("export-exaggerated", HTMLInputElement).checked) {
       Object.assign(message, ctx.exaggeration || { strength: 1.5, sigma: 3 });
     }
     button.disabled = true;
@@ -90,7 +91,7 @@ export function mount(ctx) {
       const reply = await job;
       const size = reply.size ? `, ${reply.size[0]}×${reply.size[1]}` : "";
       result.textContent = `${reply.frames} frames${size} → ${reply.file} `;
-      const preview = document.getElementById("export-preview");
+      const preview = element("export-preview", HTMLImageElement);
       preview.hidden = true;
       if (format !== "png") {
         for (const file of reply.files) {

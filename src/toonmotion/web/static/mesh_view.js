@@ -28,6 +28,7 @@ export class MeshView {
     this.project = project;
     this.rest = new Float32Array(project.vertices);
     this.vertices = new Float32Array(project.vertices);
+    /** @type {(pen: CanvasRenderingContext2D) => void} what the panel draws over the drawing */
     this.drawOverlay = () => {};
     const gl = meshCanvas.getContext("webgl2", { premultipliedAlpha: true, alpha: true, preserveDrawingBuffer: true });
     if (!gl) throw new Error("this browser has no WebGL 2, which the editor needs to draw the drawing");

@@ -52,7 +52,7 @@ export function newest(live, onReply, onError) {
 export function capture(target, event) {
   try {
     target.setPointerCapture(event.pointerId);
-  } catch (error) {
+  } catch {
     // not an active pointer: its events still reach the target while over it
   }
 }
@@ -67,4 +67,18 @@ export function typingIn(target) {
   if (target instanceof HTMLSelectElement || target instanceof HTMLTextAreaElement) return true;
   return target instanceof HTMLInputElement
     && !["range", "checkbox", "radio", "button", "color", "file"].includes(target.type);
+}
+
+/**
+ * The page's element ``id``, which must be a ``kind`` (HTMLInputElement, HTMLButtonElement, ...):
+ * a missing or different element is a bug, said at once.
+ * @template {HTMLElement} T
+ * @param {string} id
+ * @param {{new (): T, name: string}} kind
+ * @returns {T}
+ */
+export function element(id, kind) {
+  const found = document.getElementById(id);
+  if (!(found instanceof kind)) throw new Error(`the page has no ${kind.name} #${id}`);
+  return found;
 }

@@ -12,7 +12,7 @@
 // reply is awaited, newer drags replace the queued pose, so the drawing keeps up with the
 // pointer instead of falling behind it.
 
-import { capture, listen, nearest, newest } from "./panel_kit.js";
+import { capture, element, listen, nearest, newest } from "./panel_kit.js";
 
 export const name = "pose";
 export const title = "Pose";
@@ -136,7 +136,7 @@ export function mount(ctx) {
     const count = ctx.tuning.length;
     document.getElementById("pose-tuning").textContent = count
       ? `${count} fine-tuning edit${count === 1 ? "" : "s"} on this pose (keyed with it).` : "";
-    document.getElementById("pose-untune").disabled = count === 0;
+    element("pose-untune", HTMLButtonElement).disabled = count === 0;
   }
 
   // Sketching: each stroke's points in drawing pixels; a pen's pressure sets the line's width,
@@ -289,14 +289,14 @@ export function mount(ctx) {
   const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up, pointercancel: up,
                                       dblclick: pin }),
                     listen(window, { keydown: keys })];
-  document.getElementById("pose-reset").onclick = () => {
+  element("pose-reset", HTMLButtonElement).onclick = () => {
     generation++; // a drag's reply still to come is not this pose
     rest.forEach((p, i) => { positions[i] = p.slice(); });
     ctx.tuning.length = 0;
     posed();
     overlaps();
   };
-  document.getElementById("pose-untune").onclick = () => {
+  element("pose-untune", HTMLButtonElement).onclick = () => {
     ctx.tuning.pop();
     posed();
   };

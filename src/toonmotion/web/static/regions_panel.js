@@ -4,7 +4,7 @@
 // editor's Undo / Redo (Ctrl+Z, Ctrl+Shift+Z or Ctrl+Y) take edits back and make them again,
 // also after a reload: the history lives in the project.
 
-import { listen } from "./panel_kit.js";
+import { element, listen } from "./panel_kit.js";
 
 export const name = "regions";
 export const title = "Regions";
@@ -21,7 +21,7 @@ export function mount(ctx) {
 
     <p id="regions-state"></p>
     <p id="regions-fallback"></p>`;
-  const select = document.getElementById("regions-bone");
+  const select = element("regions-bone", HTMLSelectElement);
   for (const bone of project.bones) select.append(new Option(bone, bone));
 
   function showState() {

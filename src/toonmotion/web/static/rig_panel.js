@@ -7,7 +7,7 @@
 // drawing (PNG or JPEG, with or without a mask) can be opened or dropped on the stage: it is
 // rigged into this project, and Undo brings the old one back.
 
-import { listen, nearest } from "./panel_kit.js";
+import { element, listen, nearest } from "./panel_kit.js";
 
 // A file the user chose, sent to the project's upload area; resolves with the server's reply.
 async function upload(ctx, part, file, query = "") {
@@ -30,7 +30,7 @@ export function mount(ctx) {
   const draft = project.joints.map((j) => ({ name: j.name, parent: j.parent < 0 ? null : project.joints[j.parent].name,
                                              position: j.position.slice() }));
   ctx.draft = draft; // for tests and the console
-  let selected = -1, dragging = false, moved = false;
+  let selected = -1, dragging = false;
 
   side.innerHTML = `<h2>Rig</h2>
     <p>Drag joints (they snap to the orange suggestions, then to the grey curve skeleton); click an
@@ -59,10 +59,10 @@ export function mount(ctx) {
     box.innerHTML = `<p><label>Name <input id="rig-name" value="${joint.name}"></label></p>
       <p><label>Parent <select id="rig-parent"><option value="">(none: a root)</option></select></label></p>
       <p><button id="rig-delete">Delete joint</button></p>`;
-    const parent = document.getElementById("rig-parent");
+    const parent = element("rig-parent", HTMLSelectElement);
     for (const other of draft) if (other !== joint) parent.append(new Option(other.name, other.name, false, other.name === joint.parent));
-    document.getElementById("rig-name").onchange = (event) => {
-      const old = joint.name, next = event.target.value.trim();
+    element("rig-name", HTMLInputElement).onchange = (event) => {
+      const old = joint.name, next = /** @type {HTMLInputElement} */ (event.target).value.trim();
       if (!next || draft.some((j) => j !== joint && j.name === next)) return showError(`a joint needs its own name, not ${JSON.stringify(next)}`);
       joint.name = next;
       for (const j of draft) if (j.parent === old) j.parent = next;
@@ -70,7 +70,7 @@ export function mount(ctx) {
       view.draw();
     };
     parent.onchange = () => { joint.parent = parent.value || null; view.draw(); };
-    document.getElementById("rig-delete").onclick = remove;
+    element("rig-delete", HTMLButtonElement).onclick = remove;
   }
 
   function remove() {
@@ -86,7 +86,7 @@ export function mount(ctx) {
   let maskImage = null;
   view.drawOverlay = (pen) => {
     const ratio = window.devicePixelRatio || 1;
-    if (maskImage && document.getElementById("rig-show-mask").checked) {
+    if (maskImage && element("rig-show-mask", HTMLInputElement).checked) {
       const [x, y] = view.toCanvas([0, 0]);
       pen.globalAlpha = 0.35;
       pen.drawImage(maskImage, x, y, project.width * view.scale, project.height * view.scale);
@@ -145,7 +145,6 @@ export function mount(ctx) {
   const overlay = view.overlay;
   const down = (event) => {
     const hit = nearest(view, draft.map((j) => j.position), event, HANDLE + 4);
-    moved = false;
     if (hit >= 0) {
       selected = hit;
       dragging = true;
@@ -168,7 +167,6 @@ export function mount(ctx) {
   const move = (event) => {
     if (!dragging) return;
     draft[selected].position = snapped(event);
-    moved = true;
     view.draw();
   };
   const up = () => { dragging = false; };
@@ -184,8 +182,8 @@ export function mount(ctx) {
   const unlisten = [listen(overlay, { pointerdown: down, pointermove: move, pointerup: up }),
                     listen(window, { keydown: keys })];
 
-  document.getElementById("rig-go").onclick = async () => {
-    const button = document.getElementById("rig-go");
+  element("rig-go", HTMLButtonElement).onclick = async () => {
+    const button = element("rig-go", HTMLButtonElement);
     button.disabled = true;
     status("rigging…");
     try {
@@ -198,7 +196,7 @@ export function mount(ctx) {
       button.disabled = false;
     }
   };
-  document.getElementById("rig-show-mask").onchange = async () => {
+  element("rig-show-mask", HTMLInputElement).onchange = async () => {
     if (!maskImage) {
       maskImage = new Image();
       maskImage.src = `api/mask.png?token=${encodeURIComponent(ctx.token)}`;
@@ -207,8 +205,8 @@ export function mount(ctx) {
     view.draw();
   };
 
-  document.getElementById("rig-skeleton-file").onchange = async (event) => {
-    const file = event.target.files[0];
+  element("rig-skeleton-file", HTMLInputElement).onchange = async (event) => {
+    const file = /** @type {HTMLInputElement} */ (event.target).files[0];
     if (!file) return;
     try {
       const format = /\.json$/i.test(file.name) ? "json" : "yaml";
@@ -231,15 +229,15 @@ export function mount(ctx) {
     try {
       const reply = await upload(ctx, part, file);
       if (part === "drawing") haveDrawing = true; else haveMask = true;
-      document.getElementById("rig-open").disabled = !haveDrawing;
+      element("rig-open", HTMLButtonElement).disabled = !haveDrawing;
       showError("");
       status(`${part} ${reply.width}×${reply.height} ready: rig it`);
     } catch (error) {
       showError(error.message);
     }
   }
-  document.getElementById("rig-drawing").onchange = (event) => choose("drawing", event.target.files[0]);
-  document.getElementById("rig-mask").onchange = (event) => choose("mask", event.target.files[0]);
+  element("rig-drawing", HTMLInputElement).onchange = (event) => choose("drawing", /** @type {HTMLInputElement} */ (event.target).files[0]);
+  element("rig-mask", HTMLInputElement).onchange = (event) => choose("mask", /** @type {HTMLInputElement} */ (event.target).files[0]);
   const stage = document.getElementById("stage");
   const over = (event) => { event.preventDefault(); };
   const dropped = (event) => {
@@ -249,8 +247,8 @@ export function mount(ctx) {
     else showError("drop a PNG or JPEG drawing");
   };
   unlisten.push(listen(stage, { dragover: over, drop: dropped }));
-  document.getElementById("rig-open").onclick = async () => {
-    const button = document.getElementById("rig-open"), bar = document.getElementById("rig-progress");
+  element("rig-open", HTMLButtonElement).onclick = async () => {
+    const button = element("rig-open", HTMLButtonElement), bar = element("rig-progress", HTMLProgressElement);
     const skeleton = side.querySelector("input[name=rig-skeleton]:checked").value;
     button.disabled = true;
     bar.hidden = false;

@@ -7,7 +7,7 @@
 // PROJECT PROJECT/keys.json` reads). Scrubbing to a frame also makes its pose the Pose panel's,
 // to adjust and key again.
 
-import { listen } from "./panel_kit.js";
+import { element, listen } from "./panel_kit.js";
 
 const RULER = 44; // the ruler's height, CSS pixels
 
@@ -31,7 +31,7 @@ export function mount(ctx) {
     key's diamond to move it, click to go to a frame.</p>
     <p><kbd>K</kbd> key this frame, <kbd>←</kbd> <kbd>→</kbd> step, <kbd>Space</kbd> play,
     <kbd>Delete</kbd> delete this frame's key.</p>`;
-  const scrub = document.getElementById("timeline-scrub");
+  const scrub = element("timeline-scrub", HTMLInputElement);
   const ruler = document.createElement("canvas");
   ruler.id = "timeline-ruler";
   ruler.className = "ruler";
@@ -52,18 +52,19 @@ export function mount(ctx) {
       item.innerHTML = `key at frame <input type="number" min="0" value="${key.frame}" style="width: 5em"
         aria-label="move to frame"> <button class="copy">Copy here</button> <button class="delete">Delete</button>`;
       item.querySelector("input").onchange = (event) =>
-        change({ type: "move_key", frame: key.frame, to: Number(event.target.value) });
-      item.querySelector(".copy").title = "Key this pose again at the current frame";
-      item.querySelector(".copy").onclick = () =>
-        change({ type: "set_key", frame: ctx.frame, positions: key.positions, edits: key.edits });
-      item.querySelector(".delete").onclick = () => change({ type: "delete_key", frame: key.frame });
+        change({ type: "move_key", frame: key.frame, to: Number(/** @type {HTMLInputElement} */ (event.target).value) });
+      const copy = /** @type {HTMLButtonElement} */ (item.querySelector(".copy"));
+      copy.title = "Key this pose again at the current frame";
+      copy.onclick = () => change({ type: "set_key", frame: ctx.frame, positions: key.positions, edits: key.edits });
+      /** @type {HTMLButtonElement} */ (item.querySelector(".delete")).onclick =
+        () => change({ type: "delete_key", frame: key.frame });
       list.append(item);
     }
     scrub.max = String(span());
     drawRuler();
     if (project.keys) {
-      document.getElementById("timeline-fps").value = project.keys.fps;
-      document.getElementById("timeline-ease").value = project.keys.ease;
+      element("timeline-fps", HTMLInputElement).value = project.keys.fps;
+      element("timeline-ease", HTMLSelectElement).value = project.keys.ease;
     }
   }
 
@@ -113,7 +114,7 @@ export function mount(ctx) {
     ctx.frame = at;
     scrub.max = String(span());
     scrub.value = String(at);
-    document.getElementById("timeline-frame").textContent = String(at);
+    element("timeline-frame", HTMLOutputElement).textContent = String(at);
     drawRuler();
   }
 
@@ -197,10 +198,10 @@ export function mount(ctx) {
       const next = Math.max(0, ctx.frame + (event.key === "ArrowLeft" ? -1 : 1)); // the ruler grows to the right
       show(next).catch((error) => showError(error.message));
     } else if (event.key.toLowerCase() === "k") {
-      document.getElementById("timeline-key").click();
+      element("timeline-key", HTMLButtonElement).click();
     } else if (event.key === " " && !(event.target instanceof HTMLButtonElement)) { // a button takes its own
       event.preventDefault();
-      document.getElementById("timeline-play").click();
+      element("timeline-play", HTMLButtonElement).click();
     } else if (event.key === "Delete" && project.keys && project.keys.keys.some((k) => k.frame === ctx.frame)) {
       change({ type: "delete_key", frame: ctx.frame });
     }
@@ -234,7 +235,7 @@ export function mount(ctx) {
   async function play() {
     if (!project.keys || playing) return;
     playing = true;
-    document.getElementById("timeline-play").textContent = "Stop";
+    element("timeline-play", HTMLButtonElement).textContent = "Stop";
     const keys = project.keys.keys, first = keys[0].frame, last = keys[keys.length - 1].frame;
     const step = 1000 / project.keys.fps;
     let at = first;
@@ -256,19 +257,19 @@ export function mount(ctx) {
   function stop() {
     playing = false;
     clearTimeout(timer);
-    document.getElementById("timeline-play").textContent = "Play";
+    element("timeline-play", HTMLButtonElement).textContent = "Play";
   }
 
   scrub.oninput = () => show(Number(scrub.value)).catch((error) => showError(error.message));
-  document.getElementById("timeline-key").onclick = () => {
+  element("timeline-key", HTMLButtonElement).onclick = () => {
     const positions = ctx.pose || project.joints.map((j) => j.position);
     change({ type: "set_key", frame: ctx.frame, positions, edits: ctx.tuning || [] });
   };
-  document.getElementById("timeline-play").onclick = () => (playing ? stop() : play());
-  const timing = () => change({ type: "timing", fps: Number(document.getElementById("timeline-fps").value),
-                                ease: document.getElementById("timeline-ease").value });
-  document.getElementById("timeline-fps").onchange = timing;
-  document.getElementById("timeline-ease").onchange = timing;
+  element("timeline-play", HTMLButtonElement).onclick = () => (playing ? stop() : play());
+  const timing = () => change({ type: "timing", fps: Number(element("timeline-fps", HTMLInputElement).value),
+                                ease: element("timeline-ease", HTMLSelectElement).value });
+  element("timeline-fps", HTMLInputElement).onchange = timing;
+  element("timeline-ease", HTMLSelectElement).onchange = timing;
   showKeys();
   mark(ctx.frame); // the drawing stays as the Pose panel left it, to be keyed here
   status(project.keys ? "scrub or play" : "key a pose to start");
