@@ -10,7 +10,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import shutil
 import socket
 import threading
 import time
@@ -25,25 +24,14 @@ from toonmotion import api
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose
 from toonmotion.samples import sample_character
+from toonmotion.testing.browser import CHROMIUM_ARGS, chromium_path
 from toonmotion.web.server import create_app, new_token
 
 GOLDEN = Path(__file__).parent / "golden"
-# The flags the machine's closed network and a root user need (see the browser's notes).
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--use-angle=swiftshader",
-    "--enable-unsafe-swiftshader",
-]
 
 
 def _chromium():
-    found = shutil.which("chromium") or shutil.which("chromium-browser")
+    found = chromium_path()
     if found is None:
         if os.environ.get("CI") == "true":
             pytest.fail(
@@ -83,7 +71,7 @@ def page(editor):
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
+        browser = playwright.chromium.launch(executable_path=executable, args=list(CHROMIUM_ARGS))
         page = browser.new_page(viewport={"width": 1280, "height": 800})
         errors: list[str] = []
         page.on("pageerror", lambda error: errors.append(str(error)))

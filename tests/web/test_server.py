@@ -1266,3 +1266,52 @@ def test_every_page_is_told_of_another_pages_change_and_undo_says_what_it_undid(
         redone = _send(two, {"id": 4, "type": "redo"})
         assert redone["says"] == "the key at frame 12 set"
         assert one.receive_json()["kind"] == "redone"  # the next message one gets: the pose told nothing
+
+
+def test_a_slow_answer_does_not_stall_the_other_pages(editable, monkeypatch):
+    """Messages are answered off the event loop: while one page's pose is being solved (held
+    here until released), another page's request is served by the same server. Answered on the
+    loop, the request waited for the solve. (A real server: the test client gives each request
+    an event loop of its own.)"""
+    import socket as sockets
+    import threading
+    import urllib.request
+
+    import uvicorn
+    from websockets.sync.client import connect
+
+    folder, _ = editable
+    released, finished = threading.Event(), []
+    pose = session._HANDLERS["pose"]
+
+    def slow_pose(editing, message):
+        released.wait(10)
+        finished.append("pose")
+        return pose(editing, message)
+
+    monkeypatch.setitem(session._HANDLERS, "pose", slow_pose)
+    listener = sockets.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(8)
+    port = listener.getsockname()[1]
+    server = uvicorn.Server(uvicorn.Config(create_app(folder, token=TOKEN), log_level="warning"))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
+    thread.start()
+    while not server.started:
+        time.sleep(0.02)
+    try:
+        positions = api.load_project(folder).skeleton.positions.tolist()
+        with connect(f"ws://127.0.0.1:{port}/ws?token={TOKEN}") as live:
+            live.send(json.dumps({"id": 1, "type": "pose", "positions": positions}))
+            time.sleep(0.2)  # the pose is being answered
+            request = urllib.request.Request(f"http://127.0.0.1:{port}/api/project",
+                                             headers={"X-Toonmotion-Token": TOKEN})
+            with urllib.request.urlopen(request, timeout=30) as reply:
+                assert reply.status == 200
+            assert finished == []  # served while the pose was still held
+            released.set()
+            assert json.loads(live.recv(timeout=30))["type"] == "mesh"
+    finally:
+        released.set()
+        server.should_exit = True
+        thread.join(timeout=10)

@@ -13,6 +13,9 @@ Errors come back as one line: a 4xx reply ``{"error": "..."}`` over HTTP, a
 closes the connection and never shows a traceback.
 
 What the WebSocket carries, and the open project's state, are :mod:`toonmotion.web.session`'s.
+Messages are answered one at a time, in a worker thread of their own (:func:`create_app`'s
+``answers``), never on the event loop: a slow pose holds up the poses after it, as before, but not
+the server's other pages' HTTP requests, their messages being read, progress or broadcasts.
 Every page open on the project sees the others' changes: after a reply that changed the project
 (:data:`CHANGES`), every other live connection gets ``{"type": "changed", "kind": ..., "step":
 ..., "says": "...", "history": {...}}`` and the page fetches the project again.
@@ -22,6 +25,7 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import concurrent.futures
 import contextlib
 import hmac
 import json
@@ -133,6 +137,9 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
     app = FastAPI(title="toonmotion editor", docs_url=None, redoc_url=None, openapi_url=None)
     app.state.sign_in_codes = {}
     pages: set[WebSocket] = set()  # every live connection, to tell each of the others' changes
+    # Every message is answered in this one thread, in the order they come: the session's state is
+    # the answers' alone (the slow requests' threads take only what they are given).
+    answers = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="toonmotion-answer")
 
     async def tell_the_others(socket: WebSocket, reply: dict[str, Any]) -> None:
         """After ``reply`` to ``socket`` changed the project, every other page is told."""
@@ -373,9 +380,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                     ident = json.loads(text).get("id")
                     stop = threading.Event()
                     progress = _progress(socket, loop, ident, stop)
-                    if slow is export:
-                        with contextlib.suppress(ToonmotionError, ValueError, AttributeError):
-                            editing.animated(exaggeration_of(json.loads(text)))  # solved on the loop
+                    if slow is export:  # the animation is solved where messages are answered
+                        await loop.run_in_executor(answers, _animate_for_export, editing, text)
                     job = asyncio.ensure_future(asyncio.to_thread(slow, editing, text, progress))
                     while not job.done():
                         heard = asyncio.ensure_future(inbox.get())
@@ -396,7 +402,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                 elif _cancels(text, None):
                     continue  # a cancel that came after its request was answered
                 else:
-                    reply = answer(editing, text)
+                    reply = await loop.run_in_executor(answers, answer, editing, text)
                 await socket.send_text(json.dumps(reply))
                 await tell_the_others(socket, reply)
         except WebSocketDisconnect:
@@ -446,6 +452,13 @@ async def _receive(request: Request, file: Path, what: str, *, already: int = 0,
                 raise HTTPException(413, f"{what} is over the limit {limit}={most:,}; make it "
                                          "smaller (or raise the limit with --limit)")
             out.write(chunk)
+
+
+def _animate_for_export(editing: Editing, text: str) -> None:
+    """Solve the animation an export message asks for, in the answers' thread (the export then
+    only renders it); a bad message is the export's to refuse."""
+    with contextlib.suppress(ToonmotionError, ValueError, AttributeError):
+        editing.animated(exaggeration_of(json.loads(text)))
 
 
 def _host_name(host: str | None) -> str:
