@@ -21,7 +21,9 @@ export function mount(ctx) {
   let playing = false, timer = null;
 
   side.innerHTML = `<h2>Exaggerate</h2>
-    <p>Click joints to fix them (blue), then drag from the root to draw the acceleration.</p>
+    <p>Click joints to fix them (blue), then drag from the root to draw the acceleration the pose
+    anticipates (thesis eq. 5.5): the figure moves against it, so an arrow up squashes it (the
+    crouch before a jump) and an arrow down lifts and stretches it.</p>
     <p><button id="exaggerate-use">Use this pose</button> <button id="exaggerate-clear">Clear</button></p>
     <h3>The animation</h3>
     <p><label>Strength <input id="exaggerate-strength" type="number" value="1.5" step="0.1" min="0"
