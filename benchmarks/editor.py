@@ -28,40 +28,23 @@ import asyncio
 import json
 import math
 import resource
-import socket
 import statistics
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
-import uvicorn
 import websockets
 
 from toonmotion import api
 from toonmotion.io.drawing_folder import load_drawing_folder
 from toonmotion.rig.character import RigSettings
-from toonmotion.web.server import create_app, new_token
+from toonmotion.web.background import serving
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "drawings"
 DRAGS = 300
 CLIENTS = 50
 MESSAGES = 40
-
-
-def _serve(folder: Path):
-    listener = socket.socket()
-    listener.bind(("127.0.0.1", 0))
-    listener.listen(16)
-    port = listener.getsockname()[1]
-    token = new_token()
-    server = uvicorn.Server(uvicorn.Config(create_app(folder, token=token), log_level="warning"))
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.02)
-    return server, thread, f"ws://127.0.0.1:{port}/ws?token={token}"
 
 
 def _sweep(character, count):
@@ -113,13 +96,9 @@ def bench(folder):
     with tempfile.TemporaryDirectory() as scratch:
         project = Path(scratch) / "project"
         api.save_project(project, character)
-        server, thread, url = _serve(project)
-        try:
-            times = asyncio.run(_drag(url, list(_sweep(character, DRAGS))))
-            rates, loaded, errors = asyncio.run(_load(url, list(_sweep(character, MESSAGES))))
-        finally:
-            server.should_exit = True
-            thread.join(timeout=10)
+        with serving(project) as served:
+            times = asyncio.run(_drag(served.live, list(_sweep(character, DRAGS))))
+            rates, loaded, errors = asyncio.run(_load(served.live, list(_sweep(character, MESSAGES))))
     median = statistics.median(times)
     return {
         "drawing": folder.name,

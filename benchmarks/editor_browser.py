@@ -24,22 +24,17 @@ Needs Chromium (apt-get install chromium) and the dev extra (Playwright).
 import argparse
 import json
 import math
-import socket
 import statistics
 import sys
 import tempfile
-import threading
-import time
 from pathlib import Path
-
-import uvicorn
 
 from toonmotion import api
 from toonmotion.io.drawing_folder import load_drawing_folder
 from toonmotion.rig.character import RigSettings
 from toonmotion.samples import sample_character
 from toonmotion.testing.browser import CHROMIUM_ARGS, chromium_path
-from toonmotion.web.server import create_app, new_token
+from toonmotion.web.background import serving
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "drawings"
 WARM_UP = 5
@@ -73,21 +68,6 @@ def dragged_joint(skeleton):
         if parent >= 0 and skeleton.parents[parent] >= 0:
             return skeleton.names[j]
     return skeleton.names[-1]
-
-
-def serve(project):
-    listener = socket.socket()
-    listener.bind(("127.0.0.1", 0))
-    listener.listen(16)
-    port = listener.getsockname()[1]
-    token = new_token()
-    app = create_app(project, token=token, origins=(f"http://127.0.0.1:{port}",))
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning"))
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.02)
-    return server, thread, f"http://127.0.0.1:{port}/?token={token}"
 
 
 def drag(page, joint, moves):
@@ -124,26 +104,20 @@ def bench(folder, moves):
     with tempfile.TemporaryDirectory() as scratch:
         project = Path(scratch) / "project"
         api.save_project(project, character)
-        server, thread, url = serve(project)
-        try:
-            with sync_playwright() as playwright:
-                browser = playwright.chromium.launch(executable_path=chromium_path(),
-                                                     args=list(CHROMIUM_ARGS))
-                page = browser.new_page(viewport={"width": 1280, "height": 800})
-                page.goto(url)
-                page.wait_for_function("document.getElementById('status').textContent === 'ready'",
-                                       timeout=60_000)
-                page.click("nav button[data-panel=pose]")
-                webgl = page.evaluate("""() => {
-                    const gl = document.createElement("canvas").getContext("webgl2");
-                    const info = gl && gl.getExtension("WEBGL_debug_renderer_info");
-                    return info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : "unknown";
-                }""")
-                reply_ms, paint_ms = drag(page, dragged_joint(character.skeleton), moves)
-                browser.close()
-        finally:
-            server.should_exit = True
-            thread.join(timeout=10)
+        with serving(project) as served, sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
+            page = browser.new_page(viewport={"width": 1280, "height": 800})
+            page.goto(served.page)
+            page.wait_for_function("document.getElementById('status').textContent === 'ready'",
+                                   timeout=60_000)
+            page.click("nav button[data-panel=pose]")
+            webgl = page.evaluate("""() => {
+                const gl = document.createElement("canvas").getContext("webgl2");
+                const info = gl && gl.getExtension("WEBGL_debug_renderer_info");
+                return info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : "unknown";
+            }""")
+            reply_ms, paint_ms = drag(page, dragged_joint(character.skeleton), moves)
+            browser.close()
 
     def p95(values):
         return round(statistics.quantiles(values, n=20)[18], 1)

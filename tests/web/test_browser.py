@@ -10,9 +10,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import socket
-import threading
-import time
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +22,7 @@ from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose
 from toonmotion.samples import sample_character
 from toonmotion.testing.browser import CHROMIUM_ARGS, chromium_path
-from toonmotion.web.server import create_app, new_token
+from toonmotion.web.background import serving
 
 GOLDEN = Path(__file__).parent / "golden"
 
@@ -44,25 +41,11 @@ def _chromium():
 @pytest.fixture(scope="module")
 def editor(tmp_path_factory):
     """The editor serving the half-size sample character: ``(url, project folder)``."""
-    import uvicorn
-
     drawing, skeleton = sample_character(scale=0.5)
     folder = tmp_path_factory.mktemp("editor") / "hero"
     api.save_project(folder, rig_drawing(drawing, skeleton=skeleton))
-    listener = socket.socket()
-    listener.bind(("127.0.0.1", 0))
-    listener.listen(16)
-    port = listener.getsockname()[1]
-    token = new_token()
-    app = create_app(folder, token=token, origins=(f"http://127.0.0.1:{port}",))
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning"))
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.05)
-    yield f"http://127.0.0.1:{port}/?token={token}", folder
-    server.should_exit = True
-    thread.join(timeout=10)
+    with serving(folder) as served:
+        yield served.page, folder
 
 
 @pytest.fixture(scope="module")
@@ -964,27 +947,15 @@ def test_a_sign_in_code_opens_the_editor_and_leaves_no_token_in_the_address(page
     """What ``toonmotion edit --open`` gives the browser: a code good once. The page it opens
     works on the cookie alone (the project, the texture, a live drag), its address carries neither
     the code nor the token, and the page's script cannot read the cookie."""
-    import uvicorn
-
     from toonmotion.web.server import sign_in_code
 
     drawing, skeleton = sample_character(scale=0.5)
     folder = tmp_path / "hero"
     api.save_project(folder, rig_drawing(drawing, skeleton=skeleton))
-    listener = socket.socket()
-    listener.bind(("127.0.0.1", 0))
-    listener.listen(16)
-    port = listener.getsockname()[1]
-    token = new_token()
-    app = create_app(folder, token=token, origins=(f"http://127.0.0.1:{port}",))
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning"))
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.05)
-    try:
+    with serving(folder) as served:
+        port, token = served.port, served.token
         fresh = page.context.browser.new_page(viewport={"width": 1280, "height": 800})  # its own cookies
-        fresh.goto(f"http://127.0.0.1:{port}/?code={sign_in_code(app)}")
+        fresh.goto(f"http://127.0.0.1:{port}/?code={sign_in_code(served.app)}")
         fresh.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=30_000)
         assert fresh.url == f"http://127.0.0.1:{port}/"
         assert token not in fresh.evaluate("document.cookie")
@@ -994,6 +965,3 @@ def test_a_sign_in_code_opens_the_editor_and_leaves_no_token_in_the_address(page
         }""")
         assert reply["type"] == "mesh"
         fresh.close()
-    finally:
-        server.should_exit = True
-        thread.join(timeout=10)

@@ -1273,12 +1273,12 @@ def test_a_slow_answer_does_not_stall_the_other_pages(editable, monkeypatch):
     here until released), another page's request is served by the same server. Answered on the
     loop, the request waited for the solve. (A real server: the test client gives each request
     an event loop of its own.)"""
-    import socket as sockets
     import threading
     import urllib.request
 
-    import uvicorn
     from websockets.sync.client import connect
+
+    from toonmotion.web.background import serving
 
     folder, _ = editable
     released, finished = threading.Event(), []
@@ -1290,28 +1290,17 @@ def test_a_slow_answer_does_not_stall_the_other_pages(editable, monkeypatch):
         return pose(editing, message)
 
     monkeypatch.setitem(session._HANDLERS, "pose", slow_pose)
-    listener = sockets.socket()
-    listener.bind(("127.0.0.1", 0))
-    listener.listen(8)
-    port = listener.getsockname()[1]
-    server = uvicorn.Server(uvicorn.Config(create_app(folder, token=TOKEN), log_level="warning"))
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.02)
-    try:
-        positions = api.load_project(folder).skeleton.positions.tolist()
-        with connect(f"ws://127.0.0.1:{port}/ws?token={TOKEN}") as live:
+    positions = api.load_project(folder).skeleton.positions.tolist()
+    with serving(folder) as served, connect(served.live) as live:
+        try:
             live.send(json.dumps({"id": 1, "type": "pose", "positions": positions}))
             time.sleep(0.2)  # the pose is being answered
-            request = urllib.request.Request(f"http://127.0.0.1:{port}/api/project",
-                                             headers={"X-Toonmotion-Token": TOKEN})
+            request = urllib.request.Request(f"http://127.0.0.1:{served.port}/api/project",
+                                             headers={"X-Toonmotion-Token": served.token})
             with urllib.request.urlopen(request, timeout=30) as reply:
                 assert reply.status == 200
             assert finished == []  # served while the pose was still held
             released.set()
             assert json.loads(live.recv(timeout=30))["type"] == "mesh"
-    finally:
-        released.set()
-        server.should_exit = True
-        thread.join(timeout=10)
+        finally:
+            released.set()
