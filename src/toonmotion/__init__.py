@@ -28,7 +28,7 @@ _API = (
     "capture_video", "carry_keys", "composite_scene", "correct_regions", "delete_key", "drag_joint",
     "exaggerate",
     "environment_report", "export_animation",
-    "export_format", "filter_motion",
+    "export_format", "figure_box", "filter_motion",
     "keyshape_sheet", "keyshape_space", "lift_proxy", "load_project", "motion_in_frames", "move_key",
     "pick_layer", "pose_character", "pose_view", "preview_proxy", "redo_edits", "render_elements",
     "render_pose", "retarget", "retarget_keyposes", "retarget_keyshapes", "retarget_line_of_action",

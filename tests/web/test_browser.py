@@ -856,6 +856,35 @@ def test_capture_send_footage_track_it_and_play_it_on_the_character(page, editor
     assert page.errors == [] and page.locator("#error").is_hidden()
 
 
+
+def test_capture_starts_the_joints_on_the_figure_wherever_it_stands_in_the_frame(page, editor, tmp_path):
+    """Issue 44: the starting joints were the drawing's scaled onto the whole frame, so on footage
+    whose figure does not fill it they lay off the figure and the first Track was refused. They
+    are now laid onto the figure the footage's own suggestions find."""
+    from toonmotion.samples import sample_character_on
+
+    picture = sample_character_on("white", scale=0.5)[0]  # 210x300
+    frame = np.full((360, 560, 3), 255, np.uint8)
+    frame[40:340, 320:530] = picture[..., :3]  # the figure small, in the right of a wide frame
+    frames = [Image.fromarray(np.roll(frame, 2 * t, axis=1)) for t in range(4)]
+    frames[0].save(tmp_path / "aside.gif", save_all=True, append_images=frames[1:], duration=80)
+    page.click("nav button[data-panel=capture]")
+    page.set_input_files("#capture-file", str(tmp_path / "aside.gif"))
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('place the joints')")
+    figure = (frame < 200).any(axis=2)
+    near = np.zeros_like(figure)  # the figure and 6 px round it
+    ys, xs = np.nonzero(figure)
+    for dy in range(-6, 7, 3):
+        for dx in range(-6, 7, 3):
+            near[np.clip(ys + dy, 0, 359), np.clip(xs + dx, 0, 559)] = True
+    for joint in page.evaluate("window.toonmotion.capture.joints()"):
+        x, y = (int(round(v)) for v in joint["position"])
+        assert 0 <= x < 560 and 0 <= y < 360 and near[y, x], joint
+    page.click("#capture-track")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('tracked')",
+                           timeout=60_000)
+    assert page.errors == [] and page.locator("#error").is_hidden(), page.locator("#error").text_content()
+
 def test_fine_tune_drag_a_point_and_sketch_the_outline_then_key_them(page, editor):
     from toonmotion.deform.tuning import CurveEdit, DragEdit
     from toonmotion.io.pose_json import load_keyframes

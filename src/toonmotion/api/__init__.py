@@ -66,7 +66,14 @@ from toonmotion.api.scene3d import (
     scene_passes,
     simulate_scene,
 )
-from toonmotion.capture.footage import Capture, PoorlyMatched, setup_warnings, suggest_joints, suggested_sizes
+from toonmotion.capture.footage import (
+    Capture,
+    PoorlyMatched,
+    figure_box,
+    setup_warnings,
+    suggest_joints,
+    suggested_sizes,
+)
 from toonmotion.capture.foreground import border_colour
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.tracker import TrackSettings
@@ -124,6 +131,7 @@ __all__ = [
     "exaggerate",
     "export_animation",
     "export_format",
+    "figure_box",
     "filter_motion",
     "keyshape_sheet",
     "keyshape_space",

@@ -254,6 +254,36 @@ def first_figure(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | No
     return without_frame(foreground_masks(frames[:1], background=estimate_background(frames))[0])
 
 
+def figure_box(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None
+               ) -> tuple[int, int, int, int] | None:
+    """The box round frame 0's figure (:func:`first_figure`): ``(left, top, right, bottom)``
+    pixels, right and bottom exclusive; None when no figure is found.
+
+    Parameters
+    ----------
+    frames : (T, H, W, 3) uint8
+        The footage (frame 0 is looked at; the rest estimate a background that is not flat).
+    colour : (r, g, b), optional
+        The flat background's colour, when known.
+
+    Returns
+    -------
+    tuple of 4 int, or None
+
+    Examples
+    --------
+    >>> frames = np.full((1, 40, 60, 3), 255, np.uint8)
+    >>> frames[0, 10:30, 20:35] = 0  # a dark figure on white paper
+    >>> figure_box(frames)
+    (20, 10, 35, 30)
+    """
+    figure = first_figure(frames, colour=colour)
+    if not figure.any():
+        return None
+    rows, cols = np.flatnonzero(figure.any(axis=1)), np.flatnonzero(figure.any(axis=0))
+    return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
+
+
 def capture_motion(
     frames: NDArray[np.uint8],
     skeleton: Skeleton,

@@ -272,8 +272,9 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         return await footage_read(folder)
 
     async def footage_read(source: Path) -> dict[str, Any]:
-        """Footage saved in the project, read; the joints it suggests, to track, and the colour of
-        its first frame's border when that is flat (what the figure is told from), else null."""
+        """Footage saved in the project, read; the joints it suggests, to track, the colour of its
+        first frame's border when that is flat (what the figure is told from), else null, and the
+        box round that frame's figure (``[left, top, right, bottom]``, or null)."""
         try:
             frames, fps = await asyncio.to_thread(load_frames, source)
         except ToonmotionError:
@@ -284,9 +285,11 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         rate = fps or 24.0
         editing.footage, editing.capture, editing.captured = (frames, rate), None, None
         border = api.border_colour(frames[0])
+        box = api.figure_box(frames, colour=border)
         described = {"frames": len(frames), "width": frames.shape[2], "height": frames.shape[1], "fps": rate,
                      "joints": suggested_joints(skeleton, sizes),
-                     "border": None if border is None else list(border)}
+                     "border": None if border is None else list(border),
+                     "figure": None if box is None else list(box)}
         editing.capture_page = {"footage": described, "joints": None, "tracked": None}
         return described
 

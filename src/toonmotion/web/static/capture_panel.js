@@ -150,19 +150,39 @@ export function mount(ctx) {
     }
   };
 
+  // A map of the drawing's points onto the footage: the box round the drawing's figure (its
+  // outline) into the box round the footage's first figure (centred, one scale); when the footage
+  // gave none, the drawing scaled onto the frame.
+  function onFigure() {
+    if (!footage.figure) {
+      const sx = footage.width / project.width, sy = footage.height / project.height;
+      return ([x, y]) => [x * sx, y * sy];
+    }
+    const P = project.outline.flat();
+    const [a0, b0] = [Math.min(...P.map((p) => p[0])), Math.min(...P.map((p) => p[1]))];
+    const [a1, b1] = [Math.max(...P.map((p) => p[0])), Math.max(...P.map((p) => p[1]))];
+    const [c0, d0, c1, d1] = footage.figure;
+    const k = Math.min((c1 - c0) / Math.max(a1 - a0, 1e-9), (d1 - d0) / Math.max(b1 - b0, 1e-9));
+    const [cx, cy, ax, ay] = [(c0 + c1) / 2, (d0 + d1) / 2, (a0 + a1) / 2, (b0 + b1) / 2];
+    return ([x, y]) => [cx + (x - ax) * k, cy + (y - ay) * k];
+  }
+
   function loaded(body, fresh = true) {
     if (fresh) project.capture = { footage: body, joints: null, tracked: null };
     footage = body;
     images = [];
     tracked = null;
     showPoorly([]);
-    // The character's joints, scaled onto the footage: names that retarget by themselves; their
-    // rectangles start at the suggested joints' typical size.
-    const sx = footage.width / project.width, sy = footage.height / project.height;
+    // The character's joints laid onto the figure in the footage (names that retarget by
+    // themselves): the drawing's figure fitted into the footage's, centred, one scale, so they
+    // start on the figure wherever it stands in the frame (scaling the drawing onto the whole frame
+    // put them off a figure that does not fill it); their rectangles start at the suggested
+    // joints' typical size.
+    const place = onFigure();
     const sides = footage.joints.map((j) => j.size[0]).sort((a, b) => a - b);
     const side = sides.length ? Math.round(sides[Math.floor(sides.length / 2)]) : SIZE;
     joints = project.joints.map((j) => ({ name: j.name, parent: j.parent < 0 ? null : project.joints[j.parent].name,
-                                           position: [j.position[0] * sx, j.position[1] * sy], size: [side, side] }));
+                                           position: place(j.position), size: [side, side] }));
     element("capture-scrub", HTMLInputElement).max = String(footage.frames - 1);
     element("capture-track", HTMLButtonElement).disabled = false;
     show(0);
