@@ -497,6 +497,33 @@ def test_the_timeline_reaches_past_its_last_key(page, editor):
     _set_frame(page, 0)
 
 
+
+def test_a_link_in_the_project_is_refused_in_the_page_and_nothing_is_written(page, editor, tmp_path):
+    """Issue 44: files were read and written through symbolic links. A link made in the project
+    while the editor runs: keying a frame (which writes keys.json) is refused with the link named
+    in the page's error bar, the file it points to is untouched, and with the link gone keying
+    works again."""
+    folder = editor[1]
+    outside = tmp_path / "private.txt"
+    outside.write_text("not the project's")
+    link = folder / "exports" / "leak.gif"
+    link.parent.mkdir(exist_ok=True)
+    link.symlink_to(outside)
+    try:
+        page.click("nav button[data-panel=timeline]")
+        _set_frame(page, 0)
+        page.click("#timeline-key")
+        page.wait_for_function("!document.getElementById('error').hidden")
+        assert page.locator("#error").text_content().startswith(
+            "exports/leak.gif in the project is a symbolic link; the editor reads, writes and deletes only")
+        assert outside.read_text() == "not the project's"
+    finally:
+        link.unlink()
+    page.click("#error")
+    page.click("#timeline-key")
+    page.wait_for_function("document.getElementById('status').textContent === 'saved'")
+    assert page.locator("#error").is_hidden()
+
 def test_a_pose_not_yet_keyed_survives_a_reload_and_scrubbing(page, editor):
     """Issue 44: a pose made and not keyed was lost on reload (the Pose panel showed the rest
     pose), and scrubbing replaced it without a word. Now it is kept at its frame: a reload opens
