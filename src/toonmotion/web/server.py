@@ -246,6 +246,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         (errors name it ``name``, the file the user sent)."""
         if suffix.lower() not in FOOTAGE_SUFFIXES:
             raise HTTPException(400, f"send footage as {', '.join(FOOTAGE_SUFFIXES)}, not {suffix[:10]!r}")
+        editing.check_links()
         file = editing.path(FOOTAGE, f"clip.{suffix.lower()}")
         await _receive(request, file, "the footage")
         with _as_sent(file, name or "the footage sent"):
@@ -261,6 +262,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         if not 1 <= count <= most or not 0 <= index < count:
             raise HTTPException(400, f"frames are numbered 0 to count - 1, count 1 to {most:,} "
                                      "(the footage_frames limit)")
+        editing.check_links()
         folder = editing.path(FOOTAGE, "frames")
         if index == 0 and folder.is_dir():  # a new folder of frames replaces the last one
             for old in folder.iterdir():
@@ -303,6 +305,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         if part == "skeleton" and format not in ("yaml", "json"):
             raise HTTPException(400, "say the skeleton file's format: ?format=yaml (a char_cfg) "
                                      "or ?format=json")
+        editing.check_links()
         file = editing.path(UPLOADS, f"skeleton.{format}" if part == "skeleton" else part)
         limit = "skeleton_bytes" if part == "skeleton" else "upload_bytes"
         await _receive(request, file, "the file", limit=limit)
@@ -340,6 +343,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         allowed = EXPORT_FILE.fullmatch(name)
         if allowed is None:
             raise HTTPException(404, f"no export {name!r}")
+        editing.check_links()
         file = editing.path(EXPORTS, name)
         if not file.is_file():
             raise HTTPException(404, f"no export {name!r}")

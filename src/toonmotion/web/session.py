@@ -204,11 +204,16 @@ class Editing:
         timeline = load_keyframes(keys, character.skeleton) if keys.is_file() else None
         return cls(folder=folder, character=character, timeline=timeline)
 
-    def path(self, *parts: str) -> Path:
-        """The project's file or folder ``parts``, to read, write or delete, once checked: nothing
-        under the project is a symbolic link (:func:`~toonmotion.io.links.no_links`, each time:
-        one may have been made since), nor is any part of this path."""
+    def check_links(self) -> None:
+        """Refuse to go on while anything under the project is a symbolic link
+        (:func:`~toonmotion.io.links.no_links`): once per request that touches files, since one
+        may have been made since the last."""
         no_links(self.folder)
+
+    def path(self, *parts: str) -> Path:
+        """The project's file or folder ``parts``, to read, write or delete, once checked: no part
+        of it is a symbolic link and it resolves inside the project (the request has called
+        :meth:`check_links` first)."""
         return confined(self.folder, self.folder.joinpath(*parts))
 
     @property
@@ -362,7 +367,7 @@ def answer(editing: Editing, text: str) -> dict[str, Any]:
             sent = ", ".join(map(repr, _HANDLERS))
             raise PoseError(f"unknown message type {kind!r}; the editor sends {sent}")
         if kind not in _IN_MEMORY:
-            editing.path()  # a request that touches files: refused while the project holds a link
+            editing.check_links()  # a request that touches files: refused while the project holds a link
         return {"id": ident, **_HANDLERS[kind](editing, message)}
     except ToonmotionError as error:
         return {"id": ident, "type": "error", "message": one_line(str(error))}
@@ -386,7 +391,7 @@ def _off_loop(verb: str) -> Callable[[SlowHandler], SlowReply]:
             try:
                 message = json.loads(text)
                 ident = message.get("id") if isinstance(message.get("id"), (int, str)) else None
-                editing.path()  # it reads or writes files: refused while the project holds a link
+                editing.check_links()  # it reads or writes files: refused while the project holds a link
                 return {"id": ident, **handler(editing, message, progress)}
             except Cancelled:
                 return {"id": ident, "type": "error", "cancelled": True,
