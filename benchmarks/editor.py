@@ -7,8 +7,10 @@ skeleton) is rigged to about 1,500 vertices and served by the editor (``toonmoti
 free loopback port. A client then drags one joint through a sweep of poses, as a pointer does,
 one message at a time: each message is sent when the previous reply has arrived.
 
-Then CLIENTS clients at once drag joints on the same server, each MESSAGES messages, each
-waiting for its reply before sending the next (a load test, on loopback).
+Then CLIENTS clients at once drag the joint on the same server, each MESSAGES messages, each
+waiting for its reply before sending the next (a load test, on loopback). Each client starts
+its sweep at its own step, so that no two send the same pose at once (a server that remembered
+its last pose would otherwise answer 49 of 50 for free).
 
 Keys, one line per drawing:
   drawing, vertices       mesh size
@@ -47,20 +49,22 @@ CLIENTS = 50
 MESSAGES = 40
 
 
-def _sweep(character, count):
-    """Poses of the first joint with a child turning its subtree back and forth, as a drag."""
+def _sweep(character, count, start=0):
+    """Poses of the first joint with a child turning its subtree back and forth, as a drag, from
+    step ``start`` of its 60-step period."""
     skeleton = character.skeleton
     moving = [n for i, n in enumerate(skeleton.names) if skeleton.parents[i] >= 0 and i in skeleton.parents]
     joint = moving[len(moving) // 2]
-    for step in range(count):
+    for step in range(start, start + count):
         angle = 0.8 * math.sin(2 * math.pi * step / 60)
         yield api.rotate_joint(character, joint, angle).positions.tolist()
 
 
-async def _load(url, poses):
-    """CLIENTS clients dragging at once; returns (per-client rates, all round trips, errors)."""
+async def _load(url, sweeps):
+    """CLIENTS clients dragging at once, each its own sweep; returns (per-client rates, all round
+    trips, errors)."""
 
-    async def client():
+    async def client(poses):
         times, errors = [], 0
         async with websockets.connect(url, max_size=None) as socket_:
             started = time.perf_counter()
@@ -72,7 +76,7 @@ async def _load(url, poses):
                 errors += reply.get("type") != "mesh" or reply.get("id") != ident
             return len(poses) / (time.perf_counter() - started), times, errors
 
-    results = await asyncio.gather(*(client() for _ in range(CLIENTS)))
+    results = await asyncio.gather(*(client(poses) for poses in sweeps))
     return [r[0] for r in results], [t for r in results for t in r[1]], sum(r[2] for r in results)
 
 
@@ -98,7 +102,8 @@ def bench(folder):
         api.save_project(project, character)
         with serving(project) as served:
             times = asyncio.run(_drag(served.live, list(_sweep(character, DRAGS))))
-            rates, loaded, errors = asyncio.run(_load(served.live, list(_sweep(character, MESSAGES))))
+            sweeps = [list(_sweep(character, MESSAGES, start=7 * k)) for k in range(CLIENTS)]
+            rates, loaded, errors = asyncio.run(_load(served.live, sweeps))
     median = statistics.median(times)
     return {
         "drawing": folder.name,

@@ -6,17 +6,18 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
 * ``{"type": "pose", "positions": [[x, y], ...], "edits": [...]}``: every joint's position, in
   the skeleton's order, and optional fine-tuning edits (thesis 3.5) in the key-frames file's
   form, ``{"kind": "curve", "points": [...]}`` or ``{"kind": "drag", "from": [...], "to":
-  [...]}``. Reply: ``{"type": "mesh", "U": [x0, y0, x1, y1, ...]}``, the deformed vertices (the
-  needle model, then the joint-area solve).
+  [...]}``. Reply: ``{"type": "mesh", "U": "..."}``, the deformed vertices (the needle model,
+  then the joint-area solve) as :mod:`toonmotion.web.wire` writes them: base64 of
+  little-endian float32 ``x0, y0, x1, y1, ...``, as every reply's ``"U"`` below.
 * ``{"type": "drag", "positions": [...], "joint": name, "to": [x, y], "mode": "turn" | "reach" |
   "stretch", "pinned": [names], "edits": [...]}``: ``joint`` of the pose ``positions`` (the one
   at the press) dragged to ``to`` (:func:`toonmotion.api.drag_joint`: its bone turns and carries
   the joints below, or the chain above it reaches, or its bone stretches). Reply: ``{"type":
-  "mesh", "U": [...], "positions": [...]}``, the pose made and its deformed vertices.
+  "mesh", "U": "...", "positions": [...]}``, the pose made and its deformed vertices.
 * ``{"type": "sketch", "strokes": [[[x, y], ...], ...], "positions": [...]}``: the strokes of a
   sketched skeleton, matched to the bones (:func:`toonmotion.api.sketch_pose`), starting from
   ``positions``. Reply: ``{"type": "sketched", "positions": [...], "bones": [...],
-  "elsewhere": bool, "U": [...]}``, the pose, the bones covered and the deformed vertices.
+  "elsewhere": bool, "U": "..."}``, the pose, the bones covered and the deformed vertices.
 * ``{"type": "overlaps", "positions": [...]}``: the regions that overlap at the same depth in
   that pose. Reply: ``{"type": "overlaps", "pairs": [{"a": bone, "b": bone, "area": px2}]}``.
 * Edits of the regions, each saved in the project before the reply (atomic writes, as the
@@ -67,7 +68,7 @@ Messages are JSON objects; ``id``, when given, is echoed back. An error is a rep
   are kept under ``history/`` so undo brings the old drawing back. Reply ``{"type": "opened",
   "width": w, "height": h, "joints": n}``.
 * ``{"type": "frame", "frame": n}``: the animation's frame ``n`` (clamped to the keys' span).
-  Reply: ``{"type": "frame", "frame": n, "U": [...], "positions": [[x, y], ...]}``.
+  Reply: ``{"type": "frame", "frame": n, "U": "...", "positions": [[x, y], ...]}``.
 * ``{"type": "export", "format": "gif" | "mp4" | "png" | "apng" | "webp" | "webm" | "glb" |
   "spine" | "sheet", "name": "walk", "size": [w, h] | null, "background": [r, g, b] | null,
   "overlays": ["mesh", "skeleton", "rest"]}`` (the last three optional, as the CLI's ``--size``,
@@ -132,6 +133,7 @@ from toonmotion.rig.pose import Pose, check_pose
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.curve_skeleton import joint_suggestions
 from toonmotion.web.history import History
+from toonmotion.web.wire import encode_vertices
 
 # The project folder's key-frames, in the format `toonmotion animate` reads.
 KEYS_FILE = "keys.json"
@@ -638,14 +640,14 @@ def one_line(text: str) -> str:
 def _pose(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     if message.get("accel") is None:
         U = _posed(editing, message.get("positions"), _tuning(message))
-        return {"type": "mesh", "U": np.round(U, 3).ravel().tolist()}
+        return {"type": "mesh", "U": encode_vertices(U)}
     fixed = message.get("fixed")
     if not isinstance(fixed, list) or not all(isinstance(name, str) for name in fixed):
         raise FilterError("'fixed' must list the names of the joints that stay put")
     pose = Pose(_positions(editing, message.get("positions")))
     frame = api.pose_character(editing.deformer, pose, accel=_point(message.get("accel"), "'accel'"),
                                fixed=fixed)
-    return {"type": "mesh", "U": np.round(frame.deformation.U, 3).ravel().tolist(),
+    return {"type": "mesh", "U": encode_vertices(frame.deformation.U),
             "positions": frame.pose.positions.tolist()}
 
 
@@ -661,7 +663,7 @@ def _drag(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     pose = api.drag_joint(editing.character, start, joint, _point(message.get("to"), "'to'"), mode=mode,
                           pinned=pinned)
     U = api.pose_character(editing.deformer, pose, edits=_tuning(message)).deformation.U
-    return {"type": "mesh", "U": np.round(U, 3).ravel().tolist(), "positions": pose.positions.tolist()}
+    return {"type": "mesh", "U": encode_vertices(U), "positions": pose.positions.tolist()}
 
 
 def _sketch(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
@@ -673,7 +675,7 @@ def _sketch(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
     found = api.sketch_pose(editing.character, lines, pose=current)
     U = api.pose_character(editing.deformer, found.pose).deformation.U
     return {"type": "sketched", "positions": found.pose.positions.tolist(), "bones": list(found.bones),
-            "elsewhere": found.elsewhere, "U": np.round(U, 3).ravel().tolist()}
+            "elsewhere": found.elsewhere, "U": encode_vertices(U)}
 
 
 def _overlaps(editing: Editing, message: dict[str, Any]) -> dict[str, Any]:
@@ -883,7 +885,7 @@ def _frame_of_animation(editing: Editing, message: dict[str, Any]) -> dict[str, 
     at = min(max(_frame(message, "frame"), frames[0]), frames[-1])
     index = frames.index(at)
     U = animation.meshes[index][1]
-    return {"type": "frame", "frame": at, "U": np.round(U, 3).ravel().tolist(),
+    return {"type": "frame", "frame": at, "U": encode_vertices(U),
             "positions": animation.motion.positions[index].tolist()}
 
 

@@ -305,7 +305,7 @@ export function mount(ctx) {
         if (!playing) return;
         const started = performance.now();
         const shown = await live.request({ type: "frame", frame: at, source: "capture" });
-        view.setVertices(shown.U);
+        view.showDeformed(shown.U);
         at = at >= reply.last ? reply.first : at + 1;
         timer = setTimeout(next, Math.max(0, 1000 / reply.fps - (performance.now() - started)));
       };

@@ -75,7 +75,7 @@ export function mount(ctx) {
   };
 
   const send = newest(live, (reply) => {
-    view.setVertices(reply.U);
+    view.showDeformed(reply.U);
     shown = reply.positions || base.map((p) => p.slice());
     view.draw();
     showError("");
@@ -135,7 +135,7 @@ export function mount(ctx) {
       if (on) Object.assign(message, settings());
       try {
         const reply = await live.request(message);
-        view.setVertices(reply.U);
+        view.showDeformed(reply.U);
         shown = reply.positions;
         view.draw();
         showError("");

@@ -94,6 +94,14 @@ export class MeshView {
     this.draw();
   }
 
+  /** Draws the deformed vertices of a reply's "U": base64 of little-endian float32 x0, y0, ...
+   * (toonmotion.web.wire), which a typed array reads as they are on every browser's platform. */
+  showDeformed(encoded) {
+    const bytes = Uint8Array.from(atob(encoded), (c) => c.charCodeAt(0));
+    this.vertices = new Float32Array(bytes.buffer);
+    this.draw();
+  }
+
   draw() {
     const gl = this.gl;
     gl.viewport(0, 0, this.canvas.width, this.canvas.height);

@@ -95,7 +95,7 @@ export function mount(ctx) {
       made();
       view.draw();
     }
-    view.setVertices(reply.U);
+    view.showDeformed(reply.U);
     document.getElementById("pose-timing").textContent = `last update ${(performance.now() - started).toFixed(1)} ms`;
     showError("");
   }, (error) => showError(error.message));
@@ -157,7 +157,7 @@ export function mount(ctx) {
       const reply = await live.request({ type: "sketch", strokes: sent, positions });
       generation++; // a drag's reply still to come is not this pose
       reply.positions.forEach((p, i) => { positions[i] = p; });
-      view.setVertices(reply.U);
+      view.showDeformed(reply.U);
       document.getElementById("pose-matched").textContent =
         `Sketched ${reply.bones.join(", ")}${reply.elsewhere ? " (drawn beside the figure: scaled to it)" : ""}.`;
       made();

@@ -219,7 +219,7 @@ export function mount(ctx) {
       ctx.pose = unkeyed.pose.map((p) => p.slice());
       ctx.tuning = structuredClone(unkeyed.tuning || []);
       const reply = await live.request({ type: "pose", positions: ctx.pose, edits: ctx.tuning });
-      view.setVertices(reply.U);
+      view.showDeformed(reply.U);
       status(`the pose made at frame ${at}, not keyed yet (K keys it)`);
       return;
     }
@@ -229,7 +229,7 @@ export function mount(ctx) {
     const key = project.keys.keys.find((k) => k.frame === reply.frame);
     ctx.pose = reply.positions;
     ctx.tuning = key ? structuredClone(key.edits) : []; // a key's fine-tuning, to adjust and key again
-    view.setVertices(reply.U);
+    view.showDeformed(reply.U);
   }
 
   async function play() {
