@@ -12,8 +12,10 @@ balls at its feet. With --proxy and --frames, any proxy and its drawn frames are
 Line 1 (best of ``--repeat`` runs, one core): ``simulate_ms``, ``render_ms``, ``composite_ms``
 per frame (MuJoCo's sub-steps; the ray-cast colour, depth and occlusion maps; the drawing's depth,
 alpha and the depth test) and their ``total_ms`` (goal <= 50), with the frame size, frame count,
-sub-steps, balls and the deepest contact. Line 2: the frames per second of the whole ``toonmotion
-scene`` command writing an MP4 (start-up, reading, simulating, compositing and encoding).
+sub-steps, balls, the deepest contact and ``up_err_deg`` (goal <= 5): the largest angle, over the
+frames, between the picture's up and the scene's (against gravity) seen at the figure. Line 2:
+the frames per second of the whole ``toonmotion scene`` command writing an MP4 (start-up,
+reading, simulating, compositing and encoding).
 """
 
 import os
@@ -28,6 +30,8 @@ import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
 
 from toonmotion import api  # noqa: E402
 from toonmotion.io.frames import lay_on, load_frames  # noqa: E402
@@ -73,6 +77,15 @@ def stages(proxy, pictures, elements):
     return {"simulate_ms": simulate * per, "render_ms": render * per, "composite_ms": mix * per}, motion
 
 
+def up_error(proxy):
+    """Degrees, the largest over the frames, between the picture's up and the world's +Y (the
+    scene's up: gravity pulls along -Y) seen through the proxy's camera at the figure's centroid."""
+    centre = proxy.points.mean(axis=1, keepdims=True)
+    seen = proxy.camera.project(np.concatenate([centre, centre + [0.0, 0.1, 0.0]], axis=1))
+    d = seen[:, 1] - seen[:, 0]
+    return float(np.degrees(np.abs(np.arctan2(d[:, 0], -d[:, 1]))).max())
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--proxy", type=Path, help="A proxy file (default: the demo scene's, made here).")
@@ -100,7 +113,8 @@ def main():
                           "size": [proxy.camera.width, proxy.camera.height], "frames": proxy.frame_count,
                           "substeps": motion.substeps, "balls": motion.balls.shape[1],
                           **{k: round(v, 2) for k, v in best.items()}, "total_ms": round(total, 2),
-                          "goal_total_ms": 50, "deepest_contact_mm": round(motion.deepest * 1000, 2)}),
+                          "goal_total_ms": 50, "deepest_contact_mm": round(motion.deepest * 1000, 2),
+                          "up_err_deg": round(up_error(proxy), 2), "goal_up_err_deg": 5}),
               flush=True)
         argv = ["scene", proxy_path, "--frames", frames_path, "-o", folder / "scene.mp4"]
         argv += ["--balloon", args.balloon] if args.balloon else []

@@ -136,7 +136,8 @@ def _options(command):
 
 COMMANDS = ("rig", "show", "sample", "pose", "sketch", "animate", "filter", "depth", "correct", "undo",
             "redo", "track", "retarget", "keyshapes", "capture-contours", "retarget-keyshapes",
-            "retarget-line", "capture-video", "lift", "proxy-export", "proxy-preview", "edits", "remesh",
+            "retarget-line", "capture-video", "lift", "proxy-export", "proxy-preview", "project-mocap",
+            "edits", "remesh",
             "tune", "edit", "scene", "export", "doctor")
 
 

@@ -104,6 +104,16 @@ class ProxyError(ToonmotionError):
     motion prior that lacks markers or is too short to align, a camera that cannot see them."""
 
 
+class AmbiguousViewError(ProxyError):
+    """Two views explain a drawing about equally, so the view must be given, not searched.
+
+    ``views`` holds both, ``(azimuth, elevation, cost)``, the search's choice first."""
+
+    def __init__(self, message: str, views: tuple[tuple[float, float, float], ...] = ()) -> None:
+        super().__init__(message)
+        self.views = views
+
+
 class SceneError(ToonmotionError):
     """A 3D scene cannot be built, rendered or composited: an element held at a marker the proxy
     lacks, frames whose count or size differ from the proxy's, primitives that are not finite, a

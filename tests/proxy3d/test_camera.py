@@ -56,17 +56,19 @@ def _moving_camera(T):
 
 
 def test_estimation_recovers_a_moving_camera_s_path(walk_prior):
-    """The truth as the prior, the paper's weights: the path comes back to 1e-5 degree and 1e-6 m (the
-    roll and smoothness terms' pull; without them, to rounding error)."""
+    """The truth as the prior, the paper's weights and its fitted roll (roll=None; the camera rolls
+    here): the path comes back to 1e-5 degree and 1e-6 m (the roll and smoothness terms' pull;
+    without them, to rounding error)."""
     prior = prior_in_metres(walk_prior)[0]
     truth = PerspectiveCamera(1000.0, 960, 720, _moving_camera(prior.frame_count))
     drawn = Markers(prior.names, truth.project(prior.positions), fps=prior.fps)
-    found = estimate_camera(drawn, prior, azimuth=20, elevation=0, focal=1000.0, width=960, height=720)
+    found = estimate_camera(drawn, prior, azimuth=20, elevation=0, focal=1000.0, width=960, height=720,
+                            roll=None)
     error = found.extrinsics - truth.extrinsics
     assert np.degrees(np.abs(error[:, :3])).max() < 1e-5
     assert np.abs(error[:, 3:]).max() < 1e-6
     exact = estimate_camera(drawn, prior, azimuth=20, elevation=0, focal=1000.0, width=960, height=720,
-                            weights=CameraWeights(ground=0, roll=0, smooth=0))
+                            weights=CameraWeights(ground=0, roll=0, smooth=0), roll=None)
     assert np.abs(exact.extrinsics - truth.extrinsics).max() < 1e-10
 
 
@@ -83,7 +85,7 @@ def test_one_pixel_noise_and_the_window(walk_prior):
     errors = {}
     for window in (1, 3):
         found = estimate_camera(drawn, prior, azimuth=20, elevation=0, focal=1000.0, width=960, height=720,
-                                weights=CameraWeights(window=window))
+                                weights=CameraWeights(window=window), roll=None)
         e = found.extrinsics - truth.extrinsics
         errors[window] = (np.degrees(np.abs(e[:, :3])).mean(), np.abs(e[:, 3:]).mean())
     assert errors[1][0] < 1.0 and errors[1][1] < 0.1
@@ -123,7 +125,8 @@ def _is_below(parents, j, ancestor):
 
 
 def test_the_ground_and_roll_terms_pull_as_stated():
-    """Without drawing evidence against it, a camera below the ground rises and a rolled one unrolls."""
+    """Without drawing evidence against it, a camera below the ground rises and a rolled one unrolls
+    (the roll fitted, as the paper does: roll=None)."""
     P = np.array([[[0.0, 0.0, 0.0], [0.0, 0.3, 0.0]]])
     from toonmotion.proxy3d.prior import Prior
 
@@ -131,11 +134,30 @@ def test_the_ground_and_roll_terms_pull_as_stated():
     low = PerspectiveCamera(500.0, 640, 480, [[0, 0, 0.2, 0, 0.1, 4]])
     drawn = Markers(("a", "b"), low.project(P), fps=12)
     free = estimate_camera(drawn, prior, azimuth=0, elevation=0, focal=500.0, width=640, height=480,
-                           weights=CameraWeights(ground=0, roll=0, smooth=0))
+                           weights=CameraWeights(ground=0, roll=0, smooth=0), roll=None)
     pulled = estimate_camera(drawn, prior, azimuth=0, elevation=0, focal=500.0, width=640, height=480,
-                             weights=CameraWeights(ground=10, roll=10, smooth=0))
+                             weights=CameraWeights(ground=10, roll=10, smooth=0), roll=None)
     assert pulled.extrinsics[0, 4] > free.extrinsics[0, 4]
     assert abs(pulled.extrinsics[0, 2]) < abs(free.extrinsics[0, 2])
+
+
+def test_a_held_roll_keeps_the_world_upright_where_a_fitted_one_tilts_it(walk_prior):
+    """A figure lying on its side as drawn (a pig's body, with a human prior standing up): the
+    paper's fitted roll turns the camera to stand the prior up in the picture; the held roll (the
+    default) keeps the world's up the picture's up, and the camera fits what it can."""
+    prior = prior_in_metres(walk_prior)[0]
+    centre = prior.positions.reshape(-1, 3).mean(axis=0) + [7.0, 0, 0]  # 7 m away on +X
+    level = PerspectiveCamera(1000.0, 960, 720, np.tile([np.radians(90), 0, np.radians(60), *centre],
+                                                          (prior.frame_count, 1)))
+    drawn = Markers(prior.names, level.project(prior.positions), fps=prior.fps)  # seen rolled by 60°
+    fitted = estimate_camera(drawn, prior, azimuth=90, elevation=0, focal=1000.0, width=960, height=720,
+                             roll=None)
+    held = estimate_camera(drawn, prior, azimuth=90, elevation=0, focal=1000.0, width=960, height=720)
+    assert np.degrees(np.abs(fitted.extrinsics[:, 2])).min() > 50  # the world tilted to match
+    assert np.all(held.extrinsics[:, 2] == 0)  # upright
+    turned = estimate_camera(drawn, prior, azimuth=90, elevation=0, focal=1000.0, width=960, height=720,
+                             roll=60.0)
+    assert np.abs(turned.project(prior.positions) - drawn.positions).max() < 1e-3  # a roll given is kept
 
 
 def test_bad_settings_are_refused():

@@ -102,6 +102,8 @@ def test_bad_input_exits_2_in_one_line_and_overwrites_nothing(drawn, capsys, tmp
         (["lift", folder / "markers.json", "--prior", short, "-o", kept], "too short"),
         (["lift", folder / "markers.json", "--prior", walk, "--view", "30", "-o", kept], "--view"),
         (["lift", folder / "markers.json", "--prior", walk, "--segment", "x:y", "-o", kept], "--segment"),
+        (["lift", folder / "markers.json", "--prior", walk, "--up", "level", "-o", kept],
+         "--up takes an angle in degrees or 'free'"),
         (["lift", folder / "markers.json", "--prior", walk, "--width", "3=1,2", "-o", kept], "--width"),
         (["lift", folder / "markers.json", "--prior", walk, "--width", f"0:{hand}=1,2", "-o", kept],
          "give them with --frames"),

@@ -8,7 +8,7 @@ import pytest
 
 from tests.proxy3d.conftest import clip_path
 from toonmotion.capture.mocap import STANDARD_JOINTS
-from toonmotion.errors import ProxyError
+from toonmotion.errors import AmbiguousViewError, ProxyError
 from toonmotion.io.bvh import load_bvh
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.descriptor import upper_body
@@ -126,3 +126,46 @@ def test_bad_input_is_refused_in_one_line(truth):
         with pytest.raises(ProxyError, match=match) as caught:
             call()
         assert "\n" not in str(caught.value)
+
+
+def test_a_view_the_drawing_cannot_tell_from_its_twin_is_asked_for(truth):
+    """A figure moving in one plane looks the same from a view and its mirror twin: lifting
+    names both in one line and asks for --view instead of picking one; given, it lifts."""
+    P = truth.positions.copy()
+    P[..., 0] = 0.0  # the walk flattened onto its swing plane
+    flat = Prior(truth.names, truth.parents, P, truth.fps)
+    cam = _camera(flat, (40.0, 15.0))
+    drawn = Markers(flat.names, cam.project(P), fps=flat.fps)
+    with pytest.raises(AmbiguousViewError) as asked:
+        lift(drawn, flat, focal=FOCAL, size=IMAGE)
+    message = str(asked.value)
+    assert "\n" not in message and "--view" in message and message.startswith("two views explain")
+    first, second = asked.value.views
+    views = [(first[0], first[1]), (second[0], second[1])]
+    assert min(np.degrees(np.arccos(np.clip(view_direction(*v) @ view_direction(40, 15), -1, 1)))
+               for v in views) < 3.0  # the view drawn from is one of the two
+    _, report = lift(drawn, flat, view=(40.0, 15.0), focal=FOCAL, size=IMAGE)
+    assert (report.azimuth, report.elevation) == (40.0, 15.0) and not report.view_found
+
+
+def test_the_world_stays_upright_unless_the_picture_is_turned(truth):
+    """The walk drawn with the picture turned 60° clockwise (as a figure whose posture is unlike
+    the prior's leaves it): by default the camera stays level, the world's up the picture's, and a
+    warning says the fit is poor; up=60 says how the picture is turned, and the fit is exact; the
+    paper's fitted roll (up=None) tilts the world, and a warning says so."""
+    from toonmotion.api import lift_warnings
+
+    view = (30.0, 10.0)
+    middle = truth.positions.reshape(-1, 3).mean(axis=0)
+    ext = np.concatenate([np.radians([*view, -60.0]), middle + 7 * view_direction(*view)])
+    turned = PerspectiveCamera(FOCAL, *IMAGE, np.tile(ext, (truth.frame_count, 1)))
+    drawn = Markers(truth.names, turned.project(truth.positions), fps=truth.fps)
+    level, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE)
+    assert np.all(level.camera.extrinsics[:, 2] == 0)
+    assert any(w.startswith("no camera sees the prior as drawn") for w in lift_warnings(level, report))
+    told, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, up=60.0)
+    assert np.allclose(told.camera.extrinsics[:, 2], np.radians(-60.0)) and report.camera_px < 0.01
+    assert lift_warnings(told, report) == []
+    free, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, up=None)
+    assert np.degrees(np.abs(free.camera.extrinsics[:, 2])).min() > 50
+    assert any("--up 0" in w for w in lift_warnings(free, report))

@@ -5,8 +5,16 @@ import pytest
 
 from toonmotion.capture.mocap import project_orthographic
 from toonmotion.errors import ProxyError
+from toonmotion.proxy3d import orthographic
 from toonmotion.proxy3d.markers import Markers
-from toonmotion.proxy3d.orthographic import camera, find_view, plane_normal, twin_view, view_direction
+from toonmotion.proxy3d.orthographic import (
+    SEPARATE,
+    camera,
+    find_view,
+    plane_normal,
+    twin_view,
+    view_direction,
+)
 from toonmotion.proxy3d.prior import Prior
 
 # Azimuth, elevation (degrees): front, front-left from above, side, back views, from below.
@@ -89,3 +97,51 @@ def test_camera_refuses_bad_angles():
         camera(0, 95)
     with pytest.raises(ProxyError, match="azimuth must be a finite number"):
         camera(float("nan"), 0)
+
+
+def test_a_planar_figure_is_ambiguous_and_a_real_walk_is_not(walk_prior):
+    """The search says when another view explains the drawing about as well (ViewFit.ambiguous):
+    the flattened walk's twin does; the real walk has no such rival."""
+    P = walk_prior.positions.copy()
+    P[..., 0] = 0.0
+    flat = Prior(walk_prior.names, walk_prior.parents, P, walk_prior.fps)
+    fit = find_view(Markers(flat.names, 3 * P @ camera(40, 15).T, fps=flat.fps), flat)
+    assert fit.ambiguous and fit.second is not None
+    assert _angle_between((fit.azimuth, fit.elevation), fit.second[:2]) > SEPARATE
+    real = find_view(Markers(walk_prior.names, 3 * walk_prior.positions @ camera(40, 15).T,
+                             fps=walk_prior.fps), walk_prior)
+    assert not real.ambiguous  # its cost has one basin, or others far dearer
+    assert real.second is None or real.second[2] > 100 * max(real.cost, 1e-9)
+
+
+def _swung(prior, factor):
+    """The prior with every limb turned ``factor`` times as far from its mean direction (wider
+    swings, as a run's against a walk's), each limb's length kept, rebuilt from the roots."""
+    P = prior.positions
+    out = P.copy()
+    for p, c in prior.limbs:
+        v = P[:, c] - P[:, p]
+        length = np.linalg.norm(v, axis=-1, keepdims=True)
+        unit = v / length
+        mean = unit.mean(axis=0)
+        mean /= np.linalg.norm(mean)
+        angle = np.arccos(np.clip(unit @ mean, -1, 1))[:, None]
+        away = unit - (unit @ mean)[:, None] * mean
+        away /= np.maximum(np.linalg.norm(away, axis=-1, keepdims=True), 1e-12)
+        turned = np.cos(factor * angle) * mean + np.sin(factor * angle) * away
+        out[:, c] = out[:, p] + length * turned
+    return Prior(prior.names, prior.parents, out, prior.fps)
+
+
+@pytest.mark.parametrize("view", [(33.3, 12.7), (-121.5, 27.0)])
+def test_a_prior_that_swings_wider_than_drawn_still_gives_the_view(walk_prior, view, monkeypatch):
+    """Limbs weighted by how steadily the prior holds them (STEADY): the hips, shoulders and spine
+    keep the view where the swinging limbs, 1.3 times wider in the prior, would pull it away."""
+    drawn = Markers(walk_prior.names, 4 * walk_prior.positions @ camera(*view).T, fps=walk_prior.fps)
+    wide = _swung(walk_prior, 1.3)
+    steady = find_view(drawn, wide)
+    assert _angle_between(view, (steady.azimuth, steady.elevation)) < 4.0
+    monkeypatch.setattr(orthographic, "STEADY", 1e9)  # every limb alike: the search before
+    alike = find_view(drawn, wide)
+    assert _angle_between(view, (alike.azimuth, alike.elevation)) > _angle_between(
+        view, (steady.azimuth, steady.elevation))

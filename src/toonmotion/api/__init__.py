@@ -57,7 +57,7 @@ from toonmotion.api.posing import (
     rotate_joint,
     sketch_pose,
 )
-from toonmotion.api.proxy3d import lift_proxy, preview_proxy
+from toonmotion.api.proxy3d import lift_proxy, lift_warnings, preview_proxy, project_mocap
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
 from toonmotion.api.scene3d import (
     animation_frames,
@@ -136,12 +136,14 @@ __all__ = [
     "keyshape_sheet",
     "keyshape_space",
     "lift_proxy",
+    "lift_warnings",
     "load_project",
     "motion_in_frames",
     "move_key",
     "pose_character",
     "pose_view",
     "preview_proxy",
+    "project_mocap",
     "redo_edits",
     "render_elements",
     "render_pose",

@@ -1,5 +1,5 @@
-"""3D proxies for hand-drawn characters (Jain et al. 2012): the calls behind ``lift`` and
-``proxy-preview`` (docs/proxy3d.md)."""
+"""3D proxies for hand-drawn characters (Jain et al. 2012): the calls behind ``lift``,
+``proxy-preview`` and ``project-mocap`` (docs/proxy3d.md)."""
 
 from __future__ import annotations
 
@@ -11,16 +11,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.animate.motion import Motion
 from toonmotion.capture.bvh_kinematics import BvhClip
-from toonmotion.capture.mocap import find_joints
-from toonmotion.errors import MotionError
+from toonmotion.capture.mocap import find_joints, fit_to_frame
+from toonmotion.errors import MotionError, ProxyError
+from toonmotion.geometry.arrays import frame_rate
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.camera_fit import CameraWeights
 from toonmotion.proxy3d.lift import LiftReport, lift
 from toonmotion.proxy3d.markers import Markers, markers_from_motion
-from toonmotion.proxy3d.prior import prior_from_bvh
+from toonmotion.proxy3d.orthographic import camera, limb_angle
+from toonmotion.proxy3d.prior import prior_from_bvh, resample_prior
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.proxy3d.skeleton import SkeletonWeights
 from toonmotion.render.proxy_preview import preview_frames
+from toonmotion.rig.skeleton import Skeleton
 
 
 def lift_proxy(
@@ -38,6 +41,7 @@ def lift_proxy(
     extra: Sequence[BvhClip] = (),
     camera_weights: CameraWeights | None = None,
     still_camera: bool = False,
+    up: float | None = 0.0,
     skeleton_weights: SkeletonWeights | None = None,
     progress: Progress | None = None,
 ) -> tuple[Proxy, LiftReport]:
@@ -66,8 +70,9 @@ def lift_proxy(
         The clip's frames to use, as a slice.
     view : (azimuth, elevation), optional
         Degrees; searched when not given.
-    focal, size, frames, widths, units, camera_weights, still_camera, skeleton_weights
-        As :func:`toonmotion.proxy3d.lift.lift`.
+    focal, size, frames, widths, units, camera_weights, still_camera, up, skeleton_weights
+        As :func:`toonmotion.proxy3d.lift.lift` (``up``: the world's up in the picture, degrees
+        clockwise; 0 a level picture, None the camera's roll fitted).
     extra : sequence of BvhClip
         Further clips for the skeleton's PCA subspace, matched the same way.
     progress : callable, optional
@@ -114,9 +119,63 @@ def lift_proxy(
     others = [prior_from_bvh(c, drawn.names, joint_map=joint_map) for c in extra]
     proxy, report = lift(drawn, matched, view=view, focal=focal, size=size, frames=frames, widths=widths,
                          units=units, extra=others, camera_weights=camera_weights,
-                         still_camera=still_camera,
+                         still_camera=still_camera, up=up,
                          skeleton_weights=skeleton_weights, progress=progress)
     return proxy, replace(report, left_out=left_out)
+
+
+# Beyond these, a lift's result deserves a second look (lift_warnings).
+POOR_MATCH_DEG = 12.0  # limbs this far apart on average between the drawing and its aligned prior
+CAMERA_FIT_SHARE = 0.1  # the camera fit's mean residual, as a share of the figure's size
+ROLL_DEG = 20.0  # a fitted camera roll (up=None) beyond this tilts the world visibly
+
+
+def lift_warnings(proxy: Proxy, report: LiftReport) -> list[str]:
+    """One-line warnings about a lift that deserves a second look, each saying what to give.
+
+    - the prior moves unlike the drawing (its limbs :data:`POOR_MATCH_DEG` apart on average once
+      aligned): a view searched with such a prior was more than 10 degrees off in about half of
+      ``benchmarks/view_search.py``'s cases with another clip as the prior;
+    - no camera explains the drawing well (a mean residual over :data:`CAMERA_FIT_SHARE` of the
+      figure's size): proportions or a posture unlike the prior's;
+    - a fitted roll (``up=None``) beyond :data:`ROLL_DEG`: the world tilts with it.
+
+    Parameters
+    ----------
+    proxy : Proxy
+    report : LiftReport
+        What :func:`lift_proxy` returned.
+
+    Returns
+    -------
+    list of str
+        One line each, none when the lift looks sound.
+
+    Examples
+    --------
+    >>> from toonmotion.proxy3d.camera import PerspectiveCamera
+    >>> from types import SimpleNamespace
+    >>> report = SimpleNamespace(view_found=True, view_cost=0.1, azimuth=30.0, elevation=10.0,
+    ...                          camera_px=2.0, figure_px=200.0, up=0.0)
+    >>> proxy = SimpleNamespace(camera=PerspectiveCamera(500.0, 640, 480, [[0, 0, 0, 0, 1, 5]]))
+    >>> lift_warnings(proxy, report)  # doctest: +ELLIPSIS
+    ['the prior moves unlike the drawing (limbs 18° apart on average once aligned): the view ...']
+    """
+    said = []
+    angle = limb_angle(report.view_cost)
+    if report.view_found and angle > POOR_MATCH_DEG:
+        said.append(f"the prior moves unlike the drawing (limbs {angle:.0f}° apart on average once "
+                    f"aligned): the view searched, {report.azimuth:.0f},{report.elevation:.0f}, may be off; "
+                    "check the preview, or give --view AZ,EL or a prior that moves more like it")
+    if report.camera_px > CAMERA_FIT_SHARE * report.figure_px:
+        said.append(f"no camera sees the prior as drawn: the fit leaves {report.camera_px:.0f} px on a "
+                    f"figure {report.figure_px:.0f} px across (proportions or a posture unlike the prior's); "
+                    "the points stay on the drawing, the skeleton and volumes follow the prior")
+    roll = float(np.degrees(np.abs(proxy.camera.extrinsics[:, 2])).max())
+    if report.up is None and roll > ROLL_DEG:
+        said.append(f"the camera rolls up to {roll:.0f}° to fit the prior, tilting the world; give --up 0 to "
+                    "keep it level")
+    return said
 
 
 def _motion_markers(motion, clip, joint_map):
@@ -164,3 +223,119 @@ def preview_proxy(proxy: Proxy, frames: ArrayLike | None = None) -> list[NDArray
     [(60, 140, 3), (60, 140, 3)]
     """
     return preview_frames(proxy, frames)
+
+
+def project_mocap(
+    clip: BvhClip,
+    *,
+    view: tuple[float, float],
+    joint_map: Mapping[str, str] | None = None,
+    segment: tuple[int, int | None] = (0, None),
+    fps: float | None = None,
+    size: tuple[int, int] = (640, 480),
+    margin: float = 0.1,
+) -> Motion:
+    """A motion-capture clip seen from a view, as a drawn 2D motion (for ``retarget``).
+
+    The clip's joints are seen through the orthographic camera of ``view``
+    (:func:`toonmotion.proxy3d.orthographic.camera`, the same angles as ``lift --view``, after
+    the clip is turned +Y up as :func:`~toonmotion.proxy3d.prior.prior_from_bvh` does), and the
+    whole clip is fitted into the picture with one scale and one offset
+    (:func:`toonmotion.capture.mocap.fit_to_frame`), so the motion itself is unchanged.
+
+    The motion's joints are the clip's standard joints under their standard names (``hips``,
+    ``spine``, ``left_elbow``, ..., :func:`toonmotion.capture.mocap.find_joints`, as far as the
+    clip has them) and the joints ``joint_map`` names. A mapped joint carries the map's name
+    instead of its standard one, so a drawing's own joints (a pig's ``front_left_foot`` from
+    ``LeftHand``) can be named after it. Each joint's parent is its nearest ancestor in the clip
+    that is also a joint of the motion.
+
+    Parameters
+    ----------
+    clip : BvhClip
+        From :func:`toonmotion.io.bvh.load_bvh`; 3D right-handed, its own units and up axis.
+    view : (azimuth, elevation)
+        Degrees: azimuth about +Y from +Z towards +X (0: the front of a figure facing +Z, 90: its
+        left side), elevation above the horizontal, in [-90, 90].
+    joint_map : dict, optional
+        The motion's joint name -> the clip's joint name.
+    segment : (start, stop)
+        The clip's frames to use, as a slice (CMU clips open with a T-pose frame: ``(1, None)``
+        leaves it out).
+    fps : float, optional
+        The motion's frame rate (positions interpolated linearly); default the clip's.
+    size : (width, height)
+        The picture the whole motion is fitted into, pixels.
+    margin : float
+        Space kept clear on each side, a fraction of the width and the height.
+
+    Returns
+    -------
+    Motion
+        ``(T, J, 2)`` pixels, x right and y down; its skeleton's rest pose is the first frame.
+
+    Raises
+    ------
+    ProxyError
+        The map names a joint the clip lacks (with the closest name, if any) or one joint twice,
+        the clip has no joint to show, the segment is empty, an angle or the fps is out of range.
+
+    Examples
+    --------
+    An arm hanging down, then raised towards the front (+Z), seen from the front and from its side:
+
+    >>> clip = BvhClip(names=("Hips", "LeftArm", "LeftHand", "LeftHand_end"),
+    ...                parents=np.array([-1, 0, 1, 2]),
+    ...                offsets=np.array([[0.0, 0, 0], [10, 0, 0], [0, -20, 0], [0, -5, 0]]),
+    ...                channels=(("Xposition", "Yposition", "Zposition"), ("Xrotation",), (), ()),
+    ...                motion=np.array([[0.0, 90, 0, 0], [0, 90, 0, -90]]), frame_time=1 / 30)
+    >>> front = project_mocap(clip, view=(0, 0), joint_map={"base": "Hips"}, size=(100, 100), margin=0)
+    >>> front.skeleton.names, front.skeleton.parents.tolist()
+    (('base', 'left_shoulder', 'left_hand'), [-1, 0, 1])
+    >>> front.positions[1].round(6).tolist()  # the raised arm points at the camera
+    [[25.0, 0.0], [75.0, 0.0], [75.0, 0.0]]
+    >>> side = project_mocap(clip, view=(90, 0), joint_map={"base": "Hips"}, size=(100, 100), margin=0)
+    >>> side.positions[:, 2].round(6).tolist()  # seen from +X, the front (+Z) is the picture's left
+    [[100.0, 100.0], [0.0, 0.0]]
+    """
+    try:
+        azimuth, elevation = view
+    except (TypeError, ValueError):
+        raise ProxyError(f"the view is two angles in degrees (azimuth, elevation), got {view!r}") from None
+    R = camera(azimuth, elevation)
+    names, mapping = _mocap_joints(clip, dict(joint_map or {}))
+    start, stop = segment
+    if not range(clip.frame_count)[start:stop]:
+        raise ProxyError(f"the segment {start}:{'' if stop is None else stop} holds none of the clip's "
+                         f"{clip.frame_count} frames")
+    seen = prior_from_bvh(clip, names, joint_map=mapping, start=start, stop=stop)
+    if fps is not None:
+        seen = resample_prior(seen, frame_rate(fps, name="the motion's fps", error=ProxyError))
+    points = fit_to_frame(seen.positions @ R.T, size, margin=margin)
+    skeleton = Skeleton.from_joints(
+        (n, None if p < 0 else names[p], points[0, j])
+        for j, (n, p) in enumerate(zip(names, seen.parents, strict=True))
+    )
+    order = [names.index(n) for n in skeleton.names]
+    return Motion(skeleton=skeleton, positions=points[:, order], fps=seen.fps)
+
+
+def _mocap_joints(clip, joint_map):
+    """The motion's joint names, in the clip's order, and each one's clip joint: the standard
+    joints found, those the map names taking the map's names instead."""
+    picks = _roles(clip.names, clip.parents)
+    joints = list(joint_map.values())
+    twice = next((j for j in joints if joints.count(j) > 1), None)
+    if twice is not None:
+        both = [n for n, j in joint_map.items() if j == twice]
+        raise ProxyError(f"the joint map names the clip's joint {twice!r} for both {both[0]!r} and "
+                         f"{both[1]!r}; map each name to its own joint")
+    mapping = {role: clip.names[j] for role, j in picks.items()
+               if role not in joint_map and clip.names[j] not in joint_map.values()}
+    mapping.update(joint_map)
+    if not mapping:
+        raise ProxyError("none of the clip's joints has a standard name (hips, left_elbow, ...); name the "
+                         "joints to show with a joint map (--map NAME=JOINT)")
+    where = {j: i for i, j in enumerate(clip.names)}
+    names = sorted(mapping, key=lambda n: where.get(mapping[n], len(where)))
+    return names, mapping

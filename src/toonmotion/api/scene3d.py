@@ -50,7 +50,11 @@ def simulate_scene(proxy: Proxy, elements: Sequence[Element], *,
     Raises
     ------
     SceneError
-        An element held at a marker the proxy lacks.
+        An element held at a marker the proxy lacks, or given a size over
+        :data:`~toonmotion.scene.elements.MAX_SIZE` times the figure's height.
+    LimitError
+        More bodies (drops, balls, links of strings, scarves and strands) than the limit
+        ``scene_bodies``; refused before anything is built.
 
     Examples
     --------

@@ -5,7 +5,7 @@ One module per command group registers its commands on the shared Typer ``app``:
 (pose, animate, filter), :mod:`~toonmotion.cli.editing` (depth, correct, undo, redo, edits, tune)
 and :mod:`~toonmotion.cli.capture` (track, retarget), :mod:`~toonmotion.cli.keyshapes`
 (keyshapes, capture-contours), :mod:`~toonmotion.cli.proxy3d` (lift, proxy-export,
-proxy-preview), :mod:`~toonmotion.cli.scene3d` (scene), :mod:`~toonmotion.cli.export`
+proxy-preview, project-mocap), :mod:`~toonmotion.cli.scene3d` (scene), :mod:`~toonmotion.cli.export`
 (export), :mod:`~toonmotion.cli.editor` (edit) and :mod:`~toonmotion.cli.about` (doctor).
 Errors the user can fix print one line, ``toonmotion: error: ...``, and exit with status 2
 (:func:`~toonmotion.cli.app.main`).

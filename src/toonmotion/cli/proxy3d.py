@@ -1,5 +1,6 @@
 """3D proxy commands (Jain et al. 2012): ``lift`` (markers + a mocap prior -> a proxy file),
-``proxy-export`` (to .glb or .bvh) and ``proxy-preview`` (a video of the proxy over the drawing)."""
+``proxy-export`` (to .glb or .bvh), ``proxy-preview`` (a video of the proxy over the drawing) and
+``project-mocap`` (a mocap clip seen from a view -> a 2D motion for ``retarget``)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from toonmotion.io.bvh import load_bvh, save_bvh
 from toonmotion.io.exchange.proxy_gltf import save_proxy_glb
 from toonmotion.io.frames import lay_on, load_frames
 from toonmotion.io.markers_json import load_markers
-from toonmotion.io.motion_json import is_motion_file, load_motion
+from toonmotion.io.motion_json import is_motion_file, load_motion, save_motion
 from toonmotion.io.proxy_json import load_proxy, save_proxy
 from toonmotion.io.video import animation_format, save_animation
 from toonmotion.proxy3d.markers import Markers
@@ -49,6 +50,10 @@ def lift_command(
     still_camera: Annotated[bool, typer.Option(
         "--still-camera", help="One camera for the whole shot (a drawing without camera moves): steadier "
         "than a camera per frame where the prior fits the drawing badly.")] = False,
+    up: Annotated[str, typer.Option(
+        "--up", help="Where the world's up points in the picture, degrees clockwise from the picture's up "
+        "(0: a level picture: the camera does not roll, the proxy and a scene's gravity stand as drawn); "
+        "'free' fits the camera's roll per frame, as the paper does.")] = "0",
     size: Annotated[str | None, typer.Option(
         "--size", help="Image WxH pixels \\[default: the frames', else the markers' extent].")] = None,
     frames: Annotated[Path | None, typer.Option(
@@ -91,7 +96,7 @@ def lift_command(
         proxy, found = api.lift_proxy(
             markers, clip, joint_map=_pairs(joint_map, "--map"), segment=_segment(segment),
             view=None if view is None else options.numbers(view, 2, "--view"),  # type: ignore[arg-type]
-            focal=focal, still_camera=still_camera, size=options.size(size), frames=pictures,
+            focal=focal, still_camera=still_camera, up=_up(up), size=options.size(size), frames=pictures,
             widths=overrides,
             units=_units(units), extra=[load_bvh(p) for p in extra or ()], progress=report,
         )
@@ -113,6 +118,8 @@ def lift_command(
         f"{found.reproj_px:.2g} px{'' if proxy.radii is not None else ', no volumes (no --frames)'} -> "
         + ", ".join(written)
     )
+    for warning in api.lift_warnings(proxy, found):
+        options.warn(warning)
     if found.left_out:
         options.warn(f"left out {', '.join(found.left_out)}: no joint of the prior matches "
                      f"{'them' if len(found.left_out) > 1 else 'it'} (map with --map)")
@@ -154,6 +161,40 @@ def proxy_preview(
     typer.echo(f"previewed {count} frames -> {output}")
 
 
+@app.command("project-mocap")
+def project_mocap_command(
+    clip: Annotated[Path, typer.Argument(metavar="CLIP.bvh", help="A motion-capture clip (.bvh).")],
+    view: Annotated[str, typer.Option(
+        "--view", help="The view AZIMUTH,ELEVATION in degrees, as lift's (0,0: from the front of a figure "
+        "facing +Z; 90,0: from its left).")],
+    output: Annotated[Path, typer.Option(
+        "-o", "--output", help="Motion file to write (.json), for 'retarget'.")],
+    joint_map: Annotated[str | None, typer.Option(
+        "--map", help="Joints named after the drawing's: NAME=JOINT[,NAME=JOINT...] gives the clip's JOINT "
+        "the name NAME (e.g. front_left_foot=LeftHand) \\[default: standard names: hips, spine, neck, "
+        "head, left_shoulder, left_elbow, left_hand, ..., right_foot].")] = None,
+    segment: Annotated[str | None, typer.Option(
+        "--segment", help="The clip's frames to use, START:STOP (a slice) \\[default: all].")] = None,
+    fps: Annotated[float | None, typer.Option(
+        "--fps", help="Frame rate of the motion \\[default: the clip's].")] = None,
+    size: Annotated[str | None, typer.Option(
+        "--size", help="Picture WxH pixels the whole motion is fitted into, 10% clear on each side "
+        "\\[default: 640x480].")] = None,
+) -> None:
+    """See a motion-capture clip from a view as a drawn 2D motion, for 'retarget' onto a drawing."""
+    options.suffix(output, ".json", "a motion file")
+    angles = options.numbers(view, 2, "--view")
+    picture = options.size(size) or (640, 480)
+    mapping = _pairs(joint_map, "--map")
+    motion = api.project_mocap(load_bvh(clip), view=(angles[0], angles[1]), joint_map=mapping,
+                               segment=_segment(segment), fps=fps, size=picture)
+    save_motion(output, motion)
+    typer.echo(
+        f"projected {len(motion.skeleton)} joints of {clip.name} seen from {angles[0]:g},{angles[1]:g}: "
+        f"{motion.frame_count} frames at {motion.fps:g} fps in {picture[0]}x{picture[1]} -> {output}"
+    )
+
+
 def read_markers(path: Path, fps: float | None) -> Markers | Motion:
     """A markers file, or a motion file (its joints become markers)."""
     if path.suffix.lower() == ".json" and is_motion_file(path):
@@ -185,6 +226,18 @@ def _pairs(text: str | None, option: str) -> dict[str, str]:
             raise SettingsError(f"{option} takes NAME=NAME pairs separated by commas, got {item!r}")
         out[key.strip()] = value.strip()
     return out
+
+
+def _up(text: str) -> float | None:
+    if text.strip().lower() == "free":
+        return None
+    try:
+        angle = float(text)
+    except ValueError:
+        angle = float("nan")
+    if not np.isfinite(angle):
+        raise SettingsError(f"--up takes an angle in degrees or 'free', got {text!r}")
+    return angle
 
 
 def _segment(text: str | None) -> tuple[int, int | None]:

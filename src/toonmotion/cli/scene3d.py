@@ -22,8 +22,10 @@ from toonmotion.io.motion_json import is_motion_file, load_motion
 from toonmotion.io.pose_json import load_keyframes
 from toonmotion.io.proxy_json import load_proxy
 from toonmotion.io.video import animation_format, save_animation
-from toonmotion.scene.build import DEFAULT_LIMB_RADIUS
-from toonmotion.scene.elements import Balloon, Balls, Element, Rain, Scarf, Skirt
+from toonmotion.scene.build import DEFAULT_LIMB_RADIUS, check_scene
+from toonmotion.scene.elements import MAX_SIZE, Balloon, Balls, Element, Rain, Scarf, Skirt
+
+_MOST = f"{MAX_SIZE:g} times the figure's height"
 
 
 @app.command("scene")
@@ -48,15 +50,16 @@ def scene_command(
     skirt: Annotated[list[str] | None, typer.Option(
         "--skirt", help="A skirt of strands hanging in a ring around MARKER (the hips, say).")] = None,
     rain: Annotated[int, typer.Option(
-        "--rain", min=0, help="Rain: this many drops falling over the figure at a time, bouncing off it."
+        "--rain", min=0, help="Rain: this many drops falling over the figure at a time, bouncing off it. "
+        "Drops, balls and the links of strings, scarves and skirts count towards the limit scene_bodies."
     )] = 0,
     ball_count: Annotated[int, typer.Option("--ball-count", min=1, help="Balls per --balls marker.")] = 3,
     ball_radius: Annotated[float | None, typer.Option(
-        "--ball-radius", help="Metres \\[default: 5% of the figure's height].")] = None,
+        "--ball-radius", help=f"Metres, at most {_MOST} \\[default: 5% of the figure's height].")] = None,
     balloon_radius: Annotated[float | None, typer.Option(
-        "--balloon-radius", help="Metres \\[default: 7% of the figure's height].")] = None,
+        "--balloon-radius", help=f"Metres, at most {_MOST} \\[default: 7% of the figure's height].")] = None,
     string_length: Annotated[float | None, typer.Option(
-        "--string-length", help="Metres \\[default: 30% of the figure's height].")] = None,
+        "--string-length", help=f"Metres, at most {_MOST} \\[default: 30% of the figure's height].")] = None,
     shading: Annotated[str, typer.Option("--shading", help="toon, smooth or flat.")] = "toon",
     passes: Annotated[Path | None, typer.Option(
         "--passes", help="Also write the elements' passes per frame into this folder, for compositing "
@@ -82,6 +85,7 @@ def scene_command(
         options.warn("no elements given (--balloon, --balls, --scarf, --skirt, --rain): the drawing is "
                      "written as it is")
     proxy = load_proxy(source)
+    check_scene(proxy, elements)  # markers, bodies and sizes, before the frames are read
     if proxy.radii is None and elements:
         options.warn("the proxy has no collision volumes (it was lifted without --frames): its limbs' radii "
                      f"are taken as {DEFAULT_LIMB_RADIUS:.1%} of the figure's height")
@@ -99,9 +103,10 @@ def scene_command(
         if passes is not None:
             _write_passes(passes, api.scene_passes(proxy, motion, shading=shading))
     deepest = f", deepest contact {motion.deepest * 1000:.1f} mm" if len(motion.balls[0]) else ""
-    counts = [(sum(isinstance(e, kind) for e in elements), kind.__name__.lower())
-              for kind in (Balloon, Scarf, Skirt)] + [(motion.balls.shape[1], "ball"), (rain, "drop")]
-    parts = [f"{n} {what}{'' if n == 1 else 's'}" for n, what in counts if n]
+    counts = [(sum(isinstance(e, kind) for e in elements), one, many) for kind, one, many in (
+        (Balloon, "balloon", "balloons"), (Scarf, "scarf", "scarves"), (Skirt, "skirt", "skirts"))]
+    counts += [(motion.balls.shape[1], "ball", "balls"), (rain, "drop", "drops")]
+    parts = [f"{n} {one if n == 1 else many}" for n, one, many in counts if n]
     listed = " and ".join([", ".join(parts[:-1]), parts[-1]] if len(parts) > 1 else parts) or "nothing"
     typer.echo(f"simulated {listed} over {written} frames ({motion.substeps} steps each{deepest}) -> "
                f"{output}")

@@ -13,7 +13,8 @@ beyond that is the camera. For each frame ``i`` the camera's six extrinsic param
   zero above it. The paper writes ``t_z - mu``; read as a penalty that pulls the camera towards
   height ``mu`` even when it is well above the ground, it would bend every camera's path, so we
   take it as the constraint the text states ("above ground level") -- a one-sided penalty;
-- ``e_o``: the roll, squared;
+- ``e_o``: the roll, squared (beyond the paper, the roll is held at 0 by default instead, so that
+  the world's up stays the picture's: ``estimate_camera``'s ``roll``);
 - ``e_s``: ``|rho_i - rho_{i-1}|^2``, smoothness (the previous frame's solution is fixed).
 
 All terms are squared (nonlinear least squares; SciPy's Levenberg-Marquardt), with the paper's
@@ -113,6 +114,7 @@ def estimate_camera(
     height: int,
     weights: CameraWeights | None = None,
     still: bool = False,
+    roll: float | None = 0.0,
     progress: Progress | None = None,
 ) -> PerspectiveCamera:
     """The artist's camera per frame by eq. 2.
@@ -136,6 +138,11 @@ def estimate_camera(
         ground and roll terms as above; no window or smoothness). For a drawing made without
         camera moves it is far better posed than a camera per frame, which, where the prior
         explains the drawing badly (cartoon proportions), can wander off between frames.
+    roll : float or None
+        Beyond the paper: the camera's roll, degrees, held (not fitted): 0, the default, keeps
+        the world's up the picture's up, as drawings are made. The paper fits it, with the small
+        penalty ``e_o``; that lets a prior whose posture differs from the drawn figure's (a
+        human prior for a pig) tilt the whole world to match it. None fits it as the paper does.
     progress : callable, optional
         ``progress("camera", done, total)`` per frame.
 
@@ -173,7 +180,19 @@ def estimate_camera(
     centre = np.array([width / 2, height / 2])
     near = 1e-3  # metres: a marker nearer the camera than this is treated as out of sight
 
-    def residuals(p, i, frames, anchor):
+    held = None if roll is None else float(np.radians(roll))
+    if held is not None:
+        previous[2] = held
+
+    def full(q):
+        """The six extrinsics from the fitted ones (roll put back when it is held)."""
+        return q if held is None else np.concatenate([q[:2], [held], q[2:]])
+
+    def fitted(p):
+        return p if held is None else np.delete(p, 2)
+
+    def residuals(q, i, frames, anchor):
+        p = full(q)
         R = rotations(p[None, :3])[0]
         local = (X[frames] - p[3:]) @ R.T
         depth = local[..., 2:]
@@ -186,15 +205,17 @@ def estimate_camera(
         return np.concatenate(parts)
 
     if still:
-        found = least_squares(residuals, previous, args=(0, np.arange(T), None), method="lm", x_scale="jac")
-        rho[:] = found.x
+        found = least_squares(residuals, fitted(previous), args=(0, np.arange(T), None), method="lm",
+                              x_scale="jac")
+        rho[:] = full(found.x)
         if progress is not None:
             progress("camera", T, T)
     for i in range(0 if still else T):
         frames = np.arange(max(0, i - half), min(T, i + half + 1))
         anchor = None if i == 0 else previous
-        found = least_squares(residuals, previous, args=(i, frames, anchor), method="lm", x_scale="jac")
-        rho[i] = previous = found.x
+        found = least_squares(residuals, fitted(previous), args=(i, frames, anchor), method="lm",
+                              x_scale="jac")
+        rho[i] = previous = full(found.x)
         if progress is not None:
             progress("camera", i + 1, T)
     camera = PerspectiveCamera(focal, width, height, rho)

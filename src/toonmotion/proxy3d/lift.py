@@ -19,12 +19,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from toonmotion.errors import ProxyError
+from toonmotion.errors import AmbiguousViewError, ProxyError
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.camera_fit import CameraWeights, estimate_camera
 from toonmotion.proxy3d.markers import Markers
+from toonmotion.proxy3d.orthographic import ViewFit, find_view, limb_angle, view_cost
 from toonmotion.proxy3d.orthographic import camera as orthographic_camera
-from toonmotion.proxy3d.orthographic import find_view, view_cost
 from toonmotion.proxy3d.points import point_proxies
 from toonmotion.proxy3d.prior import Prior, prior_in_metres
 from toonmotion.proxy3d.proxy import Proxy
@@ -49,6 +49,11 @@ class LiftReport:
         :func:`~toonmotion.proxy3d.orthographic.view_cost` of the view (0 perfect, 4 reversed).
     twin : tuple of float or None
         The searched view's mirror twin ``(azimuth, elevation, cost)``.
+    second : tuple of float or None
+        The searched view's best rival in another basin of the cost ``(azimuth, elevation,
+        cost)`` (:attr:`~toonmotion.proxy3d.orthographic.ViewFit.second`); within
+        :data:`~toonmotion.proxy3d.orthographic.AMBIGUOUS` of the view's cost, lifting asks
+        for the view instead (:class:`~toonmotion.errors.AmbiguousViewError`).
     units : float
         Metres per unit of the prior.
     prior_frames : (T,) float
@@ -66,6 +71,10 @@ class LiftReport:
         The time-aligned prior in metres.
     times_ms : dict
         Milliseconds per stage: align, camera, points, volumes, skeleton.
+    up : float or None
+        The picture's up as given (``lift``'s ``up``; None: the camera's roll was fitted).
+    figure_px : float
+        The drawn figure's size: the median over frames of its markers' bounding-box diagonal.
     left_out : tuple of str
         A motion's joints that were not lifted (no joint of the prior matches them).
     """
@@ -75,6 +84,7 @@ class LiftReport:
     view_found: bool
     view_cost: float
     twin: tuple[float, float, float] | None
+    second: tuple[float, float, float] | None
     units: float
     prior_frames: NDArray[np.float64]
     alignment_cost: float
@@ -83,6 +93,8 @@ class LiftReport:
     capped: NDArray[np.bool_] | None
     warped: Prior
     times_ms: dict[str, float] = field(default_factory=dict)
+    figure_px: float = 0.0
+    up: float | None = 0.0
     left_out: tuple[str, ...] = ()
 
 
@@ -102,6 +114,7 @@ def lift(
     extra: Sequence[Prior] = (),
     camera_weights: CameraWeights | None = None,
     still_camera: bool = False,
+    up: float | None = 0.0,
     skeleton_weights: SkeletonWeights | None = None,
     smooth: float = 1.0,
     progress: Progress | None = None,
@@ -142,6 +155,12 @@ def lift(
     still_camera : bool
         One camera for the whole shot (:func:`~toonmotion.proxy3d.camera_fit.estimate_camera`'s
         ``still``), for drawings made without camera moves.
+    up : float or None
+        Where the world's up points in the picture, degrees clockwise from the picture's up: 0,
+        the default, for a level picture (the camera does not roll, so the proxy, a scene's
+        gravity and the exports stand as the drawing does); None fits the camera's roll per frame
+        as the paper does, which lets a prior whose posture differs from the drawn figure's (a
+        human prior for a four-legged character) tilt the world to match.
     camera_weights, skeleton_weights : optional
         Eq. 2's and eq. 16's weights.
     smooth : float
@@ -167,31 +186,37 @@ def lift(
     if image_frames is not None and (image_frames.ndim != 4 or len(image_frames) != markers.frame_count):
         raise ProxyError(f"the drawn frames must be one image per marker frame ({markers.frame_count}), got "
                          f"{'shape ' + str(image_frames.shape)}")
+    if image_frames is not None:
+        _markers_on_frames(markers, image_frames.shape[2], image_frames.shape[1])
     width, height = _image_size(markers, size, image_frames)
     f = float(np.hypot(width, height)) if focal is None else float(focal)
     if not (np.isfinite(f) and f > 0):
         raise ProxyError(f"the focal length must be a positive number of pixels, got {focal!r}")
 
+    level = markers if not up else _turned(markers, -float(up))  # the picture with the world's up up
     found = view is None
-    twin = None
+    twin = second = None
     if view is None:
-        azimuth, elevation = 0.0, 0.0
-        for _ in range(2):
-            alignment = align_prior(markers, in_metres, orthographic_camera(azimuth, elevation), band=band,
-                                    relative=relative)
-            fit = find_view(markers, warp_prior(in_metres, alignment, markers.fps))
-            azimuth, elevation, twin = fit.azimuth, fit.elevation, fit.twin
+        fit = search_view(level, in_metres, band=band, relative=relative)
+        azimuth, elevation, twin, second = fit.azimuth, fit.elevation, fit.twin, fit.second
+        if fit.ambiguous and second is not None:
+            raise AmbiguousViewError(
+                f"two views explain the drawing about equally: {_angles(fit.azimuth, fit.elevation)} "
+                f"(limbs {fit.mean_angle:.0f}° off on average) and {_angles(*second[:2])} "
+                f"({limb_angle(second[2]):.0f}° off); give the one it was drawn from (--view AZ,EL)",
+                views=((fit.azimuth, fit.elevation, fit.cost), second))
     else:
         azimuth, elevation = (float(v) for v in view)
     R = orthographic_camera(azimuth, elevation)
-    alignment = align_prior(markers, in_metres, R, band=band, relative=relative)
+    alignment = align_prior(level, in_metres, R, band=band, relative=relative)
     warped = warp_prior(in_metres, alignment, markers.fps)
-    cost = view_cost(markers, warped, azimuth, elevation)
+    cost = view_cost(level, warped, azimuth, elevation)
     times["align"] = _since(clock)
 
     clock = time.perf_counter()
     camera = estimate_camera(markers, warped, azimuth=azimuth, elevation=elevation, focal=f, width=width,
-                             height=height, weights=camera_weights, still=still_camera, progress=progress)
+                             height=height, weights=camera_weights, still=still_camera,
+                             roll=None if up is None else -float(up), progress=progress)
     camera_px = float(np.linalg.norm(camera.project(warped.positions) - markers.positions, axis=-1).mean())
     times["camera"] = _since(clock)
 
@@ -223,9 +248,59 @@ def lift(
                   radii=radii, skeleton=skeleton.positions, rest=skeleton.rest,
                   limb_rotations=skeleton.rotations)
     report = LiftReport(azimuth=azimuth, elevation=elevation, view_found=found, view_cost=cost, twin=twin,
-                        units=unit, prior_frames=alignment.frames, alignment_cost=alignment.cost,
-                        camera_px=camera_px, reproj_px=reproj, capped=capped, warped=warped, times_ms=times)
+                        second=second, units=unit, prior_frames=alignment.frames,
+                        alignment_cost=alignment.cost, camera_px=camera_px, reproj_px=reproj, capped=capped,
+                        warped=warped, times_ms=times, figure_px=_figure_size(markers), up=up)
     return proxy, report
+
+
+def search_view(markers: Markers, prior: Prior, *, band: float = 0.1, relative: bool = False) -> ViewFit:
+    """The orthographic view (3.1.3) that best shows the prior as drawn, searched.
+
+    The timing and the view depend on each other (DTW compares poses seen through a camera; the
+    view search compares aligned poses): the prior is aligned through the front view, the view
+    searched, the prior aligned again through it and the view searched once more.
+
+    Parameters
+    ----------
+    markers : Markers
+    prior : Prior
+        In metres (:func:`~toonmotion.proxy3d.prior.prior_in_metres`), with the markers' names.
+    band, relative
+        The alignment's (:func:`~toonmotion.proxy3d.timewarp.align_prior`).
+
+    Returns
+    -------
+    ViewFit
+        With its second basin (:attr:`~toonmotion.proxy3d.orthographic.ViewFit.second`): the
+        caller decides what an ambiguous view means.
+    """
+    azimuth, elevation = 0.0, 0.0
+    for _ in range(2):
+        alignment = align_prior(markers, prior, orthographic_camera(azimuth, elevation), band=band,
+                                relative=relative)
+        fit = find_view(markers, warp_prior(prior, alignment, markers.fps))
+        azimuth, elevation = fit.azimuth, fit.elevation
+    return fit
+
+
+def _figure_size(markers):
+    extent = np.ptp(markers.positions, axis=1)
+    return float(np.median(np.hypot(extent[:, 0], extent[:, 1])))
+
+
+def _turned(markers, degrees):
+    """The markers turned clockwise in the picture by ``degrees`` about their centroid."""
+    if not np.isfinite(degrees):
+        raise ProxyError(f"the picture's up must be a finite angle in degrees, got {degrees!r}")
+    a = np.radians(degrees)
+    turn = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])  # y down: clockwise on screen
+    middle = markers.positions.reshape(-1, 2).mean(axis=0)
+    return Markers(markers.names, (markers.positions - middle) @ turn.T + middle, fps=markers.fps)
+
+
+def _angles(azimuth, elevation):
+    return f"{azimuth:.0f},{elevation:.0f}"
 
 
 def _image_size(markers, size, frames):
@@ -258,3 +333,36 @@ def _limb_widths(widths, prior):
 def _since(start):
     return round(1000 * (time.perf_counter() - start), 2)
 
+
+# Drawn frames belong to the markers when the markers mostly lie on them: at most OFF_FRAMES of
+# the marker positions (over all frames) may fall outside the frame enlarged by OFF_MARGIN of its
+# size on each side. The margin keeps a joint whose limb is cut by the frame's edge; the share
+# lets a hand or a foot leave the shot for part of it. Markers of another picture are off by far
+# more (issue 45: markers over 1669 x 384 px on 562 x 379 px frames). Measured: the shared char1
+# walking (project-mocap 90,0, retarget, animate), its `--save-motion` file (drawing pixels) on
+# its own 1808 x 653 frames: 65 % beyond the enlarged frame; `--save-frame-motion`'s files with
+# their frames (that walk, char1 from the front, the bundled demo): none outside the frame itself.
+OFF_MARGIN = 0.1
+OFF_FRAMES = 0.1
+
+
+def _markers_on_frames(markers, width, height):
+    """Refuse frames the markers do not lie on (:data:`OFF_FRAMES`), naming the farthest reach.
+
+    >>> m = Markers(("a", "b"), [[[10.0, 10], [1669, 300]]], fps=12)
+    >>> try:
+    ...     _markers_on_frames(m, 562, 379)
+    ... except ProxyError as error:
+    ...     print(error)
+    the markers reach x = 1669 px but the frames are 562×379 px: are these frames of this motion? (--frames)
+    """
+    P = markers.positions.reshape(-1, 2)
+    size = np.array([width, height], dtype=float)
+    lo, hi = -OFF_MARGIN * size, (1 + OFF_MARGIN) * size
+    off = np.any((P < lo) | (P > hi), axis=1)
+    if off.mean() <= OFF_FRAMES:
+        return
+    beyond = np.maximum(lo - P, P - hi) / size  # how far outside, in frame sizes
+    point, axis = np.unravel_index(int(np.argmax(beyond)), beyond.shape)
+    raise ProxyError(f"the markers reach {'xy'[axis]} = {P[point, axis]:.0f} px but the frames are "
+                     f"{width}×{height} px: are these frames of this motion? (--frames)")

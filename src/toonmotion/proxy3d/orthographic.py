@@ -28,6 +28,17 @@ markers are named, so the left/right shoulders and hips, which stick out of the 
 tell the twins apart: the search keeps the lower cost, and reports the twin of
 the chosen view with its cost as :attr:`ViewFit.twin` (:func:`plane_normal` gives ``n``), so
 a caller can see how close the call was and take the other.
+
+Limbs are weighted by how steady the prior holds them (:data:`STEADY`): the line of the hips or
+the shoulders and the spine say more about the view than a swinging arm, whose swing in the
+drawing may be wider or narrower than the prior's (a run for a walk) -- a difference the search
+would otherwise explain by turning the view towards the swing's plane.
+
+The search reports its own confidence: the best view of every *other* basin of the cost (a
+local minimum more than :data:`SEPARATE` degrees away, the twin included) is refined too, and the
+cheapest is :attr:`ViewFit.second`. When it explains the drawing about as well as the chosen
+view (:attr:`ViewFit.ambiguous`: within :data:`AMBIGUOUS` times its cost), the drawing cannot
+tell the two apart, and the caller should ask for the view rather than pick one.
 """
 
 from __future__ import annotations
@@ -49,6 +60,18 @@ AZIMUTHS = tuple(float(a) for a in range(-180, 180, 10))
 ELEVATIONS = tuple(float(e) for e in range(-60, 61, 10))
 # The coarse grid compares at most this many frames (evenly spread); the refinement uses all.
 GRID_FRAMES = 120
+# A limb's weight is 1 / (1 - steadiness + STEADY), its steadiness the length of its mean unit
+# direction over the prior (1 for a limb that never turns, less the more it swings). Measured by
+# benchmarks/view_search.py; see docs/proxy3d.md.
+STEADY = 0.005
+# Views further apart than this (degrees) are in different basins of the cost.
+SEPARATE = 25.0
+# A second basin within this factor of the best cost (or within AMBIGUOUS_FLOOR of it, for fits
+# that are all but exact) explains the drawing about as well: the view is ambiguous.
+AMBIGUOUS = 1.25
+AMBIGUOUS_FLOOR = 1e-6
+# Second basins refined, cheapest first on the grid.
+RIVALS = 3
 
 
 def camera(azimuth: float, elevation: float) -> NDArray[np.float64]:
@@ -108,6 +131,10 @@ class ViewFit:
         ``(azimuth, elevation, cost)`` of the chosen view's twin (module docstring): the view
         that would look the same if the prior moved in one plane. A cost close to
         :attr:`cost` means the drawing cannot tell the two apart.
+    second : tuple of float or None
+        ``(azimuth, elevation, cost)``: the best view outside the chosen one's basin (more than
+        :data:`SEPARATE` degrees away; the twin when it is the cheapest), None when the cost
+        has no other basin.
     """
 
     azimuth: float
@@ -117,6 +144,27 @@ class ViewFit:
     scale: float
     translation: NDArray[np.float64]
     twin: tuple[float, float, float]
+    second: tuple[float, float, float] | None = None
+
+    @property
+    def ambiguous(self) -> bool:
+        """Whether :attr:`second` explains the drawing about as well (:data:`AMBIGUOUS`)."""
+        return self.second is not None and self.second[2] <= AMBIGUOUS * self.cost + AMBIGUOUS_FLOOR
+
+    @property
+    def mean_angle(self) -> float:
+        """:func:`limb_angle` of :attr:`cost`."""
+        return limb_angle(self.cost)
+
+
+def limb_angle(cost: float) -> float:
+    """The angle, degrees, between drawn and projected limbs that a :attr:`ViewFit.cost` amounts
+    to (``cost = 2 - 2 cos angle``).
+
+    >>> round(limb_angle(2 - 2 * np.cos(np.radians(20))), 9)
+    20.0
+    """
+    return float(np.degrees(np.arccos(np.clip(1 - cost / 2, -1.0, 1.0))))
 
 
 def view_cost(markers: Markers, prior: Prior, azimuth: float, elevation: float) -> float:
@@ -139,7 +187,8 @@ def find_view(
 
     Every grid view is scored by :func:`view_cost` on up to :data:`GRID_FRAMES` frames; the best
     is refined over all frames by Nelder-Mead (to about 1e-4 degree). Its twin (module
-    docstring) is scored too, and refined: should that find a lower cost, the two swap.
+    docstring) is scored too, and refined: should that find a lower cost, the two swap. The
+    cheapest other basins of the grid are refined as well, for :attr:`ViewFit.second`.
     Scale and translation are then fitted in closed form.
 
     Parameters
@@ -196,13 +245,14 @@ def find_view(
     twin_az, twin_el = twin_view(az, el, plane_normal(prior))
     twin = (twin_az, twin_el, view_cost(markers, prior, twin_az, twin_el))
     other = refine(twin_az, twin_el)
-    apart = np.degrees(np.arccos(np.clip(view_direction(az, el) @ view_direction(*other[:2]), -1, 1)))
-    if other[2] < cost and apart > 1.0:  # the grid missed the better valley
-        (az, el, cost), twin = other, (az, el, cost)
+    if other[2] < cost and _apart((az, el), other) > 1.0:  # the grid missed the better valley
+        (az, el, cost), twin, other = other, (az, el, cost), (az, el, cost)
+    rivals = [other] + [refine(*start) for start in _basins(grid, A, E, (az, el))]
+    rivals = [r for r in rivals if _apart((az, el), r) > SEPARATE]
     R = camera(az, el)
     scale, translation = fit_scale_translation(markers.positions, prior.positions @ R.T)
     return ViewFit(azimuth=az, elevation=el, cost=cost, R=R, scale=scale, translation=translation,
-                   twin=twin)
+                   twin=twin, second=min(rivals, key=lambda r: r[2]) if rivals else None)
 
 
 def plane_normal(prior: Prior) -> NDArray[np.float64]:
@@ -272,6 +322,26 @@ def _cameras(az, el):
     return np.stack([right, down], axis=1)
 
 
+def _apart(a, b):
+    """Degrees between the views ``a`` and ``b`` (their first two values: azimuth, elevation)."""
+    return float(np.degrees(np.arccos(np.clip(view_direction(*a[:2]) @ view_direction(*b[:2]), -1, 1))))
+
+
+def _basins(grid, A, E, best):
+    """Starting views (degrees) of the cheapest :data:`RIVALS` grid minima away from ``best``.
+
+    A grid cell is a minimum when no neighbour (azimuth wraps round; elevation does not) costs
+    less.
+    """
+    padded = np.pad(np.pad(grid, ((1, 1), (0, 0)), mode="wrap"), ((0, 0), (1, 1)), mode="edge")
+    neighbours = np.stack([padded[1 + i:1 + i + grid.shape[0], 1 + j:1 + j + grid.shape[1]]
+                           for i in (-1, 0, 1) for j in (-1, 0, 1) if (i, j) != (0, 0)])
+    minima = np.argwhere(grid <= neighbours.min(axis=0))
+    starts = [(float(np.degrees(A[i, j])), float(np.degrees(E[i, j])), float(grid[i, j])) for i, j in minima]
+    starts = sorted((s for s in starts if _apart(best, s) > SEPARATE), key=lambda s: s[2])
+    return [s[:2] for s in starts[:RIVALS]]
+
+
 def _limb_data(markers, prior):
     if tuple(prior.names) != tuple(markers.names) or prior.frame_count != markers.frame_count:
         raise ProxyError(
@@ -285,9 +355,20 @@ def _limb_data(markers, prior):
     if len(limbs) == 0 or not np.all(mean > 0):
         raise ProxyError("the drawn markers form no limb of some length on some frame; a view cannot be "
                          "fitted")
-    weight = length / mean
+    V = limb_vectors(prior.positions, limbs)
+    weight = length / mean * _steadiness_weights(V)
     unit = drawn / np.where(length > 0, length, 1.0)[..., None]
-    return unit, weight, limb_vectors(prior.positions, limbs)
+    return unit, weight, V
+
+
+def _steadiness_weights(V):
+    """Each limb's weight by how steadily the prior holds its direction (:data:`STEADY`), ``(K,)``,
+    mean 1."""
+    norm = np.linalg.norm(V, axis=-1, keepdims=True)
+    unit = V / np.where(norm > 0, norm, 1.0)
+    steadiness = np.linalg.norm(unit.mean(axis=0), axis=-1)
+    weight = 1.0 / (1.0 - steadiness + STEADY)
+    return weight / weight.mean()
 
 
 def _costs(unit, weight, V, az, el):

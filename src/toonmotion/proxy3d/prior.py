@@ -18,6 +18,7 @@ mocap rates of 30-120 fps a frame's chord is short and the error small).
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -159,8 +160,8 @@ def prior_from_bvh(
     ------
     ProxyError
         Some markers have no joint in the clip (the message names them and lists the joints),
-        two markers map to one joint, the map names a joint the clip lacks, or the segment is
-        empty.
+        two markers map to one joint, the map names a joint the clip lacks or a marker that is not
+        among ``names`` (either with the closest name, if any), or the segment is empty.
 
     Examples
     --------
@@ -174,10 +175,14 @@ def prior_from_bvh(
     """
     names = [str(n) for n in names]
     joint_map = dict(joint_map or {})
+    strays = [m for m in joint_map if m not in names]
+    if strays:  # a misspelt marker would otherwise be mapped to nothing, silently
+        raise ProxyError(f"the joint map (--map) names the marker {strays[0]!r}, which is not one of the "
+                         f"markers{_did_you_mean(strays[0], names)}; the markers are: {', '.join(names)}")
     unknown = [j for j in joint_map.values() if j not in clip.names]
     if unknown:
-        raise ProxyError(f"the joint map names {unknown[0]!r}, which the mocap clip does not have; its "
-                         f"joints are: {', '.join(clip.names)}")
+        raise ProxyError(f"the joint map names {unknown[0]!r}, which the mocap clip does not have"
+                         f"{_did_you_mean(unknown[0], clip.names)}; its joints are: {', '.join(clip.names)}")
     standard = _standard_picks(clip)
     found: list[int | None] = []
     for name in names:
@@ -380,6 +385,16 @@ def prior_in_metres(prior: Prior, units: float | str | None = None) -> tuple[Pri
     positions = prior.positions * scale
     positions[..., 1] -= positions[..., 1].min()
     return Prior(prior.names, prior.parents, positions, prior.fps, prior.joints, prior.turns), scale
+
+
+def _did_you_mean(name, choices):
+    """``" (did you mean 'x'?)"`` for the choice closest to a misspelt name, else ``""``.
+
+    >>> _did_you_mean("left_hnd", ["left_hand", "right_hand"]), _did_you_mean("ghost", ["hips"])
+    (" (did you mean 'left_hand'?)", '')
+    """
+    close = difflib.get_close_matches(name, [str(c) for c in choices], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def _some(names, shown=4):

@@ -25,11 +25,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion import limits
 from toonmotion.errors import SceneError
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.scene.elements import (
     BALL_RADIUS,
     BALLOON_RADIUS,
+    MAX_SIZE,
     RAIN_RADIUS,
     SCARF_LENGTH,
     SCARF_WIDTH,
@@ -119,20 +121,128 @@ def figure_height(proxy: Proxy) -> float:
     return float(max((Y.max(axis=1) - Y.min(axis=1)).max(), 1e-3))
 
 
-def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> SceneModel:
-    """Compile the proxy and the elements into a MuJoCo model.
+def scene_bodies(elements: list[Element] | tuple[Element, ...]) -> int:
+    """How many bodies the elements make MuJoCo simulate: a drop or a ball is one, a balloon its
+    :data:`STRING_LINKS` links and itself, a scarf :data:`SCARF_LINKS`, a skirt :data:`SKIRT_LINKS`
+    per strand. Counted from the elements alone, before anything is built.
+
+    >>> scene_bodies([Rain(count=100), Balloon("hand"), Skirt("hips", strands=16)])
+    173
+    """
+    return sum(_bodies(element) for element in elements)
+
+
+def _bodies(element):
+    if isinstance(element, (Rain, Balls)):
+        return element.count
+    if isinstance(element, Balloon):
+        return STRING_LINKS + 1
+    if isinstance(element, Scarf):
+        return SCARF_LINKS
+    if isinstance(element, Skirt):
+        return element.strands * SKIRT_LINKS
+    raise SceneError(f"a scene element is a Balloon, Balls, Scarf, Skirt or Rain, got "
+                     f"{type(element).__name__}")
+
+
+# How a refusal names an element whose marker the proxy lacks.
+_HELD = {Balloon: "a balloon is held at", Balls: "balls are laid in the path of", Scarf: "a scarf is tied at",
+         Skirt: "a skirt hangs round"}
+
+
+def check_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> None:
+    """Refuse a scene before anything is built: an element at a marker the proxy lacks, more bodies
+    than the limit ``scene_bodies`` (:mod:`toonmotion.limits`), or a size given larger than
+    :data:`~toonmotion.scene.elements.MAX_SIZE` times the figure's height (:func:`figure_height`).
+
+    Cheap (it counts and compares; it builds nothing), so a front end calls it before reading the
+    drawn frames; :func:`build_scene` calls it first too.
 
     Raises
     ------
     SceneError
-        An element names a marker the proxy lacks, or MuJoCo is not installed.
+        An unknown marker, an element too large for the figure.
+    LimitError
+        Too many bodies.
     """
-    mujoco = _mujoco()
     names = list(proxy.names)
     for element in elements:
         if element.marker is not None and element.marker not in names:
-            raise SceneError(f"the {type(element).__name__.lower()} is held at {element.marker!r}, which the "
-                             f"proxy lacks; its markers are {', '.join(names)}")
+            held = _HELD.get(type(element), "an element is held at")
+            raise SceneError(f"{held} {element.marker!r}, which the proxy lacks; its markers are "
+                             f"{', '.join(names)}")
+    bodies = scene_bodies(elements)
+    if bodies > limits.current().scene_bodies:
+        limits.check("scene_bodies", bodies, f"the number of bodies to simulate ({_listed(elements)})",
+                     hint="simulate fewer of them")
+    height = figure_height(proxy)
+    bound = MAX_SIZE * height
+    for element in elements:
+        for what, value, larger in _given_sizes(element):
+            if value is not None and float(value) > bound:
+                raise SceneError(
+                    f"{what} ({float(value):g} m) is {larger} than {bound:.3g} m, {MAX_SIZE:g} times the "
+                    f"figure's height of {height:.3g} m; give sizes in metres, as the proxy's points are, or "
+                    "leave it out to follow the figure")
+
+
+def _listed(elements):
+    """The elements' bodies in words: ``"1,000 drops, 3 balls and 2 balloons of 9 bodies"``."""
+    def count(kind):
+        return sum(1 for e in elements if isinstance(e, kind))
+
+    def plural(n, one, many):
+        return f"{n:,} {one if n == 1 else many}"
+
+    parts = []
+    drops = sum(e.count for e in elements if isinstance(e, Rain))
+    balls = sum(e.count for e in elements if isinstance(e, Balls))
+    strands = sum(e.strands for e in elements if isinstance(e, Skirt))
+    if drops:
+        parts.append(plural(drops, "drop", "drops"))
+    if balls:
+        parts.append(plural(balls, "ball", "balls"))
+    if count(Balloon):
+        parts.append(plural(count(Balloon), "balloon", "balloons") + f" of {STRING_LINKS + 1} bodies")
+    if count(Scarf):
+        parts.append(plural(count(Scarf), "scarf", "scarves") + f" of {SCARF_LINKS} links")
+    if strands:
+        parts.append(plural(strands, "skirt strand", "skirt strands") + f" of {SKIRT_LINKS} links")
+    return " and ".join([", ".join(parts[:-1]), parts[-1]] if len(parts) > 1 else parts)
+
+
+def _given_sizes(element):
+    """``(what, metres or None, comparative)`` for each size of ``element`` a user may give."""
+    if isinstance(element, Balloon):
+        return [("a balloon's radius", element.radius, "larger"),
+                ("a balloon's string", element.string_length, "longer")]
+    if isinstance(element, Balls):
+        return [("a ball's radius", element.radius, "larger")]
+    if isinstance(element, Scarf):
+        return [("a scarf's length", element.length, "longer"), ("a scarf's width", element.width, "wider")]
+    if isinstance(element, Skirt):
+        return [("a skirt's length", element.length, "longer"),
+                ("a skirt's radius", element.radius, "larger"),
+                ("a skirt's strand width", element.width, "wider")]
+    return [("a drop's radius", element.radius, "larger")]
+
+
+def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> SceneModel:
+    """Compile the proxy and the elements into a MuJoCo model.
+
+    The elements are checked first (:func:`check_scene`), before anything is built.
+
+    Raises
+    ------
+    SceneError
+        An element names a marker the proxy lacks or is larger than :data:`MAX_SIZE` times the
+        figure's height, or MuJoCo is not installed.
+    LimitError
+        The elements make more bodies than the limit ``scene_bodies``.
+    """
+    check_scene(proxy, elements)
+    mujoco = _mujoco()
+    names = list(proxy.names)
     height = figure_height(proxy)
     radii = _limb_radii(proxy, height)
     default_volumes = proxy.radii is None

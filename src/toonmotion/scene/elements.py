@@ -13,7 +13,8 @@
 
 Sizes not given follow the figure: its height (the skeleton proxy's largest vertical extent over
 the clip) times the fractions below, so a scene looks the same on a child and on a giant, and on a
-proxy whose units were guessed. Colours are ``(r, g, b)`` bytes.
+proxy whose units were guessed. A size given may be at most :data:`MAX_SIZE` figure heights
+(:func:`toonmotion.scene.build.check_scene`). Colours are ``(r, g, b)`` bytes.
 """
 
 from __future__ import annotations
@@ -32,6 +33,11 @@ SKIRT_LENGTH = 0.22
 SKIRT_RADIUS = 0.1
 SKIRT_WIDTH = 0.03
 RAIN_RADIUS = 0.008
+# The largest length or radius an element may be given, in figure heights: twelve times the largest
+# default (the scarf's 0.4), room for any prop a figure holds or kicks, and already more than the
+# camera, framed on the figure, shows; a string of a kilometre (issue 45) or a size in millimetres
+# taken for metres is refused.
+MAX_SIZE = 5.0
 
 
 @dataclass(frozen=True)

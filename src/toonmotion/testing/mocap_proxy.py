@@ -13,12 +13,14 @@ on short pieces of them.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.mocap import STANDARD_JOINTS
+from toonmotion.errors import AmbiguousViewError
 from toonmotion.io.bvh import load_bvh
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.descriptor import upper_body
@@ -76,11 +78,35 @@ def facing_difference(prior: Prior, truth: Prior) -> float:
     return (_facing(prior) - _facing(truth) + 180) % 360 - 180
 
 
+def turn_about_vertical(prior: Prior, truth: Prior) -> float:
+    """Degrees about +Y (from +Z towards +X) that best turn the truth's poses onto the prior's.
+
+    ``prior`` is time-aligned to the truth (the same frames and names); each pose is taken
+    relative to its root, so only the figures' facing counts, not where they walk. Least squares
+    on the horizontal components (closed form, as complex numbers ``z + i x``).
+    """
+    root = int(np.flatnonzero(truth.parents < 0)[0])
+    a = prior.positions - prior.positions[:, root:root + 1]
+    b = truth.positions - truth.positions[:, root:root + 1]
+    wa, wb = a[..., 2] + 1j * a[..., 0], b[..., 2] + 1j * b[..., 0]
+    return float(np.degrees(np.angle((np.conj(wb) * wa).sum())))
+
+
+def view_error(found: tuple[float, float], true: tuple[float, float]) -> float:
+    """Degrees between two views' directions (azimuth, elevation in degrees)."""
+    cos = view_direction(*found) @ view_direction(*true)
+    return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+
 def lift_scores(truth: Prior, prior: Prior, view: tuple[float, float], noise: float = 0.0,
                 squash: float = 0.0, seed: int = 0, search_view: bool = True) -> dict:
     """Lift the truth, seen from ``view``, with ``prior``; the proxy's errors against the truth.
 
-    Returns a dict: ``frames``, ``view_found``, ``z_err_mean`` (mean |depth| error of the point
+    Returns a dict: ``frames``, ``view_found``, ``view_err_deg`` (degrees between the view found
+    and the true one, turned by how the time-aligned prior faces against the truth:
+    :func:`turn_about_vertical`), ``view_asked`` (the search found two views about equally good
+    and asked: the view is then given, and ``view_found`` is the search's first choice),
+    ``z_err_mean`` (mean |depth| error of the point
     proxies, metres, each in its own camera), ``reproj_px`` (largest distance of a point proxy's
     projection from its marker), ``camera_px``, ``skeleton_rms_upper``, ``prior_rms_upper``,
     ``skeleton_rms_lower``, ``prior_rms_lower`` (RMS distance, metres, of the skeleton proxy's and
@@ -92,8 +118,17 @@ def lift_scores(truth: Prior, prior: Prior, view: tuple[float, float], noise: fl
     true_camera = truth_camera(truth, view)
     drawn3d = squashed(truth, squash, rng)
     seen = true_camera.project(drawn3d) + rng.normal(0, noise, (truth.frame_count, len(truth.names), 2))
-    proxy, report = lift(Markers(truth.names, seen, fps=truth.fps), prior, focal=FOCAL, size=IMAGE,
-                         units=1.0, view=None if search_view else view)
+    markers = Markers(truth.names, seen, fps=truth.fps)
+    asked = False
+    try:
+        proxy, report = lift(markers, prior, focal=FOCAL, size=IMAGE, units=1.0,
+                             view=None if search_view else view)
+    except AmbiguousViewError as question:  # as a user would, answer with the view drawn from
+        asked, chosen = True, question.views[0]
+        proxy, report = lift(markers, prior, focal=FOCAL, size=IMAGE, units=1.0, view=view)
+        report = replace(report, azimuth=chosen[0], elevation=chosen[1])
+    turn = turn_about_vertical(report.warped, truth)
+    view_err = view_error((report.azimuth, report.elevation), (view[0] + turn, view[1]))
     z = np.abs(proxy.camera.depth(proxy.points) - true_camera.depth(drawn3d)).mean()
     root = int(np.flatnonzero(truth.parents < 0)[0])
     truth_pose = _from_root(true_camera.to_camera(truth.positions), root)
@@ -105,6 +140,7 @@ def lift_scores(truth: Prior, prior: Prior, view: tuple[float, float], noise: fl
     t = report.times_ms
     return {"frames": truth.frame_count,
             "view_found": [round(report.azimuth, 2), round(report.elevation, 2)],
+            "view_err_deg": round(view_err, 2), "view_asked": asked,
             "z_err_mean": round(float(z), 4), "reproj_px": float(f"{report.reproj_px:.3g}"),
             "camera_px": round(report.camera_px, 2),
             "skeleton_rms_upper": _rms(skeleton_pose, truth_pose, upper),
