@@ -10,7 +10,7 @@ from toonmotion.errors import SceneError
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
-from toonmotion.scene.build import CONTACT_TIME, SKIRT_LINKS, build_scene
+from toonmotion.scene.build import CONTACT_TIME, SKIRT_ROWS, build_scene
 from toonmotion.scene.elements import Balloon, Balls, Rain, Scarf, Skirt
 from toonmotion.scene.simulate import SceneMotion
 
@@ -205,22 +205,26 @@ def test_a_missing_physics_engine_says_what_to_install(monkeypatch):
 def test_a_scarf_s_knot_stays_on_its_marker_and_the_scarf_trails_behind():
     proxy = waving()
     motion = simulate_scene(proxy, [Scarf("m2")])
-    knot = proxy.camera.project(motion.held)
-    marker = proxy.camera.project(proxy.points[:, motion.held_markers])
-    assert np.abs(knot - marker).max() < 1.0
-    # Links stay joined end to end, and the free end moves with the hand, not ahead of it.
-    caps = motion.capsules
-    np.testing.assert_allclose(caps[:, 1:, :3], caps[:, :-1, 3:6], atol=1e-6)
-    tip = caps[:, -1, 3:6]
+    # The scarf is cloth (issue 45): its knotted edge is pinned to the marker's body, so it keeps
+    # its offset from the marker's point exactly, on every frame.
+    offset = motion.cloth_vertices[:, motion.cloth_pinned] - proxy.points[:, motion.cloth_markers]
+    np.testing.assert_allclose(offset, np.broadcast_to(offset[:1], offset.shape), atol=1e-9)
+    # Edges keep their lengths within the constraints' softness, and the free end moves with the
+    # hand, not ahead of it.
+    V, F = motion.cloth_vertices, motion.cloth_triangles
+    edges = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    length = np.linalg.norm(V[:, edges[:, 0]] - V[:, edges[:, 1]], axis=-1)
+    assert np.abs(length / length[0] - 1).max() < 0.2
+    tip = V[:, -1]
     assert np.linalg.norm(np.diff(tip, axis=0), axis=-1).max() > 0.01
 
 
 def test_a_skirt_hangs_still_on_a_still_figure_and_swings_on_a_moving_one():
     still = simulate_scene(standing(), [Skirt("m0", strands=8)])
-    assert still.capsules.shape[1] == 8 * SKIRT_LINKS
-    assert np.abs(still.capsules[-1] - still.capsules[0]).max() < 1e-3
+    assert still.cloth_vertices.shape[1] == 8 * SKIRT_ROWS
+    assert np.abs(still.cloth_vertices[-1] - still.cloth_vertices[0]).max() < 1e-3
     moving = simulate_scene(kicking(), [Skirt("m0", strands=8)])
-    hem = moving.capsules[:, SKIRT_LINKS - 1 :: SKIRT_LINKS, 3:6]  # each strand's free end
+    hem = moving.cloth_vertices[:, -8:]  # the last ring of vertices
     hips = kicking().points[:, 0]
     lag = hem[:, :, 0].mean(axis=1) - hips[:, 0]
     assert lag.min() < -0.02  # the hem trails behind the hips as they move along +X

@@ -13,8 +13,8 @@ from toonmotion.errors import LimitError, SceneError
 from toonmotion.io.image import save_png
 from toonmotion.io.proxy_json import save_proxy
 from toonmotion.scene.build import (
-    SCARF_LINKS,
-    SKIRT_LINKS,
+    SCARF_BODIES,
+    SKIRT_ROWS,
     STRING_LINKS,
     build_scene,
     check_scene,
@@ -34,7 +34,8 @@ HUGE = [
 def test_the_count_is_the_bodies_mujoco_simulates():
     proxy = standing(T=2)
     elements = [Rain(count=5), Balls("m2", count=2), Balloon("m2"), Scarf("m1"), Skirt("m0", strands=3)]
-    assert scene_bodies(elements) == 5 + 2 + (STRING_LINKS + 1) + SCARF_LINKS + 3 * SKIRT_LINKS
+    # A skirt of 3 strands is a ring of 6 cloth vertices (skirt_columns), its waistband pinned.
+    assert scene_bodies(elements) == 5 + 2 + (STRING_LINKS + 1) + SCARF_BODIES + 6 * (SKIRT_ROWS - 1)
     model = build_scene(proxy, elements).model
     proxy_bodies = 1 + len(proxy.names) + len(proxy.limbs)  # the world, the markers and the limbs
     assert model.nbody - proxy_bodies == scene_bodies(elements)
@@ -59,9 +60,9 @@ def test_too_many_bodies_are_refused_at_once_in_one_line(elements):
 def test_the_refusal_says_what_the_bodies_are():
     elements = [Rain(count=400), Balls("m2", count=50), Balloon("m2"), Balloon("m2"), Scarf("m1"),
                 Skirt("m0", strands=16)]
-    listed = ("400 drops, 50 balls, 2 balloons of 9 bodies, 1 scarf of 10 links and 16 skirt strands "
-              "of 4 links")
-    with pytest.raises(LimitError, match=rf"\({listed}\) is over the limit scene_bodies=500 \(it is 542\)"):
+    listed = ("400 drops, 50 balls, 2 balloons of 9 bodies, 1 scarf of 36 cloth points and 1 skirt "
+              "\\(112 cloth points\\)")
+    with pytest.raises(LimitError, match=rf"\({listed}\) is over the limit scene_bodies=500 \(it is 616\)"):
         check_scene(standing(T=2), elements)
 
 
@@ -149,13 +150,13 @@ def test_the_command_refuses_in_one_line_exit_2_before_reading_the_frames(files,
 def test_the_command_takes_a_raised_limit_and_counts_scarves_in_good_grammar(files, capsys):
     out = files / "out"
     try:
-        code = run_cli("--limit", "scene_bodies=20", "scene", files / "proxy.json", "--frames",
+        code = run_cli("--limit", "scene_bodies=72", "scene", files / "proxy.json", "--frames",
                        files / "frames", "--scarf", "m0", "--scarf", "m1", "--shading", "flat", "-o", out)
         assert code == 0
         assert "simulated 2 scarves over 4 frames" in capsys.readouterr().out
-        code = run_cli("--limit", "scene_bodies=19", "scene", files / "proxy.json", "--frames",
+        code = run_cli("--limit", "scene_bodies=71", "scene", files / "proxy.json", "--frames",
                        files / "frames", "--scarf", "m0", "--scarf", "m1", "-o", out)
         err = capsys.readouterr().err
-        assert code == 2 and "(2 scarves of 10 links) is over the limit scene_bodies=19" in err
+        assert code == 2 and "(2 scarves of 36 cloth points) is over the limit scene_bodies=71" in err
     finally:
         limits.set_limits(limits.Limits())

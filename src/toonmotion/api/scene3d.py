@@ -14,6 +14,7 @@ from toonmotion.errors import SceneError
 from toonmotion.io.frames import lay_on
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.proxy import Proxy
+from toonmotion.render.cloth import render_cloth
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
 from toonmotion.render.sequence import animation_bones, render_animation
 from toonmotion.render.zbuffer import Layer, layer_passes, render_primitives
@@ -92,7 +93,8 @@ def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: s
     -------
     Layer
         :class:`toonmotion.render.zbuffer.Layer`: ``colour``, ``depth`` (metres along the camera's
-        axis, ``inf`` where nothing is seen), ``coverage`` (the occlusion map) and ``ids``.
+        axis, ``inf`` where nothing is seen), ``coverage`` (the occlusion map) and ``ids`` (spheres,
+        then capsules, then cloth triangles: :func:`toonmotion.render.cloth.render_cloth`).
 
     Raises
     ------
@@ -115,8 +117,13 @@ def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: s
     """
     if shading not in SHADINGS:
         raise SceneError(f"shading must be one of {', '.join(SHADINGS)}, got {shading!r}")
-    return render_primitives(proxy.camera, frame, spheres=motion.spheres[frame],
-                             capsules=motion.capsules[frame], colours=motion.colours, shading=shading)
+    layer = render_primitives(proxy.camera, frame, spheres=motion.spheres[frame],
+                              capsules=motion.capsules[frame], colours=motion.colours, shading=shading)
+    if len(motion.cloth_triangles) == 0:
+        return layer
+    return render_cloth(proxy.camera, frame, motion.cloth_vertices[frame], motion.cloth_triangles,
+                        motion.cloth_colours, shading=shading, under=layer,
+                        first_id=motion.spheres.shape[1] + motion.capsules.shape[1])
 
 
 def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, shading: str = "toon",

@@ -14,6 +14,13 @@ string's end is exactly the marker's point), the balloon a sphere pulled up by g
 compensation; balls are free spheres on the ground plane Y = 0. Air (MuJoCo's fluid model,
 density 1.2 kg/m^3) drags on everything that moves.
 
+Scarves and skirts are cloth: a MuJoCo flex (``flexcomp type="direct" dim="2"``) of triangles
+whose edges keep their lengths (soft equality constraints), declared inside the marker's body so
+that its pinned vertices (a scarf's knotted edge, a skirt's waistband) are points of that body
+and move exactly with the marker; every other vertex is a body of its own with three slide
+joints. :func:`_scarf_xml` and :func:`_skirt_xml` build them clear of the proxy's volumes over
+the whole clip (docs/scene3d.md, cloth).
+
 World: +Y up, metres, gravity -9.81 m/s^2 along Y (the proxy's frame).
 """
 
@@ -37,7 +44,6 @@ from toonmotion.scene.elements import (
     SCARF_WIDTH,
     SKIRT_LENGTH,
     SKIRT_RADIUS,
-    SKIRT_WIDTH,
     STRING_LENGTH,
     Balloon,
     Balls,
@@ -49,9 +55,34 @@ from toonmotion.scene.elements import (
 
 SEGMENTS = 3  # capsules per tapered cylinder
 STRING_LINKS = 8
+# The chains that scarves and skirts were before they became cloth (issue 45): kept for the record
+# of the limits' docs, no longer built.
 SCARF_LINKS = 10
 SKIRT_LINKS = 4
-CLOTH_DENSITY = 0.25  # kg per square metre of scarf or strand: light cloth
+CLOTH_DENSITY = 0.25  # kg per square metre of scarf or skirt: light cloth
+# A scarf's cloth: SCARF_ROWS rows of SCARF_COLUMNS vertices, the first row knotted (pinned).
+SCARF_ROWS = 13
+SCARF_COLUMNS = 3
+SCARF_BODIES = (SCARF_ROWS - 1) * SCARF_COLUMNS
+# A skirt's cloth: SKIRT_ROWS rings of ``strands`` vertices (at least MIN_SKIRT_COLUMNS), the
+# waistband ring pinned; the hem flares out by SKIRT_FLARE times the skirt's length.
+SKIRT_ROWS = 8
+MIN_SKIRT_COLUMNS = 6
+SKIRT_FLARE = 0.35
+CLOTH_RADIUS = 0.004  # the cloth's half thickness for contacts, as a fraction of the figure's height
+# Each cloth vertex weighs at least this (kg): lighter ones make the contacts and the edge
+# constraints stiffer than a 2 ms sub-step resolves (measured: 0.3 g vertices jitter on a fast hand).
+MIN_CLOTH_VERTEX_MASS = 0.001
+# Viscous damping of each free vertex, per kg of its mass (1/s): air's drag on a sheet. Quadratic
+# drag on cloth of CLOTH_DENSITY at 2 m/s, 0.5 * 1.2 * v^2 per square metre, decelerates it at
+# ~10 m/s^2, a linear rate of 5/s; lower rates (1.5/s measured) let a skirt on the jumping demo
+# fly up over the shoulders. Terminal speed g / 5 = 2 m/s: light cloth.
+CLOTH_DAMPING = 5.0
+# The cloth's contacts' time constant (s), softer than CONTACT_TIME: measured on a six-armed figure whose
+# forearms spin round the scarves' knots, 0.004 and 0.01 let them squeeze a scarf out to metres (even
+# with the speed cap of simulate.py); 0.02 keeps every scarf within its length of its knot.
+CLOTH_CONTACT_TIME = 0.02
+CLOTH_EDGE_DAMPING = 0.002  # the edges' damping (N s/m): kills the stretch modes' ringing
 MIN_LINK_MASS = 0.002  # kg: lighter links make the contacts stiff beyond what a sub-step resolves
 CHAIN_ARMATURE = 1e-4  # kg m^2 of rotor inertia on a chain's joints: keeps light links stable in contact
 # Proxy radii when the proxy has no collision volumes (lifted without drawn frames), as a fraction
@@ -99,6 +130,8 @@ class SceneModel:
         (:func:`rain_box`).
     default_volumes : bool
         Whether the proxy had no volumes and ``limb_radii`` are defaults.
+    cloths : list of (int, int)
+        ``(flex, marker)``: each scarf's and skirt's flex and the marker its pinned vertices move with.
     """
 
     model: Any
@@ -113,6 +146,7 @@ class SceneModel:
     balls: list[int] = field(default_factory=list)
     default_volumes: bool = False
     rain: list[tuple[int, NDArray[np.float64]]] = field(default_factory=list)
+    cloths: list[tuple[int, int]] = field(default_factory=list)
 
 
 def figure_height(proxy: Proxy) -> float:
@@ -123,13 +157,19 @@ def figure_height(proxy: Proxy) -> float:
 
 def scene_bodies(elements: list[Element] | tuple[Element, ...]) -> int:
     """How many bodies the elements make MuJoCo simulate: a drop or a ball is one, a balloon its
-    :data:`STRING_LINKS` links and itself, a scarf :data:`SCARF_LINKS`, a skirt :data:`SKIRT_LINKS`
-    per strand. Counted from the elements alone, before anything is built.
+    :data:`STRING_LINKS` links and itself, a scarf or a skirt its cloth's free vertices
+    (:data:`SCARF_BODIES`; a skirt's ``strands`` columns of ``SKIRT_ROWS - 1``). Counted from the
+    elements alone, before anything is built.
 
     >>> scene_bodies([Rain(count=100), Balloon("hand"), Skirt("hips", strands=16)])
-    173
+    221
     """
     return sum(_bodies(element) for element in elements)
+
+
+def skirt_columns(skirt: Skirt) -> int:
+    """The vertices round a skirt's ring: its ``strands``, at least :data:`MIN_SKIRT_COLUMNS`."""
+    return max(int(skirt.strands), MIN_SKIRT_COLUMNS)
 
 
 def _bodies(element):
@@ -138,9 +178,9 @@ def _bodies(element):
     if isinstance(element, Balloon):
         return STRING_LINKS + 1
     if isinstance(element, Scarf):
-        return SCARF_LINKS
+        return SCARF_BODIES
     if isinstance(element, Skirt):
-        return element.strands * SKIRT_LINKS
+        return skirt_columns(element) * (SKIRT_ROWS - 1)
     raise SceneError(f"a scene element is a Balloon, Balls, Scarf, Skirt or Rain, got "
                      f"{type(element).__name__}")
 
@@ -197,7 +237,7 @@ def _listed(elements):
     parts = []
     drops = sum(e.count for e in elements if isinstance(e, Rain))
     balls = sum(e.count for e in elements if isinstance(e, Balls))
-    strands = sum(e.strands for e in elements if isinstance(e, Skirt))
+    skirt_points = sum(_bodies(e) for e in elements if isinstance(e, Skirt))
     if drops:
         parts.append(plural(drops, "drop", "drops"))
     if balls:
@@ -205,9 +245,10 @@ def _listed(elements):
     if count(Balloon):
         parts.append(plural(count(Balloon), "balloon", "balloons") + f" of {STRING_LINKS + 1} bodies")
     if count(Scarf):
-        parts.append(plural(count(Scarf), "scarf", "scarves") + f" of {SCARF_LINKS} links")
-    if strands:
-        parts.append(plural(strands, "skirt strand", "skirt strands") + f" of {SKIRT_LINKS} links")
+        parts.append(plural(count(Scarf), "scarf", "scarves") + f" of {SCARF_BODIES} cloth points")
+    if count(Skirt):
+        cloth = plural(skirt_points, "cloth point", "cloth points")
+        parts.append(plural(count(Skirt), "skirt", "skirts") + f" ({cloth})")
     return " and ".join([", ".join(parts[:-1]), parts[-1]] if len(parts) > 1 else parts)
 
 
@@ -250,6 +291,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     volumes = _first_frame_volumes(proxy, radii)  # where elements must not start
     held_xml: dict[int, list[str]] = {}
     element_xml = []
+    cloths: list[tuple[str, int]] = []  # each cloth's flex and the marker holding it
     for i, element in enumerate(elements):
         if isinstance(element, Rain):
             continue
@@ -257,23 +299,13 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
         if isinstance(element, Balloon):
             at.append(_balloon_xml(i, element, height))
         elif isinstance(element, Scarf):
-            width = element.width or SCARF_WIDTH * height
-            length = element.length or SCARF_LENGTH * height
             marker = names.index(element.marker)
-            way = _free_way(P0[marker], length, width, volumes,
-                            _directions(P0, marker))
-            at.append(_chain_xml(f"e{i}_scarf", (0.0, 0.0, 0.0), length, SCARF_LINKS, width / 2, width,
-                                 _rgba(element.colour), way))
+            at.append(_scarf_xml(f"e{i}_scarf", element, proxy, marker, radii, height))
+            cloths.append((f"e{i}_scarf", marker))
         elif isinstance(element, Skirt):
-            width = element.width or SKIRT_WIDTH * height
-            length = element.length or SKIRT_LENGTH * height
             marker = names.index(element.marker)
-            ring = _skirt_ring(P0[marker], element.radius or SKIRT_RADIUS * height, element.strands, length,
-                               width, volumes)
-            for j, start in enumerate(ring):
-                way = _free_way(P0[marker] + start, length, width, [], _directions(P0, marker))
-                at.append(_chain_xml(f"e{i}_strand{j}_", start, length, SKIRT_LINKS, width / 2, width,
-                                     _rgba(element.colour), way))
+            at.append(_skirt_xml(f"e{i}_skirt", element, proxy, marker, radii, height))
+            cloths.append((f"e{i}_skirt", marker))
     placed: list[tuple[NDArray[np.float64], float]] = []
     ball_names: list[str] = []
     for i, element in enumerate(elements):
@@ -335,8 +367,9 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     colours = np.round(model.geom_rgba[drawn, :3] * 255).astype(np.uint8).reshape(-1, 3)
     held = [(geom(f"e{i}_string0"), names.index(e.marker)) for i, e in enumerate(elements)
             if isinstance(e, Balloon)]
-    held += [(geom(f"e{i}_scarf0"), names.index(e.marker)) for i, e in enumerate(elements)
-             if isinstance(e, Scarf)]
+    flex = lambda name: int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, name))  # noqa: E731
+    flexes = [(flex(name), marker) for name, marker in cloths]
+    _damp_cloth(model, [f for f, _ in flexes], [body(f"m{m}") for _, m in flexes])
     balls = [geom(name) for name in ball_names]
     rain = [(geom(name), box) for name, box in drops]
     return SceneModel(
@@ -346,7 +379,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
         limb_geoms=np.array([[geom(f"l{k}_{s}") for s in range(SEGMENTS)] for k in range(len(proxy.limbs))],
                             dtype=np.int64).reshape(-1, SEGMENTS),
         element_geoms=drawn, colours=colours, held=held, balls=balls, default_volumes=default_volumes,
-        rain=rain,
+        rain=rain, cloths=flexes,
     )
 
 
@@ -383,26 +416,173 @@ def _balloon_xml(i, balloon, height):
     return inner
 
 
-def _chain_xml(name, start, length, links, radius, width, rgba, direction):
-    """A chain of ``links`` capsules on ball joints, straight along ``direction`` from ``start`` (in
-    its holder's frame): a ribbon or a strand. The first link, knotted at the holder, collides with
-    nothing (it would fight the knot); the others collide with the proxy, the ground and the rest.
+def _scarf_xml(name, scarf, proxy, marker, radii, height):
+    """A scarf: a strip of :data:`SCARF_ROWS` x :data:`SCARF_COLUMNS` vertices hanging from a knot
+    beside the marker (in the marker body's frame), its first row pinned.
 
-    Each link weighs :data:`CLOTH_DENSITY` per square metre of ``width`` times its length; its
-    joint is damped so the ribbon settles instead of swinging for ever.
+    The knot sits outside the marker's largest joint sphere over the clip (up to 2.5 times its
+    radius out), along the first way (:func:`_directions`) on which the knot stays clear of every
+    limb's volume on every frame (seen from the marker) and the strip is clear of the first
+    frame's volumes and the ground; the strip's width faces the camera.
     """
-    link = length / links
-    mass = max(CLOTH_DENSITY * width * link, MIN_LINK_MASS)
-    d = np.asarray(direction, dtype=float)
-    inner = ""
-    for s in reversed(range(links)):
-        pos = _v(start) if s == 0 else _v(d * link)
-        bits = 'contype="0" conaffinity="0"' if s == 0 else f"{ELEMENT_BITS} {CONTACT}"
-        inner = (f'<body name="{name}{s}" pos="{pos}">'
-                 f'<joint type="ball" damping="{2e-4 * link!r}" armature="{CHAIN_ARMATURE}"/>'
-                 f'<geom name="{name}{s}" type="capsule" pos="{_v(d * link / 2)}" zaxis="{_v(d)}" '
-                 f'size="{radius!r} {link / 2!r}" mass="{mass!r}" rgba="{rgba}" {bits}/>{inner}</body>')
-    return inner
+    width = scarf.width or SCARF_WIDTH * height
+    length = scarf.length or SCARF_LENGTH * height
+    thick = CLOTH_RADIUS * height
+    P = proxy.points
+    reach = _marker_reach(proxy, marker, radii) + thick + 0.1 * width
+    relative = _relative_volumes(proxy, marker, radii)
+    first = _first_frame_volumes(proxy, radii)
+    axis = np.asarray(proxy.camera.rotations[0])[2]
+    ways = _directions(P[0], marker)
+    candidates = []  # (way, across, knot, clear on every frame), the first way and nearest knot first
+    for way in ways:
+        across = _across(way, axis)
+        if P[0, marker, 1] + way[1] * (reach + length) <= width:  # into the ground
+            continue
+        for d in reach * np.linspace(1.0, 2.5, 7):
+            edge = way * d + np.outer(np.linspace(-0.5, 0.5, SCARF_COLUMNS), across * width)
+            strip = np.linspace(0.0, 1, 9)[:, None, None] * (way * length) + edge
+            if _gap_ok(P[0, marker] + strip, thick, [_stack(first)]):
+                candidates.append((way, across, way * d, _gap_ok(edge, thick, relative)))
+    # Clear on every frame if it can be; else clear on the first (a limb may sweep through the knot
+    # later: the contacts push the cloth aside); else down (or the first way off the ground), far out.
+    best = next((c for c in candidates if c[3]), candidates[0] if candidates else None)
+    if best is None:
+        way = next((w for w in ways if P[0, marker, 1] + w[1] * (reach + length) > width), ways[0])
+        best = (way, _across(way, axis), way * 2.5 * reach, False)
+    way, across, knot, _ = best
+    rows = np.linspace(0.0, 1.0, SCARF_ROWS)[:, None, None] * (way * length)
+    cols = np.linspace(-0.5, 0.5, SCARF_COLUMNS)[None, :, None] * (across * width)
+    V = (knot + rows + cols).reshape(-1, 3)
+    F = _grid_triangles(SCARF_ROWS, SCARF_COLUMNS, ring=False)
+    return _flex_xml(name, V, F, range(SCARF_COLUMNS), CLOTH_DENSITY * width * length, scarf.colour, thick)
+
+
+def _skirt_xml(name, skirt, proxy, marker, radii, height):
+    """A skirt: :data:`SKIRT_ROWS` rings of vertices round the marker, flaring towards the hem, the
+    waistband ring pinned. The waistband widens from the skirt's radius (up to three times it)
+    until it is clear of every limb's volume on every frame seen from the marker, and the cloth of
+    the first frame's volumes."""
+    length = skirt.length or SKIRT_LENGTH * height
+    radius = skirt.radius or SKIRT_RADIUS * height
+    thick = CLOTH_RADIUS * height
+    n = skirt_columns(skirt)
+    turns = 2 * np.pi * np.arange(n) / n
+    unit = np.stack([np.cos(turns), np.zeros(n), np.sin(turns)], axis=1)
+    P = proxy.points
+    relative = _relative_volumes(proxy, marker, radii)
+    first = [_stack(_first_frame_volumes(proxy, radii))]
+    f = np.linspace(0.0, 1.0, SKIRT_ROWS)
+
+    def rings(r):
+        return (r + SKIRT_FLARE * length * f)[:, None, None] * unit + (-length * f)[:, None, None] * [0, 1, 0]
+
+    chosen = 3 * radius
+    for r in np.linspace(radius, 3 * radius, 21):
+        V = rings(r)
+        if _gap_ok(V[0], thick, relative) and _gap_ok(P[0, marker] + V[1:].reshape(-1, 3), thick, first):
+            chosen = r
+            break
+    V = rings(chosen).reshape(-1, 3)
+    drop = P[0, marker, 1] - length - thick * 2
+    if drop < 0:  # the hem would start in the ground: shorten the fall, keep the flare
+        V[:, 1] *= max(P[0, marker, 1] - 2 * thick, 1e-3) / (length + thick * 2)
+    F = _grid_triangles(SKIRT_ROWS, n, ring=True)
+    area = 2 * np.pi * (chosen + 0.5 * SKIRT_FLARE * length) * length
+    return _flex_xml(name, V, F, range(n), CLOTH_DENSITY * area, skirt.colour, thick)
+
+
+def _flex_xml(name, V, F, pinned, mass, colour, thick):
+    """A ``flexcomp`` of vertices ``V`` (in its body's frame) and triangles ``F``, ``pinned`` vertices
+    fixed to the body, edges of constant length, colliding with the proxy, the ground and the other
+    elements but not itself."""
+    mass = max(float(mass), MIN_CLOTH_VERTEX_MASS * len(V))
+    points = " ".join(repr(float(c)) for c in np.asarray(V).ravel())
+    elements = " ".join(str(int(k)) for k in np.asarray(F).ravel())
+    return (f'<flexcomp name="{name}" type="direct" dim="2" point="{points}" element="{elements}" '
+            f'mass="{mass!r}" radius="{thick!r}" rgba="{_rgba(colour)}">'
+            f'<contact {ELEMENT_BITS} selfcollide="none" solref="{CLOTH_CONTACT_TIME} 1" '
+            f'friction="0.6 0.005 0.001"/>'
+            f'<edge equality="true" solref="{CONTACT_TIME} 1" damping="{CLOTH_EDGE_DAMPING}"/>'
+            f'<pin id="{" ".join(str(k) for k in pinned)}"/></flexcomp>')
+
+
+def _grid_triangles(rows, columns, ring):
+    """Two triangles per cell of a ``rows`` x ``columns`` grid of vertices (row major); ``ring``
+    joins the last column to the first (a cylinder)."""
+    cells = columns if ring else columns - 1
+    i, j = np.meshgrid(np.arange(rows - 1), np.arange(cells), indexing="ij")
+    a = i * columns + j
+    b = i * columns + (j + 1) % columns
+    c, d = a + columns, b + columns
+    return np.stack([np.stack([a, c, b], -1), np.stack([b, c, d], -1)], axis=2).reshape(-1, 3)
+
+
+def _damp_cloth(model, flexes, holders):
+    """Damp each cloth vertex's slide joints by :data:`CLOTH_DAMPING` times its mass (air's drag),
+    and take the vertex out of MuJoCo's fluid model.
+
+    The fluid model takes a body without geoms for the box of its inertia: a cloth vertex became a
+    1 cm cube of water whose drag, with the implicit integrator, blew the simulation up (measured:
+    a scarf on a circling hand, QACC at a cloth vertex's DOF after 0.23 s). Its inertia is unused
+    otherwise (a vertex only slides), so it is shrunk a million times, which shrinks the box to
+    nothing, and the damping stands in for air.
+    """
+    for f, holder in zip(flexes, holders, strict=True):
+        start, count = model.flex_vertadr[f], model.flex_vertnum[f]
+        for b in model.flex_vertbodyid[start:start + count]:
+            if b == holder:  # a pinned vertex: a point of its holder's body
+                continue
+            dofs = model.body_dofadr[b] + np.arange(model.body_dofnum[b])
+            model.dof_damping[dofs] = CLOTH_DAMPING * model.body_mass[b]
+            model.body_inertia[b] *= 1e-6
+
+
+def _across(way, axis):
+    """A unit vector across ``way`` facing the camera's ``axis`` as far as it can."""
+    c = np.cross(way, axis)
+    if np.linalg.norm(c) < 1e-6:
+        c = np.cross(way, [0.0, 1.0, 0.0]) if abs(way[1]) < 0.9 else np.cross(way, [1.0, 0.0, 0.0])
+    return c / np.linalg.norm(c)
+
+
+def _marker_reach(proxy, marker, radii):
+    """The largest radius of any limb end at ``marker`` over the clip (its joint sphere's)."""
+    L = np.asarray(proxy.limbs)
+    ends = [radii[:, k, e] for k in range(len(L)) for e in (0, 1) if L[k, e] == marker]
+    return float(max((np.max(r) for r in ends), default=0.0))
+
+
+def _relative_volumes(proxy, marker, radii):
+    """Every frame's limb volumes ``(A, B, r)`` seen from ``marker`` (its point at the origin),
+    stacked: where a point that moves with the marker must not be."""
+    P = proxy.points - proxy.points[:, marker:marker + 1]
+    L = np.asarray(proxy.limbs)
+    R = np.asarray(radii).max(axis=2)
+    return [(P[:, L[:, 0]].reshape(-1, 3), P[:, L[:, 1]].reshape(-1, 3), R.reshape(-1))]
+
+
+def _stack(volumes):
+    if not volumes:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    a, b, r = zip(*volumes, strict=True)
+    return np.array(a), np.array(b), np.array(r)
+
+
+def _gap_ok(points, radius, volumes, gap=1e-3):
+    """Whether balls of ``radius`` at ``points`` ``(..., 3)`` touch none of the capsules in
+    ``volumes`` (a list of stacked ``(A, B, r)``), vectorised."""
+    q = np.asarray(points, dtype=float).reshape(-1, 3)
+    for A, B, r in volumes:
+        if len(A) == 0:
+            continue
+        AB = B - A
+        den = np.maximum((AB * AB).sum(-1), 1e-300)
+        s = np.clip(((q[:, None] - A) * AB).sum(-1) / den, 0.0, 1.0)
+        d = np.linalg.norm(q[:, None] - (A + s[..., None] * AB), axis=-1)
+        if (d < r + radius + gap).any():
+            return False
+    return True
 
 
 def _directions(P, marker):
@@ -414,29 +594,6 @@ def _directions(P, marker):
     away = away / n if n > 1e-9 else np.array([1.0, 0.0, 0.0])
     side = np.array([-away[2], 0.0, away[0]])
     return [np.array([0.0, -1.0, 0.0]), away, side, -side, -away, np.array([0.0, 1.0, 0.0])]
-
-
-def _free_way(start, length, width, volumes, ways):
-    """The first of ``ways`` along which a chain from ``start`` stays above the ground and clear of
-    ``volumes`` (the first frame's); the first way above the ground if none is clear."""
-    above = [w for w in ways if start[1] + w[1] * length > width] or ways
-    for way in above:
-        if _clear([start + way * f * length for f in np.linspace(0.15, 1, 8)], width / 2, volumes):
-            return way
-    return above[0]
-
-
-def _skirt_ring(centre, radius, strands, length, width, volumes):
-    """Strand knots in a horizontal ring round ``centre`` (offsets from it), widened until every
-    strand hangs clear of the first frame's volumes (at most three times ``radius``)."""
-    turns = 2 * np.pi * np.arange(strands) / strands
-    unit = np.stack([np.cos(turns), np.zeros(strands), np.sin(turns)], axis=1)
-    for r in np.linspace(radius, 3 * radius, 21):
-        ring = r * unit
-        hang = [centre + k + [0.0, -f * length, 0.0] for k in ring for f in np.linspace(0, 1, 6)]
-        if _clear(hang, width / 2, volumes):
-            return ring
-    return 3 * radius * unit
 
 
 def _clear(points, radius, volumes, gap=1e-3):

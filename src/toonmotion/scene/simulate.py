@@ -8,14 +8,15 @@ frame the proxy is put exactly at its frame's pose before the scene is read, so 
 a marker starts exactly at the marker's point.
 
 The result, :class:`SceneMotion`, is the elements as primitives per frame (spheres and capsules,
-the form :func:`toonmotion.render.zbuffer.render_primitives` draws), plus what tests and reports
-measure: the balls' centres and how far any ball ended a step inside a proxy capsule.
+the form :func:`toonmotion.render.zbuffer.render_primitives` draws, and the cloths' triangles,
+which :func:`toonmotion.render.cloth.render_cloth` draws), plus what tests and reports measure:
+the balls' centres and how far any ball ended a step inside a proxy capsule.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,6 +27,15 @@ from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.scene.build import SEGMENTS, SceneModel, _mujoco, drops_in
 
 MAX_STEP = 0.002  # seconds: the longest sub-step (the contacts' time constant is twice this)
+# Seconds the cloth hangs from the still first pose before frame 0, so it is seen hanging, not in
+# the straight sheet it is built as (measured: a 0.7 m scarf settles within 0.6 s).
+CLOTH_SETTLE = 0.6
+# The fastest a cloth vertex may move: this times the proxy's fastest marker, plus the margin
+# (m/s); a whip's tip moves a few times faster than the hand. Measured: a scarf at a hand of a
+# six-armed figure, its forearm spinning round it twice a second, was squeezed between the forearm
+# and its knot out to 50-120 m without it; with it, it stays hanging.
+CLOTH_SPEED_FACTOR = 3.0
+CLOTH_SPEED_MARGIN = 2.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,6 +60,14 @@ class SceneMotion:
         The deepest a ball ended a sub-step inside a proxy capsule, metres (0: never).
     substeps : int
         MuJoCo steps per drawn frame.
+    cloth_vertices : (T, V, 3) float
+        Every scarf's and skirt's vertices, metres, one cloth after another.
+    cloth_triangles : (F, 3) int
+        Their triangles, indices into ``cloth_vertices``.
+    cloth_colours : (F, 3) uint8
+        Each triangle's colour.
+    cloth_pinned, cloth_markers : (P,) int
+        The pinned vertices (a scarf's knot, a skirt's waistband) and the marker each moves with.
     """
 
     spheres: NDArray[np.float64]
@@ -60,6 +78,11 @@ class SceneMotion:
     balls: NDArray[np.float64]
     deepest: float
     substeps: int
+    cloth_vertices: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 0, 3)))
+    cloth_triangles: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 3), np.int64))
+    cloth_colours: NDArray[np.uint8] = field(default_factory=lambda: np.zeros((0, 3), np.uint8))
+    cloth_pinned: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
+    cloth_markers: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
 
 
 def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = None) -> SceneMotion:
@@ -84,6 +107,9 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
     substeps = max(1, math.ceil(1.0 / (proxy.fps * MAX_STEP)))
     model.opt.timestep = 1.0 / (proxy.fps * substeps)
     kinematic = _Kinematic(scene, proxy, model)
+    fastest = float(np.linalg.norm(np.diff(proxy.points, axis=0), axis=-1).max(initial=0.0) * proxy.fps)
+    cloth = _Cloth(scene, model, cap=CLOTH_SPEED_FACTOR * fastest + CLOTH_SPEED_MARGIN)
+    kinematic.cloth = cloth
     spheres = [g for g in scene.element_geoms if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE]
     capsules = [g for g in scene.element_geoms if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CAPSULE]
     order = [scene.element_geoms.index(g) for g in spheres + capsules]
@@ -92,10 +118,19 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
     out_balls = np.zeros((T, len(scene.balls), 4))
     held_geoms = [g for g, _ in scene.held]
     out_held = np.zeros((T, len(held_geoms), 3))
+    out_cloth = np.zeros((T, len(cloth.vertices), 3))
+    rain = _Rain(scene, model)
     kinematic.place(data, 0, 0.0, moving=False)
     mujoco.mj_forward(model, data)
+    if scene.cloths:  # the elements settle from the still first pose
+        still = kinematic.poses(0, [0.0], moving=False)
+        for _ in range(math.ceil(CLOTH_SETTLE / model.opt.timestep)):
+            kinematic.write(data, still, 0)
+            mujoco.mj_step(model, data)
+        kinematic.place(data, 0, 0.0, moving=False)
+        rain.respawn(data)
+        mujoco.mj_forward(model, data)
     fractions = np.arange(substeps) / substeps
-    rain = _Rain(scene, model)
     heard: list[str] = []  # MuJoCo's warnings, kept from its log file and stdout
     previous = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(heard.append)
@@ -119,6 +154,7 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
                 out_balls[t, i] = (*data.geom_xpos[g], model.geom_size[g, 0])
             for i, g in enumerate(held_geoms):
                 out_held[t, i] = _capsule(data, model, g)[:3]
+            out_cloth[t] = data.flexvert_xpos[cloth.vertices]
             if progress is not None:
                 progress("simulate", t + 1, T)
     finally:
@@ -131,7 +167,73 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
                          "element is too light or starts inside the body or the ground")
     colours = np.asarray(scene.colours).reshape(-1, 3)[order] if order else np.zeros((0, 3), np.uint8)
     return SceneMotion(out_spheres, out_capsules, colours, out_held,
-                       np.array([m for _, m in scene.held], dtype=np.int64), out_balls, deepest, substeps)
+                       np.array([m for _, m in scene.held], dtype=np.int64), out_balls, deepest, substeps,
+                       out_cloth, cloth.triangles, cloth.colours, cloth.pinned, cloth.markers)
+
+
+class _Cloth:
+    """The scene's flexes as one triangle mesh (which of MuJoCo's flex vertices to read, in order),
+    and what keeps the cloth in the world's frame while its holder is moved by hand.
+
+    A cloth's free vertices slide on joints of the holding marker's body, so writing the marker's
+    position and velocity would carry them along rigidly (a jump in the marker's velocity between
+    drawn frames would jerk the whole cloth, and the marker's own fall during a step, undone when
+    it is written back, would hide gravity from them). :meth:`carry` takes each write's change off
+    the vertices' joints, so they keep their world positions and velocities, and applies air's drag
+    on the marker's part of their world velocity (the joints' damping sees only their own part).
+    """
+
+    def __init__(self, scene, model, cap=np.inf):
+        self.cap = cap  # m/s: the fastest a cloth vertex may move
+        empty = np.zeros(0, np.int64)
+        vertices, triangles, pinned, markers = [empty], [np.zeros((0, 3), np.int64)], [empty], [empty]
+        colours = [np.zeros((0, 3), np.uint8)]
+        n = 0
+        for f, marker in scene.cloths:
+            start, count = int(model.flex_vertadr[f]), int(model.flex_vertnum[f])
+            elements = int(model.flex_elemdataadr[f]), int(model.flex_elemnum[f])
+            F = model.flex_elem[elements[0]:elements[0] + 3 * elements[1]].reshape(-1, 3)
+            vertices.append(start + np.arange(count))
+            triangles.append(F + n)
+            rgb = np.round(model.flex_rgba[f, :3] * 255).astype(np.uint8)
+            colours.append(np.tile(rgb, (len(F), 1)))
+            bodies = model.flex_vertbodyid[start:start + count]
+            held = np.flatnonzero(bodies == scene.marker_bodies[marker])
+            pinned.append(held + n)
+            markers.append(np.full(len(held), marker))
+            n += count
+        self.vertices = np.concatenate(vertices).astype(np.int64)
+        self.triangles = np.concatenate(triangles).astype(np.int64)
+        self.colours = np.concatenate(colours)
+        self.pinned = np.concatenate(pinned).astype(np.int64)
+        self.markers = np.concatenate(markers).astype(np.int64)
+        # Per cloth: its marker, its free vertices' slide joints' qpos and qvel addresses (n, 3) and
+        # their damping.
+        self.carried = []
+        for f, marker in scene.cloths:
+            start, count = int(model.flex_vertadr[f]), int(model.flex_vertnum[f])
+            holder = scene.marker_bodies[marker]
+            bodies = [b for b in model.flex_vertbodyid[start:start + count] if b != holder]
+            joints = np.array([model.body_jntadr[b] + np.arange(3) for b in bodies], np.int64).reshape(-1, 3)
+            dofs = model.jnt_dofadr[joints]
+            self.carried.append((marker, model.jnt_qposadr[joints], dofs, model.dof_damping[dofs]))
+
+    def carry(self, data, at, speed, qpos, qvel):
+        """Before the markers are written (their positions' and velocities' addresses ``at`` and
+        ``speed``, ``(N, 3)``, the new values ``qpos[:N, :3]`` and ``qvel[:N, :3]``): take the change
+        off the free vertices' joints so they stay where they are in the world, and drag them by
+        air at the marker's velocity."""
+        for marker, q, v, damping in self.carried:
+            data.qpos[q] -= qpos[marker, :3] - data.qpos[at[marker]]
+            data.qvel[v] -= qvel[marker, :3] - data.qvel[speed[marker]]
+            data.qfrc_applied[v] = -damping * qvel[marker, :3]
+            # No vertex moves faster than the cap (a limb that sweeps the cloth against its pinned
+            # edge would otherwise squeeze it out at tens of metres a second).
+            world = data.qvel[v] + qvel[marker, :3]
+            fast = np.linalg.norm(world, axis=1)
+            over = fast > self.cap
+            if over.any():
+                data.qvel[v[over]] = world[over] * (self.cap / fast[over])[:, None] - qvel[marker, :3]
 
 
 class _Rain:
@@ -193,6 +295,7 @@ class _Kinematic:
         is_proxy = np.zeros(model.ngeom, bool)
         is_proxy[self.geoms] = True
         self.is_ball, self.is_proxy = is_ball, is_proxy
+        self.cloth = None
 
     def poses(self, t, fractions, moving):
         """The kinematic state at (t + each fraction): qpos, qvel and geom sizes, positions, bounds."""
@@ -232,6 +335,9 @@ class _Kinematic:
     def write(self, data, poses, s):
         """Sub-step ``s`` of :meth:`poses` into the data and model."""
         qpos, qvel, size, pos, rbound, aabb = poses
+        if self.cloth is not None:
+            N = len(self.sphere[0])
+            self.cloth.carry(data, self.qpos[:N, :3], self.qvel[:N, :3], qpos[s], qvel)
         data.qpos[self.qpos] = qpos[s]
         data.qvel[self.qvel] = qvel
         m, g = self.model, self.geoms
