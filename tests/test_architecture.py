@@ -14,6 +14,7 @@ PACKAGE = Path(toonmotion.__file__).parent
 # Top to bottom. Each set is one layer; a module may import its own layer and any below it.
 LAYERS = (
     {"cli", "web"},
+    {"batch"},
     {"api"},
     {"io", "render", "testing", "samples", "sample_animation", "sample_cartoons"},
     {"scene"},

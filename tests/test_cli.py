@@ -138,7 +138,7 @@ COMMANDS = ("rig", "show", "sample", "pose", "sketch", "animate", "filter", "dep
             "redo", "track", "retarget", "keyshapes", "capture-contours", "retarget-keyshapes",
             "retarget-line", "capture-video", "lift", "proxy-export", "proxy-preview", "project-mocap",
             "edits", "remesh",
-            "tune", "edit", "scene", "export", "doctor")
+            "tune", "edit", "scene", "export", "batch", "doctor")
 
 
 def test_every_command_is_in_the_readme_command_reference():

@@ -118,3 +118,8 @@ class SceneError(ToonmotionError):
     """A 3D scene cannot be built, rendered or composited: an element held at a marker the proxy
     lacks, frames whose count or size differ from the proxy's, primitives that are not finite, a
     missing physics engine."""
+
+
+class BatchError(ToonmotionError):
+    """A batch job cannot run: a malformed job file, an input it names that is missing, a name
+    given twice, a pair naming a character or motion the job lacks, a cluster that cannot be reached."""

@@ -28,11 +28,13 @@ from toonmotion.cli import scene3d  # isort: split
 
 from toonmotion.cli import export  # isort: split
 
+from toonmotion.cli import batch  # isort: split
+
 from toonmotion.cli import editor  # isort: split
 
 from toonmotion.cli import about  # isort: split
 
 from toonmotion.cli.app import app, main
 
-__all__ = ["about", "animation", "app", "capture", "editing", "editor", "export", "keyshapes", "main",
-           "proxy3d", "rigging", "scene3d"]
+__all__ = ["about", "animation", "app", "batch", "capture", "editing", "editor", "export", "keyshapes",
+           "main", "proxy3d", "rigging", "scene3d"]
