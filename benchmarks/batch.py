@@ -31,6 +31,7 @@ from toonmotion.batch.plan import plan_job
 from toonmotion.batch.run import run_batch
 from toonmotion.batch.work import prepare_motion, render_output, rig_character, trivial
 from toonmotion.io.batch_job import load_job
+from toonmotion.io.bvh import load_bvh
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 FPS = 12
@@ -46,11 +47,15 @@ def write_job(folder, drawings, clips, motions, frames, size, vertices):
         if (drawing / "char_cfg.yaml").is_file():
             text += f'skeleton = "{drawing / "char_cfg.yaml"}"\n'
         text += f"vertices = {vertices}\n"
+    uses = [sum(1 for j in range(motions) if j % len(clips) == i) for i in range(len(clips))]
     for k in range(motions):
-        clip = clips[k % len(clips)]
-        start = 1 + (k // len(clips)) * frames * 10  # another stretch of the clip (at ~120 fps)
-        text += (f'\n[[motion]]\nname = "m{k}"\nbvh = "{clip}"\nview = [90, 0]\n'
-                 f"segment = [{start}, {start + frames * 10}]\nfps = {FPS}\n")
+        i = k % len(clips)
+        clip = load_bvh(clips[i])
+        length = max(2, round(frames / FPS / clip.frame_time))  # clip frames for ``frames`` at FPS
+        room = max(0, clip.frame_count - 1 - length)
+        start = 1 + (k // len(clips)) * room // max(1, uses[i] - 1)  # another stretch of the clip
+        text += (f'\n[[motion]]\nname = "m{k}"\nbvh = "{clips[i]}"\nview = [90, 0]\n'
+                 f"segment = [{start}, {start + length}]\nfps = {FPS}\n")
     text += f'\n[output]\nformats = ["gif", "glb"]\nsize = [{size}, {size}]\n'
     path = folder / "job.toml"
     path.write_text(text)

@@ -5,8 +5,9 @@ the tasks the output folder's manifest shows finished and intact, and submits th
 task per character that rigs it, one per motion that reads it, and one per output whose
 inputs are those two futures (:mod:`toonmotion.batch.work`). Workers send the outputs back as
 bytes; the client writes each file atomically and records it in the manifest as soon as its
-task finishes, so a batch stopped at any moment loses at most the tasks still running, and no
-half-written file is ever left. A worker that dies mid-task has its tasks rerun elsewhere by
+task finishes (in the manifest's journal: :mod:`toonmotion.io.batch_manifest`), so a batch
+stopped at any moment loses at most the tasks still running, and no half-written file is ever
+left. A worker that dies mid-task has its tasks rerun elsewhere by
 Dask's scheduler.
 """
 
@@ -27,7 +28,13 @@ from toonmotion.batch.work import prepare_motion, render_output, rig_character
 from toonmotion.errors import BatchError, ToonmotionError
 from toonmotion.io.atomic import atomic_path
 from toonmotion.io.batch_job import Job, load_job
-from toonmotion.io.batch_manifest import ManifestEntry, load_manifest, save_manifest
+from toonmotion.io.batch_manifest import (
+    ManifestEntry,
+    journal_path,
+    load_manifest,
+    record_task,
+    save_manifest,
+)
 from toonmotion.progress import Progress
 
 MANIFEST = "manifest.json"
@@ -148,14 +155,18 @@ def run_batch(
         progress("tasks", len(results), count)
     dashboard = None
     if pending:
-        with _client(scheduler, workers) as client:
-            dashboard = _dashboard(client)
-            if on_connect is not None:
-                on_connect(dashboard)
-            for result in _compute(client, plan, pending, folder, manifest):
-                results[result.key] = result
-                if progress is not None:
-                    progress("tasks", len(results), count)
+        try:
+            with _client(scheduler, workers) as client:
+                dashboard = _dashboard(client)
+                if on_connect is not None:
+                    on_connect(dashboard)
+                for result in _compute(client, plan, pending, folder, manifest):
+                    results[result.key] = result
+                    if progress is not None:
+                        progress("tasks", len(results), count)
+        finally:  # the journal of this run's finished tasks merged into the manifest, even if stopped
+            if journal_path(folder / MANIFEST).exists():
+                save_manifest(folder / MANIFEST, manifest)
     report = BatchReport(job=job.path, folder=folder, results=tuple(results[t.key] for t in plan.tasks),
                          seconds=time.perf_counter() - start, dashboard=dashboard)
     write_report(report)
@@ -236,6 +247,6 @@ def _compute(client: Any, plan: Plan, pending: list[OutputTask], folder: Path,
             files[file] = sha256(data)
         manifest[task.key] = ManifestEntry(character=task.character, motion=task.motion, output=name,
                                            frames=rendered.frames, files=files)
-        save_manifest(folder / MANIFEST, manifest)
+        record_task(folder / MANIFEST, task.key, manifest[task.key])
         yield TaskResult(task.key, task.character, task.motion, name, "done", seconds=rendered.seconds,
                          files=tuple(files), frames=rendered.frames)
