@@ -26,6 +26,7 @@ x right, y down; depths are metres along the camera's axis (``PerspectiveCamera.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
@@ -91,18 +92,35 @@ def drawn_depth(figure: ArrayLike, pixels: ArrayLike, depths: ArrayLike, limbs: 
     rows, cols = np.nonzero(mask)
     if len(rows) == 0 or len(L) == 0:
         return out
-    p = np.stack([cols, rows], axis=1).astype(np.float64)  # pixel centres are whole numbers
-    a, b = x[L[:, 0]], x[L[:, 1]]
-    ab = b - a
-    span = np.maximum((ab * ab).sum(1), 1e-300)
-    s = np.clip(((p[:, None] - a[None]) * ab[None]).sum(-1) / span, 0.0, 1.0)  # (P, K)
-    gap = ((a[None] + s[..., None] * ab[None] - p[:, None]) ** 2).sum(-1)
-    k = gap.argmin(axis=1)
+    given = np.full(len(rows), -1, np.int64)
     if labels is not None:
-        given = np.asarray(labels)[rows, cols]
-        k = np.where((given >= 0) & (given < len(L)), given, k)
-    t = s[np.arange(len(k)), k]
-    out[rows, cols] = (1 - t) * z[L[k, 0]] + t * z[L[k, 1]]
+        given = np.asarray(labels, dtype=np.int64)[rows, cols]
+    out[rows, cols] = _along_limbs(rows.astype(np.int64), cols.astype(np.int64), x[L[:, 0]], x[L[:, 1]],
+                                   z[L[:, 0]], z[L[:, 1]], given)
+    return out
+
+
+@njit(cache=True)
+def _along_limbs(rows, cols, a, b, za, zb, given):  # pragma: no cover - compiled
+    """Each pixel's depth on its limb: the given one (``given`` in range) or the nearest segment
+    ``a`` to ``b`` (the first of equals), interpolated between the ends' depths ``za``, ``zb``."""
+    K = len(a)
+    out = np.empty(len(rows))
+    s = np.empty(K)
+    for n in range(len(rows)):
+        px, py = float(cols[n]), float(rows[n])  # pixel centres are whole numbers
+        best, k = np.inf, 0
+        for m in range(K):
+            abx, aby = b[m, 0] - a[m, 0], b[m, 1] - a[m, 1]
+            span = max(abx * abx + aby * aby, 1e-300)
+            s[m] = min(max(((px - a[m, 0]) * abx + (py - a[m, 1]) * aby) / span, 0.0), 1.0)
+            gx, gy = a[m, 0] + s[m] * abx - px, a[m, 1] + s[m] * aby - py
+            gap = gx * gx + gy * gy
+            if gap < best:
+                best, k = gap, m
+        if 0 <= given[n] < K:
+            k = given[n]
+        out[n] = (1 - s[k]) * za[k] + s[k] * zb[k]
     return out
 
 

@@ -207,33 +207,40 @@ class _Cloth:
         self.colours = np.concatenate(colours)
         self.pinned = np.concatenate(pinned).astype(np.int64)
         self.markers = np.concatenate(markers).astype(np.int64)
-        # Per cloth: its marker, its free vertices' slide joints' qpos and qvel addresses (n, 3) and
-        # their damping.
-        self.carried = []
+        # Every cloth's free vertices at once: the marker each hangs from, its slide joints' qpos
+        # and qvel addresses (n, 3) and their damping.
+        holders, qposes, dofs = [empty], [np.zeros((0, 3), np.int64)], [np.zeros((0, 3), np.int64)]
         for f, marker in scene.cloths:
             start, count = int(model.flex_vertadr[f]), int(model.flex_vertnum[f])
             holder = scene.marker_bodies[marker]
             bodies = [b for b in model.flex_vertbodyid[start:start + count] if b != holder]
             joints = np.array([model.body_jntadr[b] + np.arange(3) for b in bodies], np.int64).reshape(-1, 3)
-            dofs = model.jnt_dofadr[joints]
-            self.carried.append((marker, model.jnt_qposadr[joints], dofs, model.dof_damping[dofs]))
+            holders.append(np.full(len(joints), marker, np.int64))
+            qposes.append(model.jnt_qposadr[joints])
+            dofs.append(model.jnt_dofadr[joints])
+        self.holder = np.concatenate(holders)
+        self.q, self.v = np.concatenate(qposes), np.concatenate(dofs)
+        self.damping = model.dof_damping[self.v]
 
     def carry(self, data, at, speed, qpos, qvel):
         """Before the markers are written (their positions' and velocities' addresses ``at`` and
         ``speed``, ``(N, 3)``, the new values ``qpos[:N, :3]`` and ``qvel[:N, :3]``): take the change
         off the free vertices' joints so they stay where they are in the world, and drag them by
         air at the marker's velocity."""
-        for marker, q, v, damping in self.carried:
-            data.qpos[q] -= qpos[marker, :3] - data.qpos[at[marker]]
-            data.qvel[v] -= qvel[marker, :3] - data.qvel[speed[marker]]
-            data.qfrc_applied[v] = -damping * qvel[marker, :3]
-            # No vertex moves faster than the cap (a limb that sweeps the cloth against its pinned
-            # edge would otherwise squeeze it out at tens of metres a second).
-            world = data.qvel[v] + qvel[marker, :3]
-            fast = np.linalg.norm(world, axis=1)
-            over = fast > self.cap
-            if over.any():
-                data.qvel[v[over]] = world[over] * (self.cap / fast[over])[:, None] - qvel[marker, :3]
+        if not len(self.q):
+            return
+        held = self.holder
+        carried = qvel[held, :3]
+        data.qpos[self.q] -= qpos[held, :3] - data.qpos[at[held]]
+        data.qvel[self.v] -= carried - data.qvel[speed[held]]
+        data.qfrc_applied[self.v] = -self.damping * carried
+        # No vertex moves faster than the cap (a limb that sweeps the cloth against its pinned
+        # edge would otherwise squeeze it out at tens of metres a second).
+        world = data.qvel[self.v] + carried
+        fast = np.sqrt((world * world).sum(axis=1))
+        over = fast > self.cap
+        if over.any():
+            data.qvel[self.v[over]] = world[over] * (self.cap / fast[over])[:, None] - carried[over]
 
 
 class _Rain:
@@ -295,6 +302,7 @@ class _Kinematic:
         is_proxy = np.zeros(model.ngeom, bool)
         is_proxy[self.geoms] = True
         self.is_ball, self.is_proxy = is_ball, is_proxy
+        self.has_balls = bool(len(scene.balls))
         self.cloth = None
 
     def poses(self, t, fractions, moving):
@@ -353,7 +361,7 @@ class _Kinematic:
     def deepest_ball(self, data):
         """How far any ball is inside any proxy volume at the step's start, metres (0 when none is)."""
         n = data.ncon
-        if n == 0:
+        if n == 0 or not self.has_balls:
             return 0.0
         pairs = data.contact.geom[:n]
         touching = (self.is_ball[pairs[:, 0]] & self.is_proxy[pairs[:, 1]]) | (
