@@ -71,6 +71,17 @@ def test_a_changed_input_recomputes_only_its_tasks(finished, cluster, tmp_path):
     (tmp_path / "job_outputs" / "char1-walk.glb").write_bytes(b"broken")
     third = run_batch(job, scheduler=cluster)
     assert [(r.character, r.motion) for r in third.results if r.status == "done"] == [("char1", "walk")]
+    # so is one damaged in place, at the same size (its modification time gives it away), and the
+    # outputs of a manifest without sizes and times (its first version) are checked by their hashes
+    gif = tmp_path / "job_outputs" / "char4-walk.gif"
+    gif.write_bytes(bytes(gif.stat().st_size))
+    manifest = json.loads((tmp_path / "job_outputs" / "manifest.json").read_text())
+    for entry in manifest["tasks"].values():
+        if entry["character"] == "char1":
+            del entry["stamps"]
+    (tmp_path / "job_outputs" / "manifest.json").write_text(json.dumps(manifest))
+    fourth = run_batch(job, scheduler=cluster)
+    assert [(r.character, r.motion) for r in fourth.results if r.status == "done"] == [("char4", "walk")]
 
 
 def test_a_bad_input_fails_only_its_tasks_with_one_line(cluster, tmp_path):

@@ -2,7 +2,9 @@
 and ``report.html`` (a static page: a strip of thumbnails per output, each failure's message).
 
 Thumbnails are a few frames of each output's GIF (or another picture format Pillow reads),
-saved as small PNGs in ``thumbs/`` beside the outputs.
+saved as small PNGs in ``thumbs/`` beside the outputs. :func:`run_batch` makes each task's as the
+task finishes (:func:`make_strip`), while the workers go on, so the report at the end only lists
+them.
 """
 
 from __future__ import annotations
@@ -51,19 +53,35 @@ def write_report(report: BatchReport) -> None:
 
 def _strip(folder: Path, result: TaskResult) -> list[str]:
     """The thumbnails of ``result``'s first picture file, made if missing; [] if it has none."""
-    from PIL import Image, ImageSequence
+    names = _strip_names(result.files)
+    if names and all((folder / n).is_file() for n in names):
+        return names
+    return make_strip(folder, result.files)
 
-    picture = next((f for f in result.files if Path(f).suffix.lower() in _PICTURES), None)
+
+def _strip_names(files: tuple[str, ...]) -> list[str]:
+    picture = next((f for f in files if Path(f).suffix.lower() in _PICTURES), None)
     if picture is None:
         return []
     stem = Path(picture).name.replace(".", "_")
-    names = [f"{THUMBS}/{stem}-{i}.png" for i in range(STRIP_FRAMES)]
-    if result.status == "skipped" and all((folder / n).is_file() for n in names):
-        return names
+    return [f"{THUMBS}/{stem}-{i}.png" for i in range(STRIP_FRAMES)]
+
+
+def make_strip(folder: Path, files: tuple[str, ...]) -> list[str]:
+    """Make the thumbnails of the first picture among ``files`` (relative to ``folder``), replacing
+    any earlier ones; their names, or [] when there is no picture or it cannot be read."""
+    from PIL import Image, ImageSequence
+
+    names = _strip_names(files)
+    if not names:
+        return []
+    picture = next(f for f in files if Path(f).suffix.lower() in _PICTURES)
     try:
         with Image.open(folder / picture) as image:
             frames = [f.convert("RGBA") for f in ImageSequence.Iterator(image)]
     except OSError:
+        for name in names:  # no stale strip of an earlier run stands in for it
+            (folder / name).unlink(missing_ok=True)
         return []
     picks = [frames[round(i * (len(frames) - 1) / max(STRIP_FRAMES - 1, 1))] for i in range(STRIP_FRAMES)]
     for name, frame in zip(names, picks, strict=True):

@@ -30,7 +30,7 @@ import re
 from pathlib import Path
 from typing import Annotated
 
-from pydantic import Field, StrictStr, ValidationError
+from pydantic import Field, StrictInt, StrictStr, ValidationError
 
 from toonmotion.errors import BatchError
 from toonmotion.io.atomic import atomic_path
@@ -40,16 +40,20 @@ FORMAT = "toonmotion-batch-manifest"
 VERSION = 1
 
 Sha256 = Annotated[StrictStr, Field(pattern=r"^[0-9a-f]{64}$")]
+Natural = Annotated[StrictInt, Field(ge=0)]  # bytes, nanoseconds: beyond 32 bits
 
 
 class ManifestEntry(Model):
-    """One finished task: its pair, output name, frame count and files with their SHA-256."""
+    """One finished task: its pair, output name, frame count and files with their SHA-256, and each
+    file's size and modification time (nanoseconds) when it was written, so that a rerun need not
+    read a file that was not touched since to know it is intact."""
 
     character: StrictStr
     motion: StrictStr
     output: StrictStr
     frames: Int
     files: dict[StrictStr, Sha256]
+    stamps: dict[StrictStr, tuple[Natural, Natural]] = Field(default_factory=dict)
 
 
 class ManifestFile(Model):
