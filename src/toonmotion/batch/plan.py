@@ -18,7 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from toonmotion import __version__
-from toonmotion.io.batch_job import Job, OutputModel, output_name
+from toonmotion.deform.deformer import DeformSettings
+from toonmotion.errors import BatchError, ToonmotionError
+from toonmotion.io.batch_job import MOTION_KINDS, Job, OutputModel, output_name
 
 
 @dataclass(frozen=True)
@@ -50,7 +52,8 @@ class CharacterInput:
 
 @dataclass(frozen=True)
 class MotionInput:
-    """What a motion needs: one file of ``kind`` (``bvh``, ``keys`` or ``motion``) and its options."""
+    """What a motion needs: one file of ``kind`` (``bvh``, ``keys``, ``motion`` or ``keyshapes``) and
+    its options; a key-shape motion also its model and each character's key poses."""
 
     name: str
     key: str
@@ -61,6 +64,8 @@ class MotionInput:
     segment: tuple[int, int | None] | None = None
     fps: float | None = None
     error: str | None = None
+    model: InputFile | None = None
+    poses: tuple[tuple[str, InputFile], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -100,6 +105,12 @@ def plan_job(job: Job) -> Plan:
     An input that cannot be read becomes an input with an ``error``: only the tasks that need
     it fail.
     """
+    for output in job.outputs:  # deformation options out of range: refused before anything runs
+        try:
+            deform_settings(output)
+        except ToonmotionError as error:
+            where = f"output {output.name}" if output.name else "output"
+            raise BatchError(f"{job.path}: {where}.deform: {error}") from None
     characters = {c.name: _character(c) for c in job.characters}
     motions = {m.name: _motion(m) for m in job.motions}
     tasks = []
@@ -110,6 +121,22 @@ def plan_job(job: Job) -> Plan:
                           "output": output.model_dump(), "files": files})
             tasks.append(OutputTask(key=key, character=c, motion=m, output=output, files=files))
     return Plan(characters=characters, motions=motions, tasks=tuple(tasks))
+
+
+def deform_settings(output: OutputModel) -> DeformSettings | None:
+    """An output's deformation options as settings (None: the defaults).
+
+    Raises
+    ------
+    SettingsError
+        A value out of range.
+    """
+    if output.deform is None:
+        return None
+    d = output.deform
+    anchor = DeformSettings.joint_anchor if d.joint_anchor is None else d.joint_anchor
+    return DeformSettings(preserve_area=d.preserve_area, stage_two=d.stage_two, weights=d.weights,
+                          joint_width=d.joint_width, skinning=d.skinning, joint_anchor=anchor)
 
 
 def _read(path: str, relative: str | None = None) -> InputFile:
@@ -137,15 +164,20 @@ def _character(entry: Any) -> CharacterInput:
 
 
 def _motion(entry: Any) -> MotionInput:
-    kind = next(k for k in ("bvh", "keys", "motion") if getattr(entry, k) is not None)
+    kind = next(k for k in MOTION_KINDS if getattr(entry, k) is not None)
     options = {"view": entry.view, "map": sorted((entry.map or {}).items()), "segment": entry.segment,
                "fps": entry.fps}
     base = {"name": entry.name, "kind": kind, "view": entry.view, "map": tuple(options["map"]),
             "segment": entry.segment, "fps": entry.fps}
     try:
         file = _read(getattr(entry, kind))
+        model = _read(entry.model) if entry.model is not None else None
+        poses = tuple((c, _read(f)) for c, f in sorted((entry.poses or {}).items()))
     except OSError as error:
         return MotionInput(key=key_of({"unreadable": entry.name}), file=None,
                            error=f"motion {entry.name!r}: cannot read {error.filename}: "
                                  f"{(error.strerror or str(error)).lower()}", **base)
-    return MotionInput(key=key_of({"kind": kind, "file": sha256(file.data), **options}), file=file, **base)
+    key = key_of({"kind": kind, "file": sha256(file.data), **options,
+                  **({"model": sha256(model.data), "poses": [(c, sha256(f.data)) for c, f in poses]}
+                     if model is not None else {})})
+    return MotionInput(key=key, file=file, model=model, poses=poses, **base)

@@ -16,30 +16,48 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+from numpy.typing import NDArray
+
 from toonmotion import api
 from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.animate.motion import Motion
 from toonmotion.animate.timeline import Timeline
-from toonmotion.batch.plan import CharacterInput, InputFile, MotionInput, OutputTask
-from toonmotion.errors import ToonmotionError
+from toonmotion.batch.plan import CharacterInput, InputFile, MotionInput, OutputTask, deform_settings
+from toonmotion.errors import KeyShapeError, ToonmotionError
 from toonmotion.io.bvh import load_bvh
+from toonmotion.io.keyshape_json import load_keymotion, load_model
 from toonmotion.io.motion_json import load_motion
 from toonmotion.io.pose_json import load_keyframes
+from toonmotion.keyshape.contour import ContourCapture
 from toonmotion.rig.character import Character, RigSettings
 
 BACKGROUNDS = {"white": (255, 255, 255), "black": (0, 0, 0)}
 
 
 @dataclass(frozen=True)
+class KeyShapeMotion:
+    """A key-shape motion captured with the hand-picked keys, those keys, its frame rate, and each
+    character's key poses (a key-frames file's bytes, one pose per key)."""
+
+    capture: ContourCapture
+    keys: NDArray[np.float64]
+    fps: float
+    poses: dict[str, InputFile]
+
+
+@dataclass(frozen=True)
 class PreparedMotion:
     """A motion ready to meet a character: a :class:`Motion` (from a clip or a motion file,
-    retargeted per character) or a key-frames file's bytes (read against each skeleton)."""
+    retargeted per character), a key-frames file's bytes (read against each skeleton), or a
+    key-shape motion (replayed on each character's key poses)."""
 
     name: str
     motion: Motion | None
     keys: InputFile | None
     map: tuple[tuple[str, str], ...]
     fps: float | None
+    keyshapes: KeyShapeMotion | None = None
 
 
 @dataclass(frozen=True)
@@ -117,6 +135,8 @@ def prepare_motion(spec: MotionInput) -> PreparedMotion:
         raise ToonmotionError(spec.error or f"motion {spec.name!r} has no file")
     if spec.kind == "keys":
         return PreparedMotion(spec.name, None, spec.file, (), spec.fps)
+    if spec.kind == "keyshapes":
+        return PreparedMotion(spec.name, None, None, (), None, keyshapes=_keyshape_motion(spec))
     with _materialised([spec.file]) as (_, (path,), names):
         try:
             if spec.kind == "bvh":
@@ -129,11 +149,42 @@ def prepare_motion(spec: MotionInput) -> PreparedMotion:
             raise _reworded(error, names) from None
 
 
+def _keyshape_motion(spec: MotionInput) -> KeyShapeMotion:
+    if spec.file is None or spec.model is None:
+        raise ToonmotionError(f"motion {spec.name!r} has no key-shape motion or model")
+    with _materialised([spec.file, spec.model]) as (_, (path, model), names):
+        try:
+            captured, fps, space = load_keymotion(path)
+            if space != "keys":
+                raise KeyShapeError(f"{path} was captured in the extended space: capture it with the "
+                                    "hand-picked keys ('capture-contours --keys') to retarget it")
+            keys = load_model(model).keys
+        except ToonmotionError as error:
+            raise _reworded(error, names) from None
+    return KeyShapeMotion(captured, keys, spec.fps or fps, dict(spec.poses))
+
+
+def _replayed(motion: KeyShapeMotion, character: Character, name: str) -> Motion:
+    """A key-shape motion replayed on ``character``'s key poses (``retarget-keyshapes --project``)."""
+    poses = motion.poses.get(name)
+    if poses is None:
+        raise ToonmotionError(f"the key-shape motion has no key poses for character {name!r}")
+    with _materialised([poses]) as (_, (path,), names):
+        try:
+            timeline = load_keyframes(path, character.skeleton)
+            outline = character.mesh.V[character.mesh.boundary[0]]  # the drawing's extent, at rest
+            return api.retarget_keyposes(motion.capture, motion.keys, character.skeleton, timeline,
+                                         fps=motion.fps, reference=outline)
+        except ToonmotionError as error:
+            raise _reworded(error, names) from None
+
+
 def render_output(character: Character, motion: PreparedMotion, task: OutputTask) -> Rendered:
     """Animate ``character`` with ``motion`` and export every format of ``task`` to bytes."""
     start = time.perf_counter()
     output = task.output
     exaggeration = FilterSettings(strength=output.exaggerate) if output.exaggerate else None
+    settings = deform_settings(output)
     source: Motion | Timeline
     with tempfile.TemporaryDirectory(prefix="toonmotion-batch-") as tmp:
         folder = Path(tmp)
@@ -146,9 +197,11 @@ def render_output(character: Character, motion: PreparedMotion, task: OutputTask
                         raise _reworded(error, names) from None
             elif motion.motion is not None:
                 source = api.retarget(motion.motion, character.skeleton, joint_map=dict(motion.map))
+            elif motion.keyshapes is not None:
+                source = _replayed(motion.keyshapes, character, task.character)
             else:
                 raise ToonmotionError(f"motion {motion.name!r} holds neither a motion nor key-frames")
-            animation = api.animate_character(character, source, exaggeration=exaggeration,
+            animation = api.animate_character(character, source, settings=settings, exaggeration=exaggeration,
                                               fps=motion.fps if motion.keys is None else None,
                                               method="solve" if output.solve_inbetweens else "interpolate")
         except ToonmotionError as error:
@@ -156,7 +209,8 @@ def render_output(character: Character, motion: PreparedMotion, task: OutputTask
         frames = 0
         for format, name in task.files:
             size = None if output.size is None else (output.size[0], output.size[1])
-            done = api.export_animation(folder / "out" / name, character, animation, format=format, size=size,
+            done = api.export_animation(folder / "out" / name, character, animation, format=format,
+                                        size=size, settings=settings,
                                         background=BACKGROUNDS.get(output.background or ""))
             frames = done.frames
         files = {p.relative_to(folder / "out").as_posix(): p.read_bytes()

@@ -1,9 +1,10 @@
 """The batch job file, ``JOB.toml``: characters, motions, outputs, and which pairs to make.
 
 A job lists ``[[character]]`` entries (a drawing with an optional mask and skeleton, or a
-project folder made by ``toonmotion rig``), ``[[motion]]`` entries (a motion-capture clip seen
-from a view, a key-frames file, or a motion file), one ``[output]`` or several ``[[output]]``
-(formats, picture size, exaggeration) and optionally ``pairs``; by default every character
+project folder made by ``toonmotion rig``), ``[[motion]]`` entries (a motion-capture clip or a
+folder of clips seen from a view, a key-frames file, a motion file, or a key-shape motion with
+each character's key poses), one ``[output]`` or several ``[[output]]`` (formats, picture size,
+exaggeration, deformation options) and optionally ``pairs``; by default every character
 is animated with every motion. Paths are relative to the job file. docs/batch.md describes
 every key.
 
@@ -56,11 +57,15 @@ FORMATS = {
     "sheet": "-sheet.json",
 }
 
+# The kinds of motion a ``[[motion]]`` holds, each named by the key of its file.
+MOTION_KINDS = ("bvh", "keys", "motion", "keyshapes")
+
 FormatName = Literal["gif", "glb", "mp4", "apng", "webp", "webm", "spine", "sheet"]
 
 # Names become parts of file names: letters, digits, '_', '.', '-', not starting with '.'.
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 Name = Annotated[StrictStr, Field(pattern=_NAME.pattern, max_length=100)]
+_NAME_CHARACTER = re.compile(r"[^A-Za-z0-9_.-]")  # what a clip's file name may not bring into a name
 Path_ = Annotated[StrictStr, Field(min_length=1)]
 
 
@@ -89,12 +94,16 @@ class CharacterModel(Model):
 
 
 class MotionModel(Model):
-    """A ``[[motion]]``: ``bvh`` (with ``view``), ``keys`` or ``motion``."""
+    """A ``[[motion]]``: ``bvh`` (a clip or a folder of clips, with ``view``), ``keys``, ``motion``,
+    or ``keyshapes`` (with ``model`` and each character's key ``poses``)."""
 
     name: Name
     bvh: Path_ | None = None
     keys: Path_ | None = None
     motion: Path_ | None = None
+    keyshapes: Path_ | None = None
+    model: Path_ | None = None
+    poses: dict[StrictStr, Path_] | None = None
     view: tuple[Float, Float] | None = None
     map: dict[StrictStr, StrictStr] | None = None
     segment: tuple[Int, Int | None] | None = None
@@ -102,16 +111,33 @@ class MotionModel(Model):
 
     @model_validator(mode="after")
     def _one_source(self) -> MotionModel:
-        given = [k for k in ("bvh", "keys", "motion") if getattr(self, k) is not None]
+        given = [k for k in MOTION_KINDS if getattr(self, k) is not None]
         if len(given) != 1:
-            raise problem("give exactly one of 'bvh', 'keys' or 'motion'")
+            raise problem("give exactly one of 'bvh', 'keys', 'motion' or 'keyshapes'")
         if self.bvh is not None and self.view is None:
             raise problem("a 'bvh' motion needs 'view = [azimuth, elevation]' in degrees")
         if self.bvh is None and (self.view is not None or self.segment is not None):
             raise problem("'view' and 'segment' go with 'bvh'")
-        if self.keys is not None and self.map is not None:
-            raise problem("'map' goes with 'bvh' or 'motion', not 'keys'")
+        if self.map is not None and (self.keys is not None or self.keyshapes is not None):
+            raise problem("'map' goes with 'bvh' or 'motion'")
+        if self.keyshapes is not None and (self.model is None or not self.poses):
+            raise problem("a 'keyshapes' motion needs its 'model' (from 'toonmotion keyshapes') and "
+                          "'poses = { CHARACTER = \"KEYS.json\" }': each character's key poses, one per key")
+        if self.keyshapes is None and (self.model is not None or self.poses is not None):
+            raise problem("'model' and 'poses' go with 'keyshapes'")
         return self
+
+
+class DeformModel(Model):
+    """An output's ``deform = { ... }``: :class:`~toonmotion.deform.deformer.DeformSettings`, as the
+    animation commands' options set them."""
+
+    preserve_area: StrictBool = True
+    stage_two: StrictBool = True
+    weights: tuple[Float, Float, Float] = (1.0, 1.0, 1.0)
+    joint_width: Annotated[Float, Field(ge=0)] = 1.5
+    skinning: Literal["one-bone", "weights"] = "one-bone"
+    joint_anchor: Annotated[Float, Field(ge=0)] | None = None
 
 
 class OutputModel(Model):
@@ -123,6 +149,7 @@ class OutputModel(Model):
     exaggerate: Annotated[Float, Field(ge=0)] | None = None
     background: Literal["transparent", "white", "black"] | None = None
     solve_inbetweens: StrictBool = False
+    deform: DeformModel | None = None
 
 
 class JobModel(Model):
@@ -188,12 +215,23 @@ def load_job(path: str | os.PathLike[str]) -> Job:
         _unique(path, "output", [o.name or "" for o in outputs])
     characters = tuple(_resolved(path, folder, "character", i, c, ("drawing", "mask", "skeleton", "project"))
                        for i, c in enumerate(model.character))
-    motions = tuple(_resolved(path, folder, "motion", i, m, ("bvh", "keys", "motion"))
-                    for i, m in enumerate(model.motion))
     names_c = [c.name for c in characters]
-    names_m = [m.name for m in motions]
+    expanded: dict[str, list[MotionModel]] = {}  # each entry's motions: a folder of clips gives several
+    for i, m in enumerate(model.motion):
+        resolved = _resolved(path, folder, "motion", i, m, ("bvh", "keys", "motion", "keyshapes", "model"))
+        if m.poses is not None:
+            for c in m.poses:
+                if c not in names_c:
+                    raise BatchError(f"{path}: motion[{i}].poses: no character named {c!r} (the job has "
+                                     f"{', '.join(names_c)})")
+            poses = {c: _existing(path, f"motion[{i}].poses.{c}", folder / f) for c, f in m.poses.items()}
+            resolved = resolved.model_copy(update={"poses": poses})
+        expanded[m.name] = _clips(path, i, resolved)
+    motions = tuple(m for group in expanded.values() for m in group)
+    _unique(path, "motion", [m.name for m in motions])
+    names_m = [m.name for m in model.motion]
     if model.pairs is None:
-        pairs = tuple((c, m) for c in names_c for m in names_m)
+        wanted = [(c, m) for c in names_c for m in names_m]
     else:
         for i, (c, m) in enumerate(model.pairs):
             if c not in names_c:
@@ -202,8 +240,33 @@ def load_job(path: str | os.PathLike[str]) -> Job:
             if m not in names_m:
                 raise BatchError(f"{path}: pairs[{i}]: no motion named {m!r} (the job has "
                                  f"{', '.join(names_m)})")
-        pairs = tuple(dict.fromkeys((c, m) for c, m in model.pairs))
+        wanted = list(model.pairs)
+    for c, m in wanted:
+        given = expanded[m][0].poses
+        if given is not None and c not in given:
+            raise BatchError(f"{path}: motion {m!r} is a key-shape motion with no key poses for character "
+                             f"{c!r}: add it to its 'poses', or list the pairs to make")
+    pairs = tuple(dict.fromkeys((c, one.name) for c, m in wanted for one in expanded[m]))
     return Job(path=path, characters=characters, motions=motions, outputs=outputs, pairs=pairs)
+
+
+def _clips(path: Path, index: int, entry: MotionModel) -> list[MotionModel]:
+    """A ``bvh`` folder's clips as motions ``NAME-CLIP`` (its ``.bvh`` files, sorted); any other
+    entry as it is."""
+    if entry.bvh is None or not Path(entry.bvh).is_dir():
+        return [entry]
+    clips = sorted(p for p in Path(entry.bvh).iterdir() if p.suffix.lower() == ".bvh" and p.is_file())
+    if not clips:
+        raise BatchError(f"{path}: motion[{index}].bvh: the folder {entry.bvh} holds no .bvh file")
+    return [entry.model_copy(update={"name": f"{entry.name}-{_NAME_CHARACTER.sub('_', clip.stem)}",
+                                     "bvh": str(clip)}) for clip in clips]
+
+
+def _existing(path: Path, key: str, target: Path) -> str:
+    target = target.resolve()
+    if not target.is_file():
+        raise BatchError(f"{path}: {key}: no such file {target}")
+    return str(target)
 
 
 def _unique(path: Path, what: str, names: list[str]) -> None:
@@ -226,6 +289,8 @@ def _resolved(path: Path, folder: Path, what: str, index: int, entry: Any, keys:
             if not (target / "project.json").is_file():
                 raise BatchError(f"{path}: {what}[{index}].project: {target} is not a project folder "
                                  "(no project.json; make one with 'toonmotion rig')")
+        elif key == "bvh" and target.is_dir():
+            pass  # a folder of clips (:func:`_clips`)
         elif not target.is_file():
             raise BatchError(f"{path}: {what}[{index}].{key}: no such file {target}")
         changes[key] = str(target)
