@@ -160,6 +160,32 @@ def test_a_held_roll_keeps_the_world_upright_where_a_fitted_one_tilts_it(walk_pr
     assert np.abs(turned.project(prior.positions) - drawn.positions).max() < 1e-3  # a roll given is kept
 
 
+def test_a_held_elevation_keeps_a_panning_camera_level_where_a_fitted_one_tilts(walk_prior):
+    """The camera pans (azimuth 70-110 degrees) but does not tilt, and the drawn figure crouches
+    lower than its prior (every marker's height halved, as a four-legged character's front feet
+    reach the ground where a human's hands hang): the fitted camera tilts to make the prior look
+    like it; the held elevation stays level, so the world's vertical is the picture's, and a true
+    pan is still found when the prior is the truth."""
+    prior = prior_in_metres(walk_prior)[0]
+    T = prior.frame_count
+    pan = np.radians(np.linspace(70, 110, T))
+    centre = prior.positions.mean(axis=(0, 1))
+    eye = centre + 6 * np.stack([np.sin(pan), np.zeros(T), np.cos(pan)], axis=1) + [0, 0.2, 0]
+    truth = PerspectiveCamera(1000.0, 960, 720, np.column_stack([pan, np.zeros((T, 2)), eye]))
+    crouched = prior.positions * [1.0, 0.5, 1.0]
+    drawn = Markers(prior.names, truth.project(crouched), fps=prior.fps)
+    fitted = estimate_camera(drawn, prior, azimuth=70, elevation=0, focal=1000.0, width=960, height=720)
+    held = estimate_camera(drawn, prior, azimuth=70, elevation=0, focal=1000.0, width=960, height=720,
+                           hold_elevation=True)
+    assert np.degrees(np.abs(fitted.extrinsics[:, 1])).max() > 10  # tilted to match the prior
+    assert np.all(held.extrinsics[:, 1:3] == 0)  # level and unrolled on every frame
+    exact = estimate_camera(Markers(prior.names, truth.project(prior.positions), fps=prior.fps), prior,
+                            azimuth=70, elevation=0, focal=1000.0, width=960, height=720,
+                            weights=CameraWeights(ground=0, smooth=0), hold_elevation=True)
+    assert np.degrees(np.abs(exact.extrinsics[:, 0] - pan)).max() < 1e-6
+    assert np.abs(exact.centres - eye).max() < 1e-6
+
+
 def test_bad_settings_are_refused():
     with pytest.raises(ProxyError, match="odd"):
         CameraWeights(window=2)

@@ -171,6 +171,31 @@ def test_the_world_stays_upright_unless_the_picture_is_turned(truth):
     assert any("--up 0" in w for w in lift_warnings(free, report))
 
 
+def test_a_figure_lower_than_its_prior_tilts_the_camera_unless_the_elevation_is_held(truth):
+    """The walk drawn crouched (every marker at half its height, as a four-legged character's front
+    feet reach the ground where a human's hands hang) from a level side view: the fitted camera
+    tilts to make the prior look like it, and a warning names --hold-elevation; held, the camera
+    stays level on every frame, the points still lie on the drawing, and the world's vertical is
+    the picture's (a vertical segment at the figure projects vertical)."""
+    from toonmotion.api import lift_warnings
+
+    view = (90.0, 0.0)
+    middle = truth.positions.reshape(-1, 3).mean(axis=0)
+    ext = np.concatenate([np.radians([*view, 0.0]), middle + 7 * view_direction(*view)])
+    level = PerspectiveCamera(FOCAL, *IMAGE, np.tile(ext, (truth.frame_count, 1)))
+    drawn = Markers(truth.names, level.project(truth.positions * [1.0, 0.5, 1.0]), fps=truth.fps)
+    tilted, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, still_camera=True)
+    assert np.degrees(np.abs(tilted.camera.extrinsics[:, 1])).max() > 20
+    assert any("--hold-elevation" in w for w in lift_warnings(tilted, report))
+    held, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, still_camera=True,
+                        hold_elevation=True)
+    assert np.all(held.camera.extrinsics[:, 1:3] == 0) and report.reproj_px < 1e-6
+    assert not any("--hold-elevation" in w for w in lift_warnings(held, report))
+    centre = held.points.mean(axis=1, keepdims=True)
+    seen = held.camera.project(np.concatenate([centre, centre + [0.0, 0.1, 0.0]], axis=1))
+    assert np.abs(seen[:, 1, 0] - seen[:, 0, 0]).max() < 1e-9
+
+
 @pytest.mark.xfail(strict=True, reason="issue 45: with a prior of another motion the view search is biased "
                    "(the walk lifted with the CMU run: about 20 degrees off, and it does not know)")
 def test_the_view_is_found_with_a_prior_of_another_motion(truth):

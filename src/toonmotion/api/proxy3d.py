@@ -42,6 +42,7 @@ def lift_proxy(
     camera_weights: CameraWeights | None = None,
     still_camera: bool = False,
     up: float | None = 0.0,
+    hold_elevation: bool = False,
     skeleton_weights: SkeletonWeights | None = None,
     progress: Progress | None = None,
 ) -> tuple[Proxy, LiftReport]:
@@ -70,9 +71,10 @@ def lift_proxy(
         The clip's frames to use, as a slice.
     view : (azimuth, elevation), optional
         Degrees; searched when not given.
-    focal, size, frames, widths, units, camera_weights, still_camera, up, skeleton_weights
+    focal, size, frames, widths, units, camera_weights, still_camera, up, hold_elevation, skeleton_weights
         As :func:`toonmotion.proxy3d.lift.lift` (``up``: the world's up in the picture, degrees
-        clockwise; 0 a level picture, None the camera's roll fitted).
+        clockwise; 0 a level picture, None the camera's roll fitted; ``hold_elevation``: the
+        camera keeps the view's elevation, for a figure unlike its prior).
     extra : sequence of BvhClip
         Further clips for the skeleton's PCA subspace, matched the same way.
     progress : callable, optional
@@ -119,7 +121,7 @@ def lift_proxy(
     others = [prior_from_bvh(c, drawn.names, joint_map=joint_map) for c in extra]
     proxy, report = lift(drawn, matched, view=view, focal=focal, size=size, frames=frames, widths=widths,
                          units=units, extra=others, camera_weights=camera_weights,
-                         still_camera=still_camera, up=up,
+                         still_camera=still_camera, up=up, hold_elevation=hold_elevation,
                          skeleton_weights=skeleton_weights, progress=progress)
     return proxy, replace(report, left_out=left_out)
 
@@ -128,6 +130,7 @@ def lift_proxy(
 POOR_MATCH_DEG = 12.0  # limbs this far apart on average between the drawing and its aligned prior
 CAMERA_FIT_SHARE = 0.1  # the camera fit's mean residual, as a share of the figure's size
 ROLL_DEG = 20.0  # a fitted camera roll (up=None) beyond this tilts the world visibly
+TILT_DEG = 20.0  # a camera tilted this far from the view's elevation leans the world's vertical
 
 
 def lift_warnings(proxy: Proxy, report: LiftReport) -> list[str]:
@@ -138,7 +141,8 @@ def lift_warnings(proxy: Proxy, report: LiftReport) -> list[str]:
       ``benchmarks/view_search.py``'s cases with another clip as the prior;
     - no camera explains the drawing well (a mean residual over :data:`CAMERA_FIT_SHARE` of the
       figure's size): proportions or a posture unlike the prior's;
-    - a fitted roll (``up=None``) beyond :data:`ROLL_DEG`: the world tilts with it.
+    - a fitted roll (``up=None``) beyond :data:`ROLL_DEG`: the world tilts with it;
+    - a camera tilted beyond :data:`TILT_DEG` from the view's elevation: the world's vertical leans.
 
     Parameters
     ----------
@@ -171,6 +175,11 @@ def lift_warnings(proxy: Proxy, report: LiftReport) -> list[str]:
         said.append(f"no camera sees the prior as drawn: the fit leaves {report.camera_px:.0f} px on a "
                     f"figure {report.figure_px:.0f} px across (proportions or a posture unlike the prior's); "
                     "the points stay on the drawing, the skeleton and volumes follow the prior")
+    tilt = float(np.degrees(np.abs(proxy.camera.extrinsics[:, 1] - np.radians(report.elevation))).max())
+    if tilt > TILT_DEG:
+        said.append(f"the camera tilts up to {tilt:.0f}° from the view's elevation to fit the prior, so the "
+                    "world's vertical leans in the picture; give --hold-elevation (with --view AZ,EL) to "
+                    "keep it level")
     roll = float(np.degrees(np.abs(proxy.camera.extrinsics[:, 2])).max())
     if report.up is None and roll > ROLL_DEG:
         said.append(f"the camera rolls up to {roll:.0f}° to fit the prior, tilting the world; give --up 0 to "

@@ -54,6 +54,10 @@ def lift_command(
         "--up", help="Where the world's up points in the picture, degrees clockwise from the picture's up "
         "(0: a level picture: the camera does not roll, the proxy and a scene's gravity stand as drawn); "
         "'free' fits the camera's roll per frame, as the paper does.")] = "0",
+    hold_elevation: Annotated[bool, typer.Option(
+        "--hold-elevation", help="The camera keeps the view's elevation (it pans, it does not tilt): the "
+        "world's vertical stays the picture's, for a figure unlike its prior (four legs on a human clip)."
+    )] = False,
     size: Annotated[str | None, typer.Option(
         "--size", help="Image WxH pixels \\[default: the frames', else the markers' extent].")] = None,
     frames: Annotated[Path | None, typer.Option(
@@ -96,7 +100,8 @@ def lift_command(
         proxy, found = api.lift_proxy(
             markers, clip, joint_map=_pairs(joint_map, "--map"), segment=_segment(segment),
             view=None if view is None else options.numbers(view, 2, "--view"),  # type: ignore[arg-type]
-            focal=focal, still_camera=still_camera, up=_up(up), size=options.size(size), frames=pictures,
+            focal=focal, still_camera=still_camera, up=_up(up), hold_elevation=hold_elevation,
+            size=options.size(size), frames=pictures,
             widths=overrides,
             units=_units(units), extra=[load_bvh(p) for p in extra or ()], progress=report,
         )

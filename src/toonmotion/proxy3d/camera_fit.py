@@ -115,6 +115,7 @@ def estimate_camera(
     weights: CameraWeights | None = None,
     still: bool = False,
     roll: float | None = 0.0,
+    hold_elevation: bool = False,
     progress: Progress | None = None,
 ) -> PerspectiveCamera:
     """The artist's camera per frame by eq. 2.
@@ -143,6 +144,11 @@ def estimate_camera(
         the world's up the picture's up, as drawings are made. The paper fits it, with the small
         penalty ``e_o``; that lets a prior whose posture differs from the drawn figure's (a
         human prior for a pig) tilt the whole world to match it. None fits it as the paper does.
+    hold_elevation : bool
+        Beyond the paper: the camera's elevation held at ``elevation`` (not fitted), as a camera
+        on a tripod pans but does not tilt. With the roll held too, the world's vertical stays
+        the picture's everywhere in it, whatever the prior: for a figure unlike its prior (a pig
+        lifted with a human clip), whose fitted camera would tilt to make the prior look like it.
     progress : callable, optional
         ``progress("camera", done, total)`` per frame.
 
@@ -180,16 +186,25 @@ def estimate_camera(
     centre = np.array([width / 2, height / 2])
     near = 1e-3  # metres: a marker nearer the camera than this is treated as out of sight
 
-    held = None if roll is None else float(np.radians(roll))
-    if held is not None:
-        previous[2] = held
+    held = {}  # extrinsic index -> its value, radians: those not fitted
+    if hold_elevation:
+        held[1] = float(np.radians(elevation))
+    if roll is not None:
+        held[2] = float(np.radians(roll))
+    free = np.array([k for k in range(6) if k not in held])
+    for k, value in held.items():
+        previous[k] = value
 
     def full(q):
-        """The six extrinsics from the fitted ones (roll put back when it is held)."""
-        return q if held is None else np.concatenate([q[:2], [held], q[2:]])
+        """The six extrinsics from the fitted ones (the held ones put back)."""
+        p = np.empty(6)
+        p[free] = q
+        for k, value in held.items():
+            p[k] = value
+        return p
 
     def fitted(p):
-        return p if held is None else np.delete(p, 2)
+        return p[free]
 
     def residuals(q, i, frames, anchor):
         p = full(q)

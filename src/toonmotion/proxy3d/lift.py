@@ -115,6 +115,7 @@ def lift(
     camera_weights: CameraWeights | None = None,
     still_camera: bool = False,
     up: float | None = 0.0,
+    hold_elevation: bool = False,
     skeleton_weights: SkeletonWeights | None = None,
     smooth: float = 1.0,
     progress: Progress | None = None,
@@ -161,6 +162,12 @@ def lift(
         gravity and the exports stand as the drawing does); None fits the camera's roll per frame
         as the paper does, which lets a prior whose posture differs from the drawn figure's (a
         human prior for a four-legged character) tilt the world to match.
+    hold_elevation : bool
+        The camera keeps the view's elevation (it pans but does not tilt;
+        :func:`~toonmotion.proxy3d.camera_fit.estimate_camera`'s ``hold_elevation``): with ``up``
+        held, the world's vertical is the picture's everywhere. For a figure unlike its prior (a
+        four-legged character lifted with a human clip), whose fitted camera tilts to make the
+        prior look like it.
     camera_weights, skeleton_weights : optional
         Eq. 2's and eq. 16's weights.
     smooth : float
@@ -216,7 +223,8 @@ def lift(
     clock = time.perf_counter()
     camera = estimate_camera(markers, warped, azimuth=azimuth, elevation=elevation, focal=f, width=width,
                              height=height, weights=camera_weights, still=still_camera,
-                             roll=None if up is None else -float(up), progress=progress)
+                             roll=None if up is None else -float(up), hold_elevation=hold_elevation,
+                             progress=progress)
     camera_px = float(np.linalg.norm(camera.project(warped.positions) - markers.positions, axis=-1).mean())
     times["camera"] = _since(clock)
 
