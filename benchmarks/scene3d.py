@@ -18,7 +18,8 @@ the frames per second of the whole ``toonmotion scene`` command writing an MP4 (
 reading, simulating, compositing and encoding). Line 3, the cloth scene: a scarf at ``--scarf``
 and a skirt round ``--skirt`` (MuJoCo flexes, rendered as triangles), the same stages and
 ``total_ms`` (goal <= 80), ``instabilities`` (runs that stopped with an unstable simulation, goal
-0), the cloth's largest edge stretch and ``up_err_deg``.
+0), the cloth's largest edge stretch and ``up_err_deg``; an element the scene refuses to build on
+the proxy (a skirt round a level body's hips) is listed under ``refused`` with its message.
 """
 
 import os
@@ -41,6 +42,7 @@ from toonmotion.errors import SceneError  # noqa: E402
 from toonmotion.io.frames import lay_on, load_frames  # noqa: E402
 from toonmotion.io.proxy_json import load_proxy  # noqa: E402
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth  # noqa: E402
+from toonmotion.scene.build import build_scene  # noqa: E402
 from toonmotion.scene.elements import Balloon, Balls, Scarf, Skirt  # noqa: E402
 
 SHARED_MOCAP = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
@@ -148,7 +150,15 @@ def cloth_line(proxy, pictures, args, name):
     """Line 3: a scarf and a skirt, as cloth."""
     elements = [Scarf(args.scarf)] if args.scarf in proxy.names else []
     elements += [Skirt(args.skirt)] if args.skirt in proxy.names else []
+    refused = {}  # an element that cannot be built on this proxy (said in one line), not simulated
+    for element in list(elements):
+        try:
+            build_scene(proxy, [element])
+        except SceneError as error:
+            refused[f"{type(element).__name__.lower()}@{element.marker}"] = str(error)
+            elements.remove(element)
     if not elements:
+        print(json.dumps({"scene": name, "refused": refused}), flush=True)
         return
     runs, instabilities = [], 0
     for _ in range(max(1, args.repeat)):
@@ -158,7 +168,8 @@ def cloth_line(proxy, pictures, args, name):
             instabilities += 1
     line = {"scene": name, "size": [proxy.camera.width, proxy.camera.height], "frames": proxy.frame_count,
             "elements": [f"{type(e).__name__.lower()}@{e.marker}" for e in elements],
-            "instabilities": instabilities, "goal_instabilities": 0}
+            "instabilities": instabilities, "goal_instabilities": 0,
+            **({"refused": refused} if refused else {})}
     if runs:
         best = {k: min(r[0][k] for r in runs) for k in runs[0][0]}
         motion = runs[0][1]

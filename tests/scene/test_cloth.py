@@ -138,3 +138,18 @@ def test_a_still_skirt_hangs_clear_of_the_legs():
     s = np.clip((V - a) @ (b - a) / ((b - a) @ (b - a)), 0, 1)
     gap = np.linalg.norm(V - (a + s[:, None] * (b - a)), axis=1) - 0.12
     assert gap.min() > -0.01
+
+
+def test_a_skirt_that_cannot_hang_clear_of_a_level_body_is_refused_in_one_line():
+    """A four-legged figure's hips: the body runs level from them (a pig's, lifted with a human
+    prior, has hip volumes 35 cm wide). No waistband up to three times the skirt's radius clears
+    the body, and a skirt started inside it was flung to nine times its edges' lengths; it is
+    refused before anything is simulated. Hung from a standing figure's hip it builds."""
+    from toonmotion.errors import SceneError
+
+    T = 4
+    level = [[0.0, 0.8, 0], [0.9, 0.8, 0], [0.9, 0.1, 0]]  # hip, shoulders along the body, a front leg
+    with pytest.raises(SceneError, match="cannot hang clear of the body") as refused:
+        build_scene(make_proxy(np.repeat([level], T, axis=0), radius=0.2), [Skirt("m0")])
+    assert "\n" not in str(refused.value) and "'m0'" in str(refused.value)
+    build_scene(standing(T), [Skirt("m0")])

@@ -48,7 +48,7 @@ def scene_command(
     scarf: Annotated[list[str] | None, typer.Option(
         "--scarf", help="A scarf tied at MARKER (a wrist, say; repeat for more).")] = None,
     skirt: Annotated[list[str] | None, typer.Option(
-        "--skirt", help="A skirt of strands hanging in a ring around MARKER (the hips, say).")] = None,
+        "--skirt", help="A skirt of cloth hanging in a ring around MARKER (the hips, say).")] = None,
     rain: Annotated[int, typer.Option(
         "--rain", min=0, help="Rain: this many drops falling over the figure at a time, bouncing off it. "
         "Drops, balls and the links of strings, scarves and skirts count towards the limit scene_bodies."

@@ -480,12 +480,17 @@ def _skirt_xml(name, skirt, proxy, marker, radii, height):
     def rings(r):
         return (r + SKIRT_FLARE * length * f)[:, None, None] * unit + (-length * f)[:, None, None] * [0, 1, 0]
 
-    chosen = 3 * radius
+    chosen = None
     for r in np.linspace(radius, 3 * radius, 21):
         V = rings(r)
         if _gap_ok(V[0], thick, relative) and _gap_ok(P[0, marker] + V[1:].reshape(-1, 3), thick, first):
             chosen = r
             break
+    if chosen is None:  # started inside the body, the cloth would be flung out or crushed
+        raise SceneError(f"a skirt round {proxy.names[marker]!r} cannot hang clear of the body: its "
+                         f"waistband, up to {3 * radius:.2f} m across the marker, meets a limb's volume "
+                         "(a figure whose body lies level, or limbs wider than the skirt); give it another "
+                         "marker")
     V = rings(chosen).reshape(-1, 3)
     drop = P[0, marker, 1] - length - thick * 2
     if drop < 0:  # the hem would start in the ground: shorten the fall, keep the flare

@@ -101,6 +101,14 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
     SceneMotion
     """
     mujoco = _mujoco()
+    try:
+        return _simulate(mujoco, scene, proxy, progress)
+    except mujoco.FatalError as error:  # MuJoCo's own errors (its arena full, say): one line
+        raise SceneError(f"the simulation stopped: {str(error).splitlines()[0]} (fewer or smaller elements "
+                         "may fit)") from None
+
+
+def _simulate(mujoco, scene, proxy, progress):
     model = scene.model
     data = mujoco.MjData(model)
     T = proxy.frame_count
