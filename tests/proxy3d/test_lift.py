@@ -196,6 +196,32 @@ def test_a_figure_lower_than_its_prior_tilts_the_camera_unless_the_elevation_is_
     assert np.abs(seen[:, 1, 0] - seen[:, 0, 0]).max() < 1e-9
 
 
+def test_the_ground_can_be_the_drawn_figure_s_lowest_path(truth):
+    """The walk drawn crouched (half its height) from the side, lifted with the walk standing as the
+    prior and the camera level: on the prior's floor its feet float; with ground="feet" the whole
+    proxy and its camera move down together, so every picture is the same, and the figure's lowest
+    path is the ground."""
+    from toonmotion.proxy3d.lift import lowest_path
+
+    view = (90.0, 0.0)
+    middle = truth.positions.reshape(-1, 3).mean(axis=0)
+    ext = np.concatenate([np.radians([*view, 0.0]), middle + 7 * view_direction(*view)])
+    level = PerspectiveCamera(FOCAL, *IMAGE, np.tile(ext, (truth.frame_count, 1)))
+    drawn = Markers(truth.names, level.project(truth.positions * [1.0, 0.5, 1.0]), fps=truth.fps)
+    floor, _ = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, still_camera=True, hold_elevation=True)
+    feet, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, still_camera=True,
+                        hold_elevation=True, ground="feet")
+    lowest = lowest_path(floor.points, floor.radii, floor.limbs)
+    assert lowest > 0.2  # in the air on the prior's floor
+    assert report.ground_shift == pytest.approx(-lowest)
+    assert abs(lowest_path(feet.points, feet.radii, feet.limbs)) < 1e-12
+    np.testing.assert_allclose(feet.points, floor.points - [0, lowest, 0], atol=1e-12)
+    seen = feet.camera.project(feet.points)
+    np.testing.assert_allclose(seen, floor.camera.project(floor.points), atol=1e-9)
+    with pytest.raises(ProxyError, match="'prior'.*'feet'"):
+        lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, ground="floor")
+
+
 @pytest.mark.xfail(strict=True, reason="issue 45: with a prior of another motion the view search is biased "
                    "(the walk lifted with the CMU run: about 20 degrees off, and it does not know)")
 def test_the_view_is_found_with_a_prior_of_another_motion(truth):

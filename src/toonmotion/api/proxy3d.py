@@ -43,6 +43,7 @@ def lift_proxy(
     still_camera: bool = False,
     up: float | None = 0.0,
     hold_elevation: bool = False,
+    ground: str = "prior",
     skeleton_weights: SkeletonWeights | None = None,
     progress: Progress | None = None,
 ) -> tuple[Proxy, LiftReport]:
@@ -71,10 +72,13 @@ def lift_proxy(
         The clip's frames to use, as a slice.
     view : (azimuth, elevation), optional
         Degrees; searched when not given.
-    focal, size, frames, widths, units, camera_weights, still_camera, up, hold_elevation, skeleton_weights
+    focal, size, frames, widths, units, camera_weights, still_camera, up, hold_elevation, ground
         As :func:`toonmotion.proxy3d.lift.lift` (``up``: the world's up in the picture, degrees
         clockwise; 0 a level picture, None the camera's roll fitted; ``hold_elevation``: the
-        camera keeps the view's elevation, for a figure unlike its prior).
+        camera keeps the view's elevation, for a figure unlike its prior; ``ground``: "prior",
+        the clip's floor, or "feet", the markers' lowest path).
+    skeleton_weights : SkeletonWeights, optional
+        As :func:`toonmotion.proxy3d.lift.lift`.
     extra : sequence of BvhClip
         Further clips for the skeleton's PCA subspace, matched the same way.
     progress : callable, optional
@@ -121,7 +125,7 @@ def lift_proxy(
     others = [prior_from_bvh(c, drawn.names, joint_map=joint_map) for c in extra]
     proxy, report = lift(drawn, matched, view=view, focal=focal, size=size, frames=frames, widths=widths,
                          units=units, extra=others, camera_weights=camera_weights,
-                         still_camera=still_camera, up=up, hold_elevation=hold_elevation,
+                         still_camera=still_camera, up=up, hold_elevation=hold_elevation, ground=ground,
                          skeleton_weights=skeleton_weights, progress=progress)
     return proxy, replace(report, left_out=left_out)
 

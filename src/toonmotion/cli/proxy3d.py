@@ -58,6 +58,10 @@ def lift_command(
         "--hold-elevation", help="The camera keeps the view's elevation (it pans, it does not tilt): the "
         "world's vertical stays the picture's, for a figure unlike its prior (four legs on a human clip)."
     )] = False,
+    ground: Annotated[str, typer.Option(
+        "--ground", help="Where the ground (Y = 0) is: 'prior', the clip's floor, or 'feet', the drawn "
+        "markers' lowest path (for a figure unlike its prior, which the clip's floor leaves in the air)."
+    )] = "prior",
     size: Annotated[str | None, typer.Option(
         "--size", help="Image WxH pixels \\[default: the frames', else the markers' extent].")] = None,
     frames: Annotated[Path | None, typer.Option(
@@ -100,7 +104,7 @@ def lift_command(
         proxy, found = api.lift_proxy(
             markers, clip, joint_map=_pairs(joint_map, "--map"), segment=_segment(segment),
             view=None if view is None else options.numbers(view, 2, "--view"),  # type: ignore[arg-type]
-            focal=focal, still_camera=still_camera, up=_up(up), hold_elevation=hold_elevation,
+            focal=focal, still_camera=still_camera, up=_up(up), hold_elevation=hold_elevation, ground=ground,
             size=options.size(size), frames=pictures,
             widths=overrides,
             units=_units(units), extra=[load_bvh(p) for p in extra or ()], progress=report,

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import AmbiguousViewError, ProxyError
 from toonmotion.progress import Progress
+from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.camera_fit import CameraWeights, estimate_camera
 from toonmotion.proxy3d.markers import Markers
 from toonmotion.proxy3d.orthographic import ViewFit, find_view, limb_angle, view_cost
@@ -35,6 +36,9 @@ from toonmotion.proxy3d.volumes import collision_radii, drawn_widths
 # The default image, when neither frames nor a size are given: the markers' extent from the
 # origin, plus this fraction.
 MARGIN = 0.05
+# The quantile, over the frames, of the figure's lowest reach taken as the ground (ground="feet"):
+# low enough that a jump's frames in the air do not lift it, above a single stray frame.
+GROUND_SHIFT_SHARE = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,6 +81,9 @@ class LiftReport:
         The drawn figure's size: the median over frames of its markers' bounding-box diagonal.
     left_out : tuple of str
         A motion's joints that were not lifted (no joint of the prior matches them).
+    ground_shift : float
+        Metres the proxy was raised to stand on its markers' lowest path (``ground="feet"``; 0
+        on the prior's floor).
     """
 
     azimuth: float
@@ -96,6 +103,7 @@ class LiftReport:
     figure_px: float = 0.0
     up: float | None = 0.0
     left_out: tuple[str, ...] = ()
+    ground_shift: float = 0.0
 
 
 def lift(
@@ -116,6 +124,7 @@ def lift(
     still_camera: bool = False,
     up: float | None = 0.0,
     hold_elevation: bool = False,
+    ground: str = "prior",
     skeleton_weights: SkeletonWeights | None = None,
     smooth: float = 1.0,
     progress: Progress | None = None,
@@ -168,6 +177,11 @@ def lift(
         held, the world's vertical is the picture's everywhere. For a figure unlike its prior (a
         four-legged character lifted with a human clip), whose fitted camera tilts to make the
         prior look like it.
+    ground : {"prior", "feet"}
+        Where the ground (Y = 0) is: the prior clip's floor, or the drawing's own, the lowest path
+        of its markers (:func:`lowest_path`): for a figure unlike its prior, whose markers the
+        prior's floor leaves in the air. The whole proxy and its camera move together, so every
+        picture stays as it was.
     camera_weights, skeleton_weights : optional
         Eq. 2's and eq. 16's weights.
     smooth : float
@@ -186,6 +200,9 @@ def lift(
         Markers and prior that do not match, a prior too short to align, frames that do not fit
         the markers, a camera that cannot see them.
     """
+    if ground not in ("prior", "feet"):
+        raise ProxyError(f"the ground is 'prior' (the clip's floor) or 'feet' (the markers' lowest path), "
+                         f"got {ground!r}")
     times: dict[str, float] = {}
     clock = time.perf_counter()
     in_metres, unit = prior_in_metres(prior, units)
@@ -252,14 +269,40 @@ def lift(
     skeleton = skeleton_proxy(markers, warped, R, upper=chosen_upper, extra=others, weights=skeleton_weights)
     times["skeleton"] = _since(clock)
 
-    proxy = Proxy(names=markers.names, parents=warped.parents, fps=markers.fps, camera=camera, points=points,
-                  radii=radii, skeleton=skeleton.positions, rest=skeleton.rest,
+    lift_by = -lowest_path(points, radii, warped.limbs) if ground == "feet" else 0.0
+    up_by = np.array([0.0, lift_by, 0.0])
+    extrinsics = camera.extrinsics.copy()
+    extrinsics[:, 4] += lift_by  # the camera moves with the world: every picture stays as it was
+    camera = PerspectiveCamera(camera.focal, camera.width, camera.height, extrinsics)
+    proxy = Proxy(names=markers.names, parents=warped.parents, fps=markers.fps, camera=camera,
+                  points=points + up_by, radii=radii, skeleton=skeleton.positions + up_by, rest=skeleton.rest,
                   limb_rotations=skeleton.rotations)
     report = LiftReport(azimuth=azimuth, elevation=elevation, view_found=found, view_cost=cost, twin=twin,
                         second=second, units=unit, prior_frames=alignment.frames,
                         alignment_cost=alignment.cost, camera_px=camera_px, reproj_px=reproj, capped=capped,
-                        warped=warped, times_ms=times, figure_px=_figure_size(markers), up=up)
+                        warped=warped, times_ms=times, figure_px=_figure_size(markers), up=up,
+                        ground_shift=lift_by)
     return proxy, report
+
+
+def lowest_path(points: NDArray[np.float64], radii: NDArray[np.float64] | None, limbs: NDArray[np.int64],
+                share: float = GROUND_SHIFT_SHARE) -> float:
+    """The height of the ground the markers stand on: the lowest reach of the figure on each frame
+    (its lowest marker less the radius of the limbs' volumes there), taken at the ``share``
+    quantile over the frames (a jump's frames in the air do not lift it; a stray frame's dip does
+    not sink it), metres.
+
+    >>> P = np.zeros((10, 2, 3)); P[:, 1, 1] = 1.0; P[:, 0, 1] = 0.2; P[9, 0, 1] = -0.5
+    >>> round(lowest_path(P, None, np.array([[1, 0]])), 6)
+    0.2
+    """
+    reach = points[..., 1].copy()
+    if radii is not None and len(limbs):
+        ends = np.zeros(points.shape[:2])
+        for end in (0, 1):  # a marker's volume reaches as far as the widest limb end at it
+            np.maximum.at(ends.T, limbs[:, end], radii[:, :, end].T)
+        reach -= ends
+    return float(np.quantile(reach.min(axis=1), share, method="higher"))
 
 
 def search_view(markers: Markers, prior: Prior, *, band: float = 0.1, relative: bool = False) -> ViewFit:
