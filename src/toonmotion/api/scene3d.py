@@ -24,6 +24,7 @@ from toonmotion.scene.elements import Element
 from toonmotion.scene.simulate import SceneMotion, simulate
 
 SHADINGS = ("toon", "smooth", "flat")
+STRING_MIN_PX = 1.5  # the narrowest a string is drawn, pixels: a line, not dashes
 
 
 def simulate_scene(proxy: Proxy, elements: Sequence[Element], *,
@@ -118,12 +119,30 @@ def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: s
     if shading not in SHADINGS:
         raise SceneError(f"shading must be one of {', '.join(SHADINGS)}, got {shading!r}")
     layer = render_primitives(proxy.camera, frame, spheres=motion.spheres[frame],
-                              capsules=motion.capsules[frame], colours=motion.colours, shading=shading)
+                              capsules=_drawn_strings(proxy, motion.capsules[frame], frame),
+                              colours=motion.colours, shading=shading)
     if len(motion.cloth_triangles) == 0:
         return layer
     return render_cloth(proxy.camera, frame, motion.cloth_vertices[frame], motion.cloth_triangles,
                         motion.cloth_colours, shading=shading, under=layer,
                         first_id=motion.spheres.shape[1] + motion.capsules.shape[1])
+
+
+def _drawn_strings(proxy: Proxy, capsules: NDArray[np.float64], frame: int) -> NDArray[np.float64]:
+    """The strings' capsules at least :data:`STRING_MIN_PX` across on the picture: a string a few
+    millimetres thick is thinner than a pixel a few metres away, and one ray a pixel caught it on
+    some pixels and not others, a dashed line."""
+    C = np.array(capsules, dtype=np.float64).reshape(-1, 7)
+    if not len(C):
+        return C
+    camera = proxy.camera
+    known = isinstance(frame, int | np.integer) and not isinstance(frame, bool)
+    if not known or not 0 <= frame < camera.frame_count:
+        return C  # render_primitives refuses the frame
+    depth = ((C[:, 0:3] + C[:, 3:6]) / 2 - camera.centres[frame]) @ camera.rotations[frame][2]
+    least = STRING_MIN_PX / 2 * np.maximum(depth, 0.0) / camera.focal  # metres at that depth
+    C[:, 6] = np.maximum(C[:, 6], least)
+    return C
 
 
 def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, shading: str = "toon",

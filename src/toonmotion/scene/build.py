@@ -94,7 +94,7 @@ BALL_DENSITY = 300.0  # kg/m^3, a light rubber ball
 BALLOON_MASS = 0.01  # kg
 AIR_DENSITY = 1.2  # kg/m^3
 AIR_VISCOSITY = 0.000018  # Pa s
-STRING_RADIUS = 0.003  # m, physical; drawn wider (simulate.STRING_DRAWN_PX)
+STRING_RADIUS = 0.003  # m, physical; drawn at least api.scene3d.STRING_MIN_PX across
 # Collision bits: proxies (2) touch elements (3) only; elements touch the ground (1) and each other.
 PROXY_BITS = 'contype="2" conaffinity="0"'
 ELEMENT_BITS = 'contype="1" conaffinity="3"'
