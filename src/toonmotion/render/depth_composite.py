@@ -148,14 +148,26 @@ def composite(drawing: ArrayLike, layer: Layer, drawn: ArrayLike, *, alpha: Arra
     if layer.depth.shape != (H, W):
         h, w = layer.depth.shape
         raise SceneError(f"the render is {w}x{h} pixels but the drawing is {W}x{H}")
-    out = colour.copy()
-    seen = layer.coverage
-    if not seen.any():
-        return out
-    a = np.asarray(alpha, dtype=np.float64)[seen]
-    occlusion = np.asarray(figure, dtype=np.float64)[seen]
-    in_front = np.asarray(drawn, dtype=np.float64)[seen] < layer.depth[seen]
-    a = np.where(occlusion > 0, np.where(in_front, np.maximum(a, occlusion), 0.0), a)
-    mixed = a[:, None] * colour[seen] + (1.0 - a[:, None]) * layer.colour[seen]
-    out[seen] = np.clip(np.round(mixed), 0, 255).astype(np.uint8)
+    out = colour.copy()  # C-ordered
+    _mix(out, layer.colour, layer.depth, layer.coverage, np.asarray(alpha, dtype=np.float64),
+         np.asarray(figure, dtype=np.float64), np.asarray(drawn, dtype=np.float64))
     return out
+
+
+@njit(cache=True)
+def _mix(out, colour, depth, seen, alpha, occlusion, drawn):  # pragma: no cover - compiled
+    """Eq. 25-26 in place on ``out`` (the drawing's colour) where an element is ``seen``: the
+    drawing's alpha where it is in front of the element (at least its occlusion map), none where
+    it is behind, its own off the figure; then the drawing over the element, rounded half to even."""
+    H, W = seen.shape
+    for i in range(H):
+        for j in range(W):
+            if not seen[i, j]:
+                continue
+            a = alpha[i, j]
+            o = occlusion[i, j]
+            if o > 0:
+                a = max(a, o) if drawn[i, j] < depth[i, j] else 0.0
+            for c in range(3):
+                mixed = a * out[i, j, c] + (1.0 - a) * colour[i, j, c]
+                out[i, j, c] = min(max(np.rint(mixed), 0), 255)
