@@ -16,7 +16,7 @@ export UV_PYTHON_DOWNLOADS := never
 # The shared motion-capture clips (../shared beside the checkout), for the 3D scene step of the demo.
 MOCAP ?= ../shared/data/mocap
 
-.PHONY: demo test test-latest lock lint bench fuzz browser validator jscheck clean
+.PHONY: demo test test-latest lock lint bench fuzz browser validator jscheck docs clean
 
 $(UV): $(LOCK)
 	test -x $(TOOLS)/bin/python || $(PYTHON) -m venv $(TOOLS)
@@ -58,10 +58,16 @@ demo: $(STAMP)
 	$(BIN)/toonmotion scene demo/proxy.json --project demo/hero --keys demo/keys.json \
 	  --balloon right_hand --balls left_foot,right_foot -o demo/demo_scene.mp4
 
-test: $(STAMP) browser validator jscheck
+test: $(STAMP) browser validator jscheck docs
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
 	$(BIN)/python -m pytest
+
+# The documentation site (mkdocs.yml: the guides in docs/ and the API reference read from the
+# docstrings) into build/site; --strict fails on a broken link or a reference that does not resolve.
+export NO_MKDOCS_2_WARNING := 1
+docs: $(STAMP)
+	$(BIN)/mkdocs build --strict --quiet
 
 # The suite against the newest versions pyproject.toml allows, with no lock: what a user who installs
 # the library into an environment of their own gets today. A throw-away environment in .venv-latest.
@@ -70,8 +76,9 @@ LATEST := .venv-latest
 test-latest: $(UV) browser validator
 	rm -rf $(LATEST)
 	$(UV) venv --quiet --python $(PYTHON) $(LATEST)
-	$(UV) pip install --quiet --python $(LATEST)/bin/python --refresh -e '.[dev]'
+	$(UV) pip install --quiet --python $(LATEST)/bin/python --refresh -e '.[dev,docs]'
 	$(UV) pip list --python $(LATEST)/bin/python --format freeze > $(LATEST)/versions.txt
+	$(LATEST)/bin/mkdocs build --strict --quiet --site-dir $(LATEST)/site
 	$(LATEST)/bin/python -m pytest
 
 # The editor's browser tests drive Debian's Chromium (Playwright); installed here when missing and
@@ -125,6 +132,8 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/editor.py
 	$(BIN)/python benchmarks/proxy3d.py
 	$(BIN)/python benchmarks/scene3d.py
+	$(BIN)/python benchmarks/view_search.py
+	$(BIN)/python benchmarks/batch.py
 
 clean:
 	rm -rf $(VENV) $(LATEST) $(TOOLS) demo node_modules dist

@@ -4,6 +4,8 @@ The command line (:mod:`toonmotion.cli`) and the editor parse what the user gave
 these, and report. Each is a thin, documented wrapper; the work sits in the layers below
 (``docs/architecture.md``). They are re-exported from the package, so ``toonmotion.rig_image(...)`` works.
 
+Examples
+--------
 >>> import numpy as np
 >>> import toonmotion
 >>> from toonmotion.samples import sample_character
