@@ -24,12 +24,40 @@ def hero():
     return rig_drawing(rgba, skeleton=skeleton)
 
 
-def test_the_package_re_exports_exactly_the_api():
-    assert set(toonmotion._API) == set(api.__all__)
+def test_the_package_re_exports_exactly_the_api_and_the_types_a_user_builds():
+    assert toonmotion.__all__ == ["ToonmotionError", "__version__", *api.__all__]
     for name in api.__all__:
         assert getattr(toonmotion, name) is getattr(api, name)
+    # The types the README and the docs tell users to construct are among them.
+    assert {"Deformer", "DeformSettings", "RigSettings", "TrackSettings", "FilterSettings", "CameraWeights",
+            "SkeletonWeights", "Balloon", "Balls", "Scarf", "Skirt", "Rain"} <= set(api.__all__)
+    # Nothing else: every name is a function or class of the library, none a module.
+    for name in api.__all__:
+        value = getattr(api, name)
+        assert not isinstance(value, type(api)) and value.__module__.startswith("toonmotion."), name
+    namespace: dict[str, object] = {}
+    exec("from toonmotion import *", namespace)
+    assert set(api.__all__) <= set(namespace)
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         toonmotion.nope  # noqa: B018
+
+
+def test_the_docs_api_reference_lists_every_name_of_the_api(tmp_path):
+    """The site's API reference (docs/reference.md, rendered by mkdocstrings) has an entry for every
+    name of toonmotion.api, and the site builds with --strict."""
+    import os
+    import zlib
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
+    build = [sys.executable, "-m", "mkdocs", "build", "--strict", "--quiet", "--site-dir", str(tmp_path)]
+    subprocess.run(build, cwd=root, check=True, env=env)
+    inventory = (tmp_path / "objects.inv").read_bytes()
+    listed = zlib.decompress(inventory.split(b"\n", 4)[4]).decode()
+    # Each entry: canonical name, role, priority, page#anchor, title; the anchor is the name documented.
+    names = {line.split()[3].partition("#")[2] for line in listed.splitlines() if line.strip()}
+    assert {f"toonmotion.api.{n}" for n in api.__all__} <= names
 
 
 def test_importing_the_package_does_not_load_the_heavy_libraries():

@@ -17,32 +17,19 @@ from toonmotion.errors import ToonmotionError
 
 __version__ = "0.1.0"
 
-_API = (
-    "Animation", "Balloon", "Balls", "Capture", "Character", "ContourCapture", "DeformSettings",
-    "EnvironmentItem", "Exported", "FilterSettings", "KeyShapeSpace", "LiftReport", "Markers", "Motion",
-    "PoorlyMatched",
-    "PosedFrame", "Proxy",
-    "RigSettings", "SameDepthOverlap", "SceneMotion", "SketchMatch", "TrackSettings", "VideoCapture",
-    "animate_character", "animate_drawing", "animation_frames", "border_colour", "capture_contours",
-    "capture_parts",
-    "capture_video", "carry_keys", "composite_scene", "correct_regions", "delete_key", "drag_joint",
-    "exaggerate",
-    "environment_report", "export_animation",
-    "export_format", "figure_box", "filter_motion",
-    "keyshape_sheet", "keyshape_space", "lift_proxy", "lift_warnings", "load_project", "motion_in_frames",
-    "move_key",
-    "pick_layer", "pose_character", "pose_view", "preview_proxy", "project_mocap", "redo_edits",
-    "render_elements",
-    "render_pose", "retarget", "retarget_keyposes", "retarget_keyshapes", "retarget_line_of_action",
-    "retarget_parts", "retime", "rig_again", "rig_image", "rotate_joint", "same_depth_overlaps",
-    "save_project", "scene_passes", "set_depth", "set_key", "simulate_scene", "sketch_pose",
-    "setup_warnings", "suggest_joints", "suggested_sizes", "track_footage", "undo_edits", "write_animation",
-)
-
-__all__ = ["ToonmotionError", "__version__", *_API]
+def _api() -> Any:
+    return import_module("toonmotion.api")
 
 
 def __getattr__(name: str) -> Any:
-    if name in _API:
-        return getattr(import_module("toonmotion.api"), name)
+    # The public API is toonmotion.api's __all__ (made from what it imports, not kept by hand),
+    # loaded on first use; so is this package's __all__, for ``from toonmotion import *``.
+    if name == "__all__":
+        return ["ToonmotionError", "__version__", *_api().__all__]
+    if not name.startswith("__") and name in _api().__all__:
+        return getattr(_api(), name)
     raise AttributeError(f"module 'toonmotion' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_api().__all__})

@@ -2,4 +2,5 @@
 
 from toonmotion.cli import main
 
-main()
+if __name__ == "__main__":  # run as a module, not imported (the docs' API reference imports it)
+    main()
