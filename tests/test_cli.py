@@ -141,13 +141,16 @@ COMMANDS = ("rig", "show", "sample", "pose", "sketch", "animate", "filter", "dep
             "tune", "edit", "scene", "export", "batch", "doctor")
 
 
-def test_every_command_is_in_the_readme_command_reference():
+def test_every_command_is_in_the_command_reference_and_the_readme_table():
     from pathlib import Path
 
     assert set(typer.main.get_command(app).commands) == set(COMMANDS)
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    root = Path(__file__).resolve().parents[1]
+    reference = (root / "docs" / "commands.md").read_text(encoding="utf-8")
+    readme = (root / "README.md").read_text(encoding="utf-8")
     for command in COMMANDS:
-        assert f"`toonmotion {command} " in readme, command
+        assert f"`toonmotion {command} " in reference, command
+        assert f"`{command}`" in readme, command
 
 
 @pytest.mark.parametrize("command", [None, *COMMANDS])
