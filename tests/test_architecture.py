@@ -78,3 +78,50 @@ def test_library_code_never_prints():
             if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "print":
                 printing.append(f"{path.relative_to(PACKAGE)}:{node.lineno}")
     assert printing == []
+
+
+def _dotted(path):
+    """A module's dotted name (a package's is its folder's)."""
+    parts = path.relative_to(PACKAGE).with_suffix("").parts
+    return ".".join(("toonmotion", *parts)).removesuffix(".__init__")
+
+
+def _module_imports(path):
+    """Every toonmotion module ``path`` imports, by its dotted name (a name imported from a package
+    that is itself a module counts as that module), wherever the import stands: at the top, in a
+    function or under ``TYPE_CHECKING``."""
+    modules = {_dotted(p) for p in PACKAGE.rglob("*.py")}
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module.split(".")[0] != "toonmotion":
+                continue
+            named = [f"{node.module}.{a.name}" for a in node.names if f"{node.module}.{a.name}" in modules]
+            yield from named or ([node.module] if node.module in modules else [])
+        elif isinstance(node, ast.Import):
+            yield from (a.name for a in node.names if a.name in modules)
+
+
+def test_no_import_cycle():
+    """No module imports, even only for type checking, one that imports it back (directly or round
+    a loop): each idea sits below what uses it. A package's __init__ re-exporting its modules is
+    not a loop."""
+    graph = {}
+    for path in PACKAGE.rglob("*.py"):
+        name = _dotted(path)
+        if path.name != "__init__.py":
+            graph[name] = {m for m in _module_imports(path) if not name.startswith(m + ".")}
+    cycles, state = [], {}
+
+    def visit(node, trail):  # depth first: an edge back to a module still open closes a loop
+        state[node] = "open"
+        for nxt in sorted(graph[node] & graph.keys()):
+            if state.get(nxt) == "open":
+                cycles.append(" -> ".join([*trail[trail.index(nxt):], nxt]))
+            elif nxt not in state:
+                visit(nxt, [*trail, nxt])
+        state[node] = "done"
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [node])
+    assert cycles == []

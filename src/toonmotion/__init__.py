@@ -11,6 +11,7 @@ The public API (:mod:`toonmotion.api`) is re-exported here, loaded on first use 
 """
 
 from importlib import import_module
+from pathlib import Path
 from typing import Any
 
 from toonmotion.errors import ToonmotionError
@@ -23,12 +24,19 @@ def _api() -> Any:
 
 def __getattr__(name: str) -> Any:
     # The public API is toonmotion.api's __all__ (made from what it imports, not kept by hand),
-    # loaded on first use; so is this package's __all__, for ``from toonmotion import *``.
+    # loaded on first use; so is this package's __all__, for ``from toonmotion import *``. A
+    # submodule's name is left to the import system (``from toonmotion import limits`` while the
+    # API itself is being imported must not import the API).
     if name == "__all__":
         return ["ToonmotionError", "__version__", *_api().__all__]
-    if not name.startswith("__") and name in _api().__all__:
+    if not name.startswith("__") and not _is_submodule(name) and name in _api().__all__:
         return getattr(_api(), name)
     raise AttributeError(f"module 'toonmotion' has no attribute {name!r}")
+
+
+def _is_submodule(name: str) -> bool:
+    here = Path(__file__).parent
+    return (here / f"{name}.py").is_file() or (here / name / "__init__.py").is_file()
 
 
 def __dir__() -> list[str]:

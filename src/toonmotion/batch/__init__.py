@@ -6,6 +6,7 @@ submits, collects and writes (:func:`run_batch`), :mod:`~toonmotion.batch.report
 ``report.json`` and ``report.html``. See docs/batch.md.
 """
 
-from toonmotion.batch.run import BatchReport, TaskResult, run_batch
+from toonmotion.batch.report import BatchReport, TaskResult
+from toonmotion.batch.run import run_batch
 
 __all__ = ["BatchReport", "TaskResult", "run_batch"]

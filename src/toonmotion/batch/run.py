@@ -19,12 +19,11 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import Any
 
 from toonmotion.batch.plan import OutputTask, Plan, plan_job, sha256
-from toonmotion.batch.report import make_strip, write_report
+from toonmotion.batch.report import BatchReport, TaskResult, make_strip, write_report
 from toonmotion.batch.work import prepare_motion, render_output, rig_character
 from toonmotion.errors import BatchError, ToonmotionError
 from toonmotion.io.atomic import atomic_path
@@ -39,53 +38,6 @@ from toonmotion.io.batch_manifest import (
 from toonmotion.progress import Progress
 
 MANIFEST = "manifest.json"
-
-
-@dataclass(frozen=True)
-class TaskResult:
-    """How one output task ended.
-
-    Attributes
-    ----------
-    key : str
-        The task's key (SHA-256 of its inputs and options).
-    character, motion, output : str
-        Its pair and output name ("" for a job's single unnamed output).
-    status : {"done", "skipped", "failed"}
-        Computed now, found finished and intact in the manifest, or failed.
-    message : str
-        Why it failed: one line.
-    seconds : float
-        Work on the worker (0 when skipped or failed).
-    files : tuple of str
-        The files it wrote (or had written), relative to the output folder.
-    frames : int
-    """
-
-    key: str
-    character: str
-    motion: str
-    output: str
-    status: str
-    message: str = ""
-    seconds: float = 0.0
-    files: tuple[str, ...] = ()
-    frames: int = 0
-
-
-@dataclass(frozen=True)
-class BatchReport:
-    """What :func:`run_batch` did: every task's result, the wall time, where it wrote."""
-
-    job: Path
-    folder: Path
-    results: tuple[TaskResult, ...]
-    seconds: float
-    dashboard: str | None = None
-
-    def count(self, status: str) -> int:
-        """How many tasks ended as ``status``."""
-        return sum(r.status == status for r in self.results)
 
 
 def run_batch(

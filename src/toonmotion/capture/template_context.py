@@ -19,14 +19,21 @@ squat) matches it badly there, and the neighbours decide, as before.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.template_match import Patch, Templates, confidence, distinct_size, is_distinct, sample
+from toonmotion.capture.template_match import (
+    Context,
+    Templates,
+    confidence,
+    distinct_size,
+    is_distinct,
+    sample,
+)
 
 # The context's side, times the rectangle's larger side. Over the drawings' footage (43 clips,
 # 287.2 px summed without a context), 2 placed the joints 236.0 px off summed, 2.5 241.7, 3
@@ -74,29 +81,20 @@ def at_level(xy: NDArray[np.float64], n: int) -> NDArray[np.float64]:
     return np.asarray(xy, dtype=float) / 2.0**n
 
 
-@dataclass(frozen=True)
-class Context:
-    """A joint's wider view: ``patch`` ``(s, s, 3)`` float32 at pyramid level ``level``, in the
-    rectangle's own frame (:func:`~toonmotion.capture.template_match.sample`)."""
-
-    patch: Patch
-    level: int
-
-    @classmethod
-    def cut(cls, pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int]
-            ) -> Context | None:
-        """The context of a ``size`` rectangle at ``centre`` turned by ``angle`` radians, grown
-        further where it is not distinct (:func:`~toonmotion.capture.template_match.distinct_size`);
-        None where it is not distinct even so (all inside a fill, it would match anywhere in it).
-        """
-        centre = np.asarray(centre, dtype=float)
-        grown = round(CONTEXT_GROWTH * max(size))
-        side = max(distinct_size(pyramid.level(0), centre, (grown, grown)))
-        if not is_distinct(pyramid.level(0), centre, (side, side)):
-            return None
-        level = max(0, math.ceil(math.log2(side / CONTEXT_SIDE)))
-        s = max(1, round(side / 2**level))
-        return cls(sample(pyramid.level(level), at_level(centre, level), angle, (s, s)), level)
+def cut_context(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int]
+                ) -> Context | None:
+    """The context of a ``size`` rectangle at ``centre`` turned by ``angle`` radians, grown further
+    where it is not distinct (:func:`~toonmotion.capture.template_match.distinct_size`); None where
+    it is not distinct even so (all inside a fill, it would match anywhere in it).
+    """
+    centre = np.asarray(centre, dtype=float)
+    grown = round(CONTEXT_GROWTH * max(size))
+    side = max(distinct_size(pyramid.level(0), centre, (grown, grown)))
+    if not is_distinct(pyramid.level(0), centre, (side, side)):
+        return None
+    level = max(0, math.ceil(math.log2(side / CONTEXT_SIDE)))
+    s = max(1, round(side / 2**level))
+    return Context(sample(pyramid.level(level), at_level(centre, level), angle, (s, s)), level)
 
 
 def cut_templates(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int]
@@ -104,7 +102,7 @@ def cut_templates(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, s
     """A joint's templates cut from the frame ``pyramid`` holds, with its :class:`Context` (if it
     has one)."""
     return replace(Templates.cut(pyramid.level(0), centre, angle, size),
-                   context=Context.cut(pyramid, centre, angle, size))
+                   context=cut_context(pyramid, centre, angle, size))
 
 
 def place_by_context(pyramid: Pyramid, context: Context, centre: NDArray[np.float64], angle: float,
@@ -128,14 +126,14 @@ def place_by_context(pyramid: Pyramid, context: Context, centre: NDArray[np.floa
     >>> first, later = ground.copy(), ground.copy()
     >>> _ = cv2.ellipse(first, (100, 100), (60, 40), 0, 0, 360, (40, 90, 200), -1)
     >>> _ = cv2.ellipse(later, (109, 100), (60, 40), 8, 0, 360, (40, 90, 200), -1)
-    >>> context = Context.cut(Pyramid(first), np.array([100.0, 100.0]), 0.0, (16, 16))
+    >>> context = cut_context(Pyramid(first), np.array([100.0, 100.0]), 0.0, (16, 16))
     >>> xy, sure = place_by_context(Pyramid(later), context, np.array([104.0, 100.0]), 0.0, 24.0)
     >>> bool(np.hypot(*(xy - [109.0, 100.0])) < 2.0), sure > CONTEXT_CONFIDENCE
     (True, True)
 
     On the plain ground alone, however large, no context is distinct: none is cut.
 
-    >>> Context.cut(Pyramid(ground), np.array([100.0, 100.0]), 0.0, (16, 16)) is None
+    >>> cut_context(Pyramid(ground), np.array([100.0, 100.0]), 0.0, (16, 16)) is None
     True
     """
     n, patch = context.level, context.patch

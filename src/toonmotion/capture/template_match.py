@@ -19,16 +19,12 @@ import functools
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.track_figure import figure_cells, on_figure
-
-if TYPE_CHECKING:  # template_context imports this module
-    from toonmotion.capture.template_context import Context
 
 # Confidence is exp(-d^2 / (2 CONFIDENCE_SCALE^2)), d the RMS difference per channel (grey levels).
 CONFIDENCE_SCALE = 30.0
@@ -157,6 +153,16 @@ def plan_joint(size: tuple[int, int], r: float, w_alpha: float, w_beta: float, p
                      geometric=w_beta * (offsets[:, None] + offsets[None, :]),
                      plain=ssd_at(UPDATE_CONFIDENCE, size), tie=0.25 * 3 * size[0] * size[1],
                      alike=ALIKE_LEVEL**2 * 3 * size[0] * size[1], visible=ssd_at(VISIBLE_CONFIDENCE, size))
+
+
+@dataclass(frozen=True)
+class Context:
+    """A joint's wider view: ``patch`` ``(s, s, 3)`` float32 at pyramid level ``level``, in the
+    rectangle's own frame (:func:`sample`); cut by
+    :func:`~toonmotion.capture.template_context.cut_context`."""
+
+    patch: Patch
+    level: int
 
 
 @dataclass

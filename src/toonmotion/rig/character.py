@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from numbers import Integral, Real
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -13,14 +12,12 @@ from toonmotion.errors import SettingsError
 from toonmotion.geometry.arrays import frozen_array
 from toonmotion.rig.binding import RULES as DECOMPOSITIONS
 from toonmotion.rig.binding import Binding, Correction
+from toonmotion.rig.depth_edit import DepthEdit
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.shape.curve_skeleton import CurveSkeleton
 from toonmotion.shape.mesh import Mesh
 from toonmotion.shape.segment import METHODS
 from toonmotion.shape.silhouette import Silhouette
-
-if TYPE_CHECKING:  # rig.edits imports this module
-    from toonmotion.rig.edits import DepthEdit
 
 
 @dataclass(frozen=True)
