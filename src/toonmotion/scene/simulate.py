@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -108,7 +109,7 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
                          "may fit)") from None
 
 
-def _simulate(mujoco, scene, proxy, progress):
+def _simulate(mujoco: Any, scene: SceneModel, proxy: Proxy, progress: Progress | None) -> SceneMotion:
     model = scene.model
     data = mujoco.MjData(model)
     T = proxy.frame_count
