@@ -211,10 +211,10 @@ def test_the_ground_can_be_the_drawn_figure_s_lowest_path(truth):
     floor, _ = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, still_camera=True, hold_elevation=True)
     feet, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, still_camera=True,
                         hold_elevation=True, ground="feet")
-    lowest = lowest_path(floor.points, floor.radii, floor.limbs)
+    lowest = lowest_path(floor)
     assert lowest > 0.2  # in the air on the prior's floor
     assert report.ground_shift == pytest.approx(-lowest)
-    assert abs(lowest_path(feet.points, feet.radii, feet.limbs)) < 1e-12
+    assert abs(lowest_path(feet)) < 1e-12
     np.testing.assert_allclose(feet.points, floor.points - [0, lowest, 0], atol=1e-12)
     seen = feet.camera.project(feet.points)
     np.testing.assert_allclose(seen, floor.camera.project(floor.points), atol=1e-9)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -269,14 +269,12 @@ def lift(
     skeleton = skeleton_proxy(markers, warped, R, upper=chosen_upper, extra=others, weights=skeleton_weights)
     times["skeleton"] = _since(clock)
 
-    lift_by = -lowest_path(points, radii, warped.limbs) if ground == "feet" else 0.0
-    up_by = np.array([0.0, lift_by, 0.0])
-    extrinsics = camera.extrinsics.copy()
-    extrinsics[:, 4] += lift_by  # the camera moves with the world: every picture stays as it was
-    camera = PerspectiveCamera(camera.focal, camera.width, camera.height, extrinsics)
-    proxy = Proxy(names=markers.names, parents=warped.parents, fps=markers.fps, camera=camera,
-                  points=points + up_by, radii=radii, skeleton=skeleton.positions + up_by, rest=skeleton.rest,
+    proxy = Proxy(names=markers.names, parents=warped.parents, fps=markers.fps, camera=camera, points=points,
+                  radii=radii, skeleton=skeleton.positions, rest=skeleton.rest,
                   limb_rotations=skeleton.rotations)
+    lift_by = -lowest_path(proxy) if ground == "feet" else 0.0
+    if lift_by:
+        proxy = _raised(proxy, lift_by)
     report = LiftReport(azimuth=azimuth, elevation=elevation, view_found=found, view_cost=cost, twin=twin,
                         second=second, units=unit, prior_frames=alignment.frames,
                         alignment_cost=alignment.cost, camera_px=camera_px, reproj_px=reproj, capped=capped,
@@ -285,24 +283,33 @@ def lift(
     return proxy, report
 
 
-def lowest_path(points: NDArray[np.float64], radii: NDArray[np.float64] | None, limbs: NDArray[np.int64],
-                share: float = GROUND_SHIFT_SHARE) -> float:
-    """The height of the ground the markers stand on: the lowest reach of the figure on each frame
-    (its lowest marker less the radius of the limbs' volumes there), taken at the ``share``
-    quantile over the frames (a jump's frames in the air do not lift it; a stray frame's dip does
-    not sink it), metres.
+def lowest_path(proxy: Proxy, share: float = GROUND_SHIFT_SHARE) -> float:
+    """The height of the ground the proxy stands on: the figure's lowest reach on each frame (its
+    lowest marker less its joint sphere's radius, :attr:`Proxy.sphere_radii`), taken at the
+    ``share`` quantile over the frames (a jump's frames in the air do not lift it; a stray frame's
+    dip does not sink it), metres.
 
+    >>> from toonmotion.proxy3d.camera import PerspectiveCamera
     >>> P = np.zeros((10, 2, 3)); P[:, 1, 1] = 1.0; P[:, 0, 1] = 0.2; P[9, 0, 1] = -0.5
-    >>> round(lowest_path(P, None, np.array([[1, 0]])), 6)
+    >>> cam = PerspectiveCamera(500.0, 64, 48, [[0, 0, 0, 0, 1, 5]] * 10)
+    >>> proxy = Proxy(("foot", "hip"), [-1, 0], 12, cam, P, None, P, [[0.0, 0.8, 0]], [[[0.0, 0, 0, 1]]] * 10)
+    >>> round(lowest_path(proxy), 6)
     0.2
     """
-    reach = points[..., 1].copy()
-    if radii is not None and len(limbs):
-        ends = np.zeros(points.shape[:2])
-        for end in (0, 1):  # a marker's volume reaches as far as the widest limb end at it
-            np.maximum.at(ends.T, limbs[:, end], radii[:, :, end].T)
-        reach -= ends
+    reach = proxy.points[..., 1]
+    spheres = proxy.sphere_radii
+    if spheres is not None:
+        reach = reach - spheres
     return float(np.quantile(reach.min(axis=1), share, method="higher"))
+
+
+def _raised(proxy: Proxy, by: float) -> Proxy:
+    """``proxy`` and its camera moved up by ``by`` metres together: every picture stays as it was."""
+    up = np.array([0.0, by, 0.0])
+    extrinsics = proxy.camera.extrinsics.copy()
+    extrinsics[:, 4] += by
+    camera = PerspectiveCamera(proxy.camera.focal, proxy.camera.width, proxy.camera.height, extrinsics)
+    return replace(proxy, camera=camera, points=proxy.points + up, skeleton=proxy.skeleton + up)
 
 
 def search_view(markers: Markers, prior: Prior, *, band: float = 0.1, relative: bool = False) -> ViewFit:
