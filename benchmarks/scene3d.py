@@ -20,6 +20,8 @@ and a skirt round ``--skirt`` (MuJoCo flexes, rendered as triangles), the same s
 ``total_ms`` (goal <= 80), ``instabilities`` (runs that stopped with an unstable simulation, goal
 0), the cloth's largest edge stretch and ``up_err_deg``; an element the scene refuses to build on
 the proxy (a skirt round a level body's hips) is listed under ``refused`` with its message.
+Line 4, the cape scene: a cape from ``--cape LEFT,RIGHT`` (its top row driven behind the two
+markers), measured as line 3 (``''`` for none).
 """
 
 import os
@@ -43,7 +45,7 @@ from toonmotion.io.frames import lay_on, load_frames  # noqa: E402
 from toonmotion.io.proxy_json import load_proxy  # noqa: E402
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth  # noqa: E402
 from toonmotion.scene.build import build_scene  # noqa: E402
-from toonmotion.scene.elements import Balloon, Balls, Scarf, Skirt  # noqa: E402
+from toonmotion.scene.elements import Balloon, Balls, Cape, Scarf, Skirt  # noqa: E402
 
 SHARED_MOCAP = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
 TOONMOTION = [sys.executable, "-m", "toonmotion.cli"]
@@ -100,6 +102,8 @@ def main():
     parser.add_argument("--balls", default="left_foot,right_foot", help="Markers with balls in their path.")
     parser.add_argument("--scarf", default="right_hand", help="Marker a scarf is tied at (cloth line).")
     parser.add_argument("--skirt", default="hip", help="Marker a skirt hangs round (cloth line).")
+    parser.add_argument("--cape", default="left_shoulder,right_shoulder",
+                        help="The figure's left and right shoulders, a cape between them (cape line).")
     parser.add_argument("--prior", type=Path, default=SHARED_MOCAP / "cmu_16_07_jump.bvh",
                         help="The demo's prior clip.")
     parser.add_argument("--repeat", type=int, default=3, help="Runs per stage; the best counts.")
@@ -133,7 +137,13 @@ def main():
         print(json.dumps({"command": "toonmotion scene -> mp4", "frames": proxy.frame_count,
                           "seconds": round(seconds, 2), "fps": round(proxy.frame_count / seconds, 2)}),
               flush=True)
-        cloth_line(proxy, pictures, args, "demo cloth" if args.proxy is None else f"{proxy_path} cloth")
+        name = "demo" if args.proxy is None else str(proxy_path)
+        cloth = [Scarf(args.scarf)] if args.scarf in proxy.names else []
+        cloth += [Skirt(args.skirt)] if args.skirt in proxy.names else []
+        cloth_line(proxy, pictures, cloth, args.repeat, f"{name} cloth")
+        pair = [m for m in args.cape.split(",") if m]
+        if len(pair) == 2 and set(pair) <= set(proxy.names):
+            cloth_line(proxy, pictures, [Cape(*pair)], args.repeat, f"{name} cape")
 
 
 def stretch(motion):
@@ -146,28 +156,33 @@ def stretch(motion):
     return float(np.abs(length / length[:1] - 1).max())
 
 
-def cloth_line(proxy, pictures, args, name):
-    """Line 3: a scarf and a skirt, as cloth."""
-    elements = [Scarf(args.scarf)] if args.scarf in proxy.names else []
-    elements += [Skirt(args.skirt)] if args.skirt in proxy.names else []
+def named(element):
+    """``scarf@right_hand``, ``cape@left_shoulder,right_shoulder``."""
+    held = f"{element.left},{element.right}" if isinstance(element, Cape) else element.marker
+    return f"{type(element).__name__.lower()}@{held}"
+
+
+def cloth_line(proxy, pictures, elements, repeat, name):
+    """Lines 3 and 4: cloth ``elements`` on the proxy, timed, best of ``repeat``."""
+    elements = list(elements)
     refused = {}  # an element that cannot be built on this proxy (said in one line), not simulated
     for element in list(elements):
         try:
             build_scene(proxy, [element])
         except SceneError as error:
-            refused[f"{type(element).__name__.lower()}@{element.marker}"] = str(error)
+            refused[named(element)] = str(error)
             elements.remove(element)
     if not elements:
         print(json.dumps({"scene": name, "refused": refused}), flush=True)
         return
     runs, instabilities = [], 0
-    for _ in range(max(1, args.repeat)):
+    for _ in range(max(1, repeat)):
         try:
             runs.append(stages(proxy, pictures, elements))
         except SceneError:
             instabilities += 1
     line = {"scene": name, "size": [proxy.camera.width, proxy.camera.height], "frames": proxy.frame_count,
-            "elements": [f"{type(e).__name__.lower()}@{e.marker}" for e in elements],
+            "elements": [named(e) for e in elements],
             "instabilities": instabilities, "goal_instabilities": 0,
             **({"refused": refused} if refused else {})}
     if runs:

@@ -1,4 +1,5 @@
-"""Scarves and skirts as cloth (issue 45, item 3): MuJoCo flexes pinned to their markers, stable on
+"""Scarves, skirts and capes as cloth (issue 45, item 3): MuJoCo flexes pinned to their markers (a
+cape's top row driven behind two), stable on
 any proxy (a six-armed figure, capped or odd limb widths), rendered as triangles with depth."""
 
 import numpy as np
@@ -6,11 +7,19 @@ import pytest
 
 from tests.scene.test_scene import CAMERA_Z, FOCAL, FPS, H, W, kicking, make_proxy, standing, waving
 from toonmotion.api import render_elements, simulate_scene
+from toonmotion.errors import SceneError
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.depth_composite import composite
-from toonmotion.scene.build import SCARF_BODIES, build_scene, figure_height, scene_bodies
-from toonmotion.scene.elements import SCARF_LENGTH, SCARF_WIDTH, Balls, Scarf, Skirt
+from toonmotion.scene.build import (
+    CAPE_BODIES,
+    CAPE_COLUMNS,
+    SCARF_BODIES,
+    build_scene,
+    figure_height,
+    scene_bodies,
+)
+from toonmotion.scene.elements import CAPE_LENGTH, SCARF_LENGTH, SCARF_WIDTH, Balls, Cape, Scarf, Skirt
 
 
 def test_a_scarf_is_a_flex_of_triangles_pinned_to_its_marker_s_body():
@@ -145,7 +154,6 @@ def test_a_skirt_that_cannot_hang_clear_of_a_level_body_is_refused_in_one_line()
     prior, has hip volumes 35 cm wide). No waistband up to three times the skirt's radius clears
     the body, and a skirt started inside it was flung to nine times its edges' lengths; it is
     refused before anything is simulated. Hung from a standing figure's hip it builds."""
-    from toonmotion.errors import SceneError
 
     T = 4
     level = [[0.0, 0.8, 0], [0.9, 0.8, 0], [0.9, 0.1, 0]]  # hip, shoulders along the body, a front leg
@@ -153,3 +161,93 @@ def test_a_skirt_that_cannot_hang_clear_of_a_level_body_is_refused_in_one_line()
         build_scene(make_proxy(np.repeat([level], T, axis=0), radius=0.2), [Skirt("m0")])
     assert "\n" not in str(refused.value) and "'m0'" in str(refused.value)
     build_scene(standing(T), [Skirt("m0")])
+
+
+def turning(T=48, shoulders=0.4):
+    """A torso that turns a quarter left in its first second, seen from the front: hip, neck and
+    the figure's left (+X, facing the camera) and right shoulders, each a limb from the neck."""
+    t = np.arange(T) / FPS
+    turn = np.pi / 2 * np.minimum(t, 1.0)
+
+    def at(x, y):
+        return np.stack([np.cos(turn) * x, np.full(T, y), -np.sin(turn) * x], 1)
+
+    P = np.stack([at(0, 0.9), at(0, 1.45), at(shoulders / 2, 1.4), at(-shoulders / 2, 1.4)], 1)
+    names, parents = ("hip", "neck", "left", "right"), np.array([-1, 0, 1, 1])
+    camera = PerspectiveCamera(FOCAL, W, H, [[0, 0, 0, 0, 1, CAMERA_Z]] * T)
+    rest = P[0, 1:] - P[0, parents[1:]]
+    turns = np.tile([0.0, 0, 0, 1], (T, 3, 1))
+    return Proxy(names, parents, FPS, camera, P, np.full((T, 3, 2), 0.06), np.repeat(P[:1], T, axis=0),
+                 rest, turns)
+
+
+def _behind(proxy, motion):
+    """How far each cape vertex is behind the shoulders' midpoint, along (right - left) x up, (T, V)."""
+    P = proxy.points
+    across = P[:, 3] - P[:, 2]
+    back = np.stack([-across[:, 2], np.zeros(len(P)), across[:, 0]], 1)
+    back /= np.linalg.norm(back, axis=1, keepdims=True)
+    mid = (P[:, 2] + P[:, 3]) / 2
+    return np.einsum("tvk,tk->tv", motion.cloth_vertices - mid[:, None], back)
+
+
+def test_a_cape_hangs_behind_the_shoulders_and_turns_with_them():
+    proxy = turning()
+    scene = build_scene(proxy, [Cape("left", "right")])
+    assert scene_bodies([Cape("left", "right")]) == CAPE_BODIES
+    assert scene.model.nbody - (1 + 4 + 3) == CAPE_BODIES  # the world, the markers, the limbs
+    motion = simulate_scene(proxy, [Cape("left", "right")])
+    V = motion.cloth_vertices
+    # The top row is where the shoulders put it on every frame, to the float: across the back, one
+    # width (the shoulders'), behind them and level with them.
+    top = V[:, :CAPE_COLUMNS]
+    np.testing.assert_allclose(top, scene.driven_paths, atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(top[:, -1] - top[:, 0], axis=1), 0.4, atol=1e-9)
+    behind = _behind(proxy, motion)
+    assert (behind[:, :CAPE_COLUMNS] > 0.06).all()  # clear of the shoulders' 6 cm spheres
+    # All of it stays behind as the figure turns a quarter (the back moves from -Z to -X), and it
+    # hangs: the hem is the cape's length below the top on the still frames, edges keep their lengths.
+    assert (behind > 0.0).all()
+    hem_drop = top[:, :, 1].mean(1) - V[:, -CAPE_COLUMNS:, 1].mean(1)
+    length = CAPE_LENGTH * figure_height(proxy)
+    np.testing.assert_allclose(hem_drop[[0, -1]], length, rtol=0.05)
+    assert np.abs(V[-1, :, 0]).max() < 0.25 and V[-1, :, 0].max() < 0  # turned: behind is now -X
+    assert _stretch(motion) < 0.2
+
+
+def test_a_cape_is_stable_when_the_shoulders_jump_part_and_close():
+    """A lifted clip's first frame may be off (the demo's proxy: shoulders 0.46 m apart, then 0.23
+    m on the next, the neck 0.1 m lower); the top row keeps one width and the cape stays whole."""
+    proxy = turning(T=24)
+    P = proxy.points.copy()
+    P[0, 2:] += (P[0, 2:] - P[0, 1]) * 1.0 + [0.0, 0.1, 0.0]  # frame 0: shoulders twice as far, higher
+    P[0, 1] += [0.0, 0.1, 0.0]
+    proxy = Proxy(proxy.names, proxy.parents, FPS, proxy.camera, P, proxy.radii, proxy.skeleton,
+                  proxy.rest, proxy.limb_rotations)
+    motion = simulate_scene(proxy, [Cape("left", "right")])
+    assert (_behind(proxy, motion) > 0.0).all()
+    assert _stretch(motion) < 0.2
+
+
+def test_a_cape_that_cannot_hang_behind_or_between_stacked_markers_is_refused_in_one_line():
+    with pytest.raises(SceneError, match="'hip' and 'neck' are one above the other on the first frame"):
+        build_scene(turning(T=2), [Cape("hip", "neck")])
+    # A four-legged figure's shoulders: its body runs level behind them, where the cape would hang.
+    level = turning(T=2)
+    P = level.points.copy()
+    P[:, 0] = [0.0, 1.4, -0.9]
+    level = Proxy(level.names, level.parents, FPS, level.camera, P, level.radii, P, level.rest,
+                  level.limb_rotations)
+    with pytest.raises(SceneError) as refused:
+        build_scene(level, [Cape("left", "right")])
+    assert str(refused.value).startswith("a cape from 'left' to 'right' cannot hang clear of the body")
+    assert "\n" not in str(refused.value)
+    with pytest.raises(SceneError, match="got 'left' twice"):
+        Cape("left", "left")
+
+
+def _stretch(motion):
+    V, F = motion.cloth_vertices, motion.cloth_triangles
+    edges = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    length = np.linalg.norm(V[:, edges[:, 0]] - V[:, edges[:, 1]], axis=-1)
+    return float(np.abs(length / length[0] - 1).max())

@@ -21,7 +21,7 @@ from toonmotion.scene.build import (
     figure_height,
     scene_bodies,
 )
-from toonmotion.scene.elements import MAX_SIZE, Balloon, Balls, Rain, Scarf, Skirt
+from toonmotion.scene.elements import MAX_SIZE, Balloon, Balls, Cape, Rain, Scarf, Skirt
 
 HUGE = [
     [Rain(count=1_000_000_000)],
@@ -59,10 +59,10 @@ def test_too_many_bodies_are_refused_at_once_in_one_line(elements):
 
 def test_the_refusal_says_what_the_bodies_are():
     elements = [Rain(count=400), Balls("m2", count=50), Balloon("m2"), Balloon("m2"), Scarf("m1"),
-                Skirt("m0", strands=16)]
-    listed = ("400 drops, 50 balls, 2 balloons of 9 bodies, 1 scarf of 36 cloth points and 1 skirt "
-              "\\(112 cloth points\\)")
-    with pytest.raises(LimitError, match=rf"\({listed}\) is over the limit scene_bodies=500 \(it is 616\)"):
+                Skirt("m0", strands=16), Cape("m1", "m2")]
+    listed = ("400 drops, 50 balls, 2 balloons of 9 bodies, 1 scarf of 36 cloth points, 1 skirt "
+              "\\(112 cloth points\\) and 1 cape of 50 cloth points")
+    with pytest.raises(LimitError, match=rf"\({listed}\) is over the limit scene_bodies=500 \(it is 666\)"):
         check_scene(standing(T=2), elements)
 
 
@@ -87,6 +87,7 @@ SIZES = [
     (lambda s: Skirt("m0", length=s), "a skirt's length", "longer"),
     (lambda s: Skirt("m0", radius=s), "a skirt's radius", "larger"),
     (lambda s: Skirt("m0", width=s), "a skirt's strand width", "wider"),
+    (lambda s: Cape("m0", "m1", length=s), "a cape's length", "longer"),
     (lambda s: Rain(radius=s), "a drop's radius", "larger"),
 ]
 
@@ -109,6 +110,7 @@ def test_a_size_over_five_figure_heights_is_refused_naming_it_the_figure_and_the
     (Balls("wrist"), "balls are laid in the path of 'wrist', which the proxy lacks"),
     (Scarf("wrist"), "a scarf is tied at 'wrist', which the proxy lacks"),
     (Skirt("wrist"), "a skirt hangs round 'wrist', which the proxy lacks"),
+    (Cape("m1", "wrist"), "a cape hangs from 'wrist', which the proxy lacks"),
 ])
 def test_a_missing_marker_is_named_in_good_grammar_for_every_element(element, words):
     """Issue 45: "the balls is held at ..."."""
@@ -135,6 +137,8 @@ def files(tmp_path_factory):
     (["--balloon", "m2", "--balloon-radius", "1e300"], "a balloon's radius (1e+300 m) is larger than 4.5 m"),
     (["--balls", "m2", "--ball-radius", "4.6"], "a ball's radius (4.6 m) is larger than 4.5 m"),
     (["--balls", "wrist"], "balls are laid in the path of 'wrist', which the proxy lacks"),
+    (["--cape", "m1"], "--cape takes two markers, LEFT,RIGHT (the figure's own shoulders), got 'm1'"),
+    (["--cape", "m1,m1"], "a cape hangs between two markers, got 'm1' twice"),
 ])
 def test_the_command_refuses_in_one_line_exit_2_before_reading_the_frames(files, capsys, argv, message):
     out = files / "kept.gif"

@@ -94,7 +94,7 @@ from toonmotion.proxy3d.skeleton import SkeletonWeights
 from toonmotion.render.sequence import write_animation
 from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.sketch import SketchMatch
-from toonmotion.scene.elements import Balloon, Balls, Rain, Scarf, Skirt
+from toonmotion.scene.elements import Balloon, Balls, Cape, Rain, Scarf, Skirt
 from toonmotion.scene.simulate import SceneMotion
 
 # The public API is what this module imports from the library (functions, classes, settings

@@ -39,7 +39,7 @@ def simulate_scene(proxy: Proxy, elements: Sequence[Element], *,
     ----------
     proxy : Proxy
         From :func:`toonmotion.api.lift_proxy` or a proxy file.
-    elements : sequence of Balloon, Balls, Scarf, Skirt or Rain
+    elements : sequence of Balloon, Balls, Scarf, Skirt, Cape or Rain
         :mod:`toonmotion.scene.elements`.
     progress : callable, optional
         ``progress("simulate", done, total)``.

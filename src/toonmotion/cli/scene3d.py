@@ -23,7 +23,7 @@ from toonmotion.io.pose_json import load_keyframes
 from toonmotion.io.proxy_json import load_proxy
 from toonmotion.io.video import animation_format, save_animation
 from toonmotion.scene.build import DEFAULT_LIMB_RADIUS, check_scene
-from toonmotion.scene.elements import MAX_SIZE, Balloon, Balls, Element, Rain, Scarf, Skirt
+from toonmotion.scene.elements import MAX_SIZE, Balloon, Balls, Cape, Element, Rain, Scarf, Skirt
 
 _MOST = f"{MAX_SIZE:g} times the figure's height"
 
@@ -49,9 +49,12 @@ def scene_command(
         "--scarf", help="A scarf tied at MARKER (a wrist, say; repeat for more).")] = None,
     skirt: Annotated[list[str] | None, typer.Option(
         "--skirt", help="A skirt of cloth hanging in a ring around MARKER (the hips, say).")] = None,
+    cape: Annotated[list[str] | None, typer.Option(
+        "--cape", help="A cape of cloth hanging from LEFT,RIGHT (the figure's own left and right "
+        "shoulders) down its back.")] = None,
     rain: Annotated[int, typer.Option(
         "--rain", min=0, help="Rain: this many drops falling over the figure at a time, bouncing off it. "
-        "Drops, balls and the links of strings, scarves and skirts count towards the limit scene_bodies."
+        "Drops, balls, the links of strings and the points of cloth count towards the limit scene_bodies."
     )] = 0,
     ball_count: Annotated[int, typer.Option("--ball-count", min=1, help="Balls per --balls marker.")] = 3,
     ball_radius: Annotated[float | None, typer.Option(
@@ -78,12 +81,13 @@ def scene_command(
     for text in balls or ():
         elements += [Balls(m, count=ball_count, radius=ball_radius) for m in options.names(text)]
     elements += [Scarf(m.strip()) for m in scarf or ()] + [Skirt(m.strip()) for m in skirt or ()]
+    elements += [Cape(*_pair(text)) for text in cape or ()]
     elements += [Rain(count=rain)] if rain else []
     if (frames is None) == (project is None) or (project is None) != (keys is None):
         raise SettingsError("give the drawn frames (--frames) or a project and its keys (--project, --keys)")
     if not elements:
-        options.warn("no elements given (--balloon, --balls, --scarf, --skirt, --rain): the drawing is "
-                     "written as it is")
+        options.warn("no elements given (--balloon, --balls, --scarf, --skirt, --cape, --rain): the drawing "
+                     "is written as it is")
     proxy = load_proxy(source)
     check_scene(proxy, elements)  # markers, bodies and sizes, before the frames are read
     if proxy.radii is None and elements:
@@ -104,7 +108,8 @@ def scene_command(
             _write_passes(passes, api.scene_passes(proxy, motion, shading=shading))
     deepest = f", deepest contact {motion.deepest * 1000:.1f} mm" if len(motion.balls[0]) else ""
     counts = [(sum(isinstance(e, kind) for e in elements), one, many) for kind, one, many in (
-        (Balloon, "balloon", "balloons"), (Scarf, "scarf", "scarves"), (Skirt, "skirt", "skirts"))]
+        (Balloon, "balloon", "balloons"), (Scarf, "scarf", "scarves"), (Skirt, "skirt", "skirts"),
+        (Cape, "cape", "capes"))]
     counts += [(motion.balls.shape[1], "ball", "balls"), (rain, "drop", "drops")]
     parts = [f"{n} {one if n == 1 else many}" for n, one, many in counts if n]
     listed = " and ".join([", ".join(parts[:-1]), parts[-1]] if len(parts) > 1 else parts) or "nothing"
@@ -134,3 +139,12 @@ def _write_passes(folder: Path, passes) -> None:
         save_png(folder / f"beauty_{t:04d}.png", beauty)
         save_png(folder / f"depth_{t:04d}.png", Image.fromarray(depth))
         save_png(folder / f"occlusion_{t:04d}.png", occlusion)
+
+
+def _pair(text: str) -> tuple[str, str]:
+    """``LEFT,RIGHT`` for ``--cape``."""
+    found = options.names(text)
+    if len(found) != 2:
+        raise SettingsError(f"--cape takes two markers, LEFT,RIGHT (the figure's own shoulders), "
+                            f"got {text!r}")
+    return found[0], found[1]

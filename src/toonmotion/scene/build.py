@@ -20,7 +20,9 @@ whose edges keep their lengths (soft equality constraints), declared inside the 
 that its pinned vertices (a scarf's knotted edge, a skirt's waistband) are points of that body
 and move exactly with the marker; every other vertex is a body of its own with three slide
 joints. :func:`_scarf_xml` and :func:`_skirt_xml` build them clear of the proxy's volumes over
-the whole clip (docs/scene3d.md, cloth).
+the whole clip (docs/scene3d.md, cloth). A cape hangs from two markers, so no one body can hold
+it: it is declared in the world, and its top row of vertices is **driven** like the proxy (heavy,
+its positions written every sub-step along a path that follows both shoulders, :func:`_cape_xml`).
 
 World: +Y up, metres, gravity -9.81 m/s^2 along Y (the proxy's frame).
 """
@@ -39,6 +41,7 @@ from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.scene.elements import (
     BALL_RADIUS,
     BALLOON_RADIUS,
+    CAPE_LENGTH,
     MAX_SIZE,
     RAIN_RADIUS,
     SCARF_LENGTH,
@@ -48,6 +51,7 @@ from toonmotion.scene.elements import (
     STRING_LENGTH,
     Balloon,
     Balls,
+    Cape,
     Element,
     Rain,
     Scarf,
@@ -70,6 +74,10 @@ SCARF_BODIES = (SCARF_ROWS - 1) * SCARF_COLUMNS
 SKIRT_ROWS = 8
 MIN_SKIRT_COLUMNS = 6
 SKIRT_FLARE = 0.35
+# A cape's cloth: CAPE_ROWS rows of CAPE_COLUMNS vertices, the top row driven behind the shoulders.
+CAPE_ROWS = 10
+CAPE_COLUMNS = 5
+CAPE_BODIES = CAPE_ROWS * CAPE_COLUMNS
 CLOTH_RADIUS = 0.004  # the cloth's half thickness for contacts, as a fraction of the figure's height
 # Each cloth vertex weighs at least this (kg): lighter ones make the contacts and the edge
 # constraints stiffer than a 2 ms sub-step resolves (measured: 0.3 g vertices jitter on a fast hand).
@@ -134,7 +142,12 @@ class SceneModel:
     default_volumes : bool
         Whether the proxy had no volumes and ``limb_radii`` are defaults.
     cloths : list of (int, int)
-        ``(flex, marker)``: each scarf's and skirt's flex and the marker its pinned vertices move with.
+        ``(flex, marker)``: each cloth's flex and the marker its pinned vertices move with (-1 for a
+        cape, which is held by the world and driven).
+    driven_bodies : (D,) int
+        The capes' top-row vertices, moved by hand every sub-step like the proxy.
+    driven_paths : (T, D, 3) float
+        Where they are on each frame, metres.
     """
 
     model: Any
@@ -150,6 +163,8 @@ class SceneModel:
     default_volumes: bool = False
     rain: list[tuple[int, NDArray[np.float64]]] = field(default_factory=list)
     cloths: list[tuple[int, int]] = field(default_factory=list)
+    driven_bodies: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
+    driven_paths: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 0, 3)))
 
 
 def figure_height(proxy: Proxy) -> float:
@@ -161,7 +176,8 @@ def figure_height(proxy: Proxy) -> float:
 def scene_bodies(elements: list[Element] | tuple[Element, ...]) -> int:
     """How many bodies the elements make MuJoCo simulate: a drop or a ball is one, a balloon its
     :data:`STRING_LINKS` links and itself, a scarf or a skirt its cloth's free vertices
-    (:data:`SCARF_BODIES`; a skirt's ``strands`` columns of ``SKIRT_ROWS - 1``). Counted from the
+    (:data:`SCARF_BODIES`; a skirt's ``strands`` columns of ``SKIRT_ROWS - 1``), a cape all its
+    vertices (:data:`CAPE_BODIES`, the driven top row too). Counted from the
     elements alone, before anything is built.
 
     >>> scene_bodies([Rain(count=100), Balloon("hand"), Skirt("hips", strands=16)])
@@ -184,13 +200,15 @@ def _bodies(element):
         return SCARF_BODIES
     if isinstance(element, Skirt):
         return skirt_columns(element) * (SKIRT_ROWS - 1)
-    raise SceneError(f"a scene element is a Balloon, Balls, Scarf, Skirt or Rain, got "
+    if isinstance(element, Cape):
+        return CAPE_BODIES
+    raise SceneError(f"a scene element is a Balloon, Balls, Scarf, Skirt, Cape or Rain, got "
                      f"{type(element).__name__}")
 
 
 # How a refusal names an element whose marker the proxy lacks.
 _HELD = {Balloon: "a balloon is held at", Balls: "balls are laid in the path of", Scarf: "a scarf is tied at",
-         Skirt: "a skirt hangs round"}
+         Skirt: "a skirt hangs round", Cape: "a cape hangs from"}
 
 
 def check_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> None:
@@ -210,10 +228,12 @@ def check_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     """
     names = list(proxy.names)
     for element in elements:
-        if element.marker is not None and element.marker not in names:
-            held = _HELD.get(type(element), "an element is held at")
-            raise SceneError(f"{held} {element.marker!r}, which the proxy lacks; its markers are "
-                             f"{', '.join(names)}")
+        held_at = (element.left, element.right) if isinstance(element, Cape) else (element.marker,)
+        for marker in held_at:
+            if marker is not None and marker not in names:
+                held = _HELD.get(type(element), "an element is held at")
+                raise SceneError(f"{held} {marker!r}, which the proxy lacks; its markers are "
+                                 f"{', '.join(names)}")
     bodies = scene_bodies(elements)
     if bodies > limits.current().scene_bodies:
         limits.check("scene_bodies", bodies, f"the number of bodies to simulate ({_listed(elements)})",
@@ -252,6 +272,8 @@ def _listed(elements):
     if count(Skirt):
         cloth = plural(skirt_points, "cloth point", "cloth points")
         parts.append(plural(count(Skirt), "skirt", "skirts") + f" ({cloth})")
+    if count(Cape):
+        parts.append(plural(count(Cape), "cape", "capes") + f" of {CAPE_BODIES} cloth points")
     return " and ".join([", ".join(parts[:-1]), parts[-1]] if len(parts) > 1 else parts)
 
 
@@ -268,6 +290,8 @@ def _given_sizes(element):
         return [("a skirt's length", element.length, "longer"),
                 ("a skirt's radius", element.radius, "larger"),
                 ("a skirt's strand width", element.width, "wider")]
+    if isinstance(element, Cape):
+        return [("a cape's length", element.length, "longer")]
     return [("a drop's radius", element.radius, "larger")]
 
 
@@ -295,8 +319,16 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     held_xml: dict[int, list[str]] = {}
     element_xml = []
     cloths: list[tuple[str, int]] = []  # each cloth's flex and the marker holding it
+    capes: list[tuple[str, NDArray[np.float64]]] = []  # each cape's flex and its top row's path
     for i, element in enumerate(elements):
         if isinstance(element, Rain):
+            continue
+        if isinstance(element, Cape):
+            xml, path = _cape_xml(f"e{i}_cape", element, proxy, names.index(element.left),
+                                  names.index(element.right), radii, height)
+            element_xml.append(xml)
+            cloths.append((f"e{i}_cape", -1))
+            capes.append((f"e{i}_cape", path))
             continue
         at = held_xml.setdefault(names.index(element.marker), [])
         if isinstance(element, Balloon):
@@ -372,7 +404,10 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             if isinstance(e, Balloon)]
     flex = lambda name: int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, name))  # noqa: E731
     flexes = [(flex(name), marker) for name, marker in cloths]
-    _damp_cloth(model, [f for f, _ in flexes], [body(f"m{m}") for _, m in flexes])
+    _damp_cloth(model, [f for f, _ in flexes], [body(f"m{m}") if m >= 0 else 0 for _, m in flexes])
+    driven = np.array([_top_row(model, flex(name)) for name, _ in capes], np.int64).reshape(-1)
+    if len(driven):
+        _drive(mujoco, model, driven)
     balls = [geom(name) for name in ball_names]
     rain = [(geom(name), box) for name, box in drops]
     return SceneModel(
@@ -382,7 +417,8 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
         limb_geoms=np.array([[geom(f"l{k}_{s}") for s in range(SEGMENTS)] for k in range(len(proxy.limbs))],
                             dtype=np.int64).reshape(-1, SEGMENTS),
         element_geoms=drawn, colours=colours, held=held, balls=balls, default_volumes=default_volumes,
-        rain=rain, cloths=flexes,
+        rain=rain, cloths=flexes, driven_bodies=driven,
+        driven_paths=np.concatenate([path for _, path in capes], axis=1) if capes else np.zeros((0, 0, 3)),
     )
 
 
@@ -500,6 +536,75 @@ def _skirt_xml(name, skirt, proxy, marker, radii, height):
     return _flex_xml(name, V, F, range(n), CLOTH_DENSITY * area, skirt.colour, thick)
 
 
+def _cape_xml(name, cape, proxy, left, right, radii, height):
+    """A cape: :data:`CAPE_ROWS` x :data:`CAPE_COLUMNS` vertices hanging straight down from a top
+    row that runs from the ``left`` marker to the ``right`` one, set back behind them; and that top
+    row's path over the clip, ``(T, CAPE_COLUMNS, 3)``.
+
+    The top row keeps one width, the shoulders' median distance over the clip, centred between them
+    on every frame: a lifted clip's shoulders may come closer or part (measured on the demo's proxy:
+    0.46 m on its first frame, 0.23 m on the next), and a top row squeezed to half its width buckled
+    the cape and flung it over the head.
+
+    Behind is the horizontal way of ``(right - left) x up`` on each frame (the previous frame's
+    while the shoulders are one above the other), so the top row turns as the shoulders turn. It is
+    set back by the shoulders' largest joint sphere and the cloth's thickness, further (up to 2.5
+    times) until the sheet is clear of the first frame's volumes.
+
+    Raises
+    ------
+    SceneError
+        The shoulders are one above the other on the first frame, or no set-back clears the body.
+    """
+    length = cape.length or CAPE_LENGTH * height
+    thick = CLOTH_RADIUS * height
+    P = proxy.points
+    across = P[:, right] - P[:, left]
+    back = np.stack([-across[:, 2], np.zeros(len(P)), across[:, 0]], axis=1)  # (right - left) x up
+    size = np.linalg.norm(back, axis=1)
+    if size[0] < 1e-3 * height:
+        raise SceneError(f"a cape hangs from two markers side by side, but {cape.left!r} and {cape.right!r} "
+                         "are one above the other on the first frame; give the shoulders")
+    for t in range(len(P)):  # a frame whose shoulders are one above the other keeps the last way
+        back[t] = back[t] / size[t] if size[t] >= 1e-3 * height else back[t - 1]
+    reach = max(_marker_reach(proxy, left, radii), _marker_reach(proxy, right, radii)) + 2 * thick
+    width = float(np.median(np.linalg.norm(across, axis=1)))
+    way = across / np.maximum(np.linalg.norm(across, axis=1), 1e-300)[:, None]
+    s = np.linspace(-0.5, 0.5, CAPE_COLUMNS) * width
+    top = (P[:, left] + P[:, right])[:, None] / 2 + s[None, :, None] * way[:, None]  # (T, CAPE_COLUMNS, 3)
+    fall = np.linspace(0.0, 1.0, CAPE_ROWS)[:, None, None] * [0.0, -length, 0.0]
+    first = [_stack(_first_frame_volumes(proxy, radii))]
+    for d in reach * np.linspace(1.0, 2.5, 7):
+        V = top[0] + back[0] * d + fall
+        if _gap_ok(V, thick, first):
+            break
+    else:
+        raise SceneError(f"a cape from {cape.left!r} to {cape.right!r} cannot hang clear of the body behind "
+                         f"them (set back up to {2.5 * reach:.2f} m): a figure whose body runs level behind "
+                         "its shoulders, or the shoulders swapped (the cape hangs behind (right - left) x "
+                         "up: give the figure's own left first)")
+    if V[-1, 0, 1] < thick:  # the hem would start in the ground: shorten the fall
+        V[1:, :, 1] = V[0, :, 1] + (V[1:, :, 1] - V[0, :, 1]) * max(V[0, 0, 1] - 2 * thick, 1e-3) / length
+    F = _grid_triangles(CAPE_ROWS, CAPE_COLUMNS, ring=False)
+    xml = _flex_xml(name, V.reshape(-1, 3), F, (), CLOTH_DENSITY * width * length, cape.colour, thick)
+    return xml, top + back[:, None] * d
+
+
+def _top_row(model, flex):
+    """A cape's driven vertices' bodies: the first :data:`CAPE_COLUMNS` of its flex."""
+    start = model.flex_vertadr[flex]
+    return model.flex_vertbodyid[start:start + CAPE_COLUMNS]
+
+
+def _drive(mujoco, model, bodies):
+    """Make ``bodies`` (cape vertices moved by hand) as heavy as the proxy and undamped, so the cloth
+    they hold does not drag them off their path within a sub-step."""
+    model.body_mass[bodies] = KINEMATIC_MASS
+    for b in bodies:
+        model.dof_damping[model.body_dofadr[b] + np.arange(model.body_dofnum[b])] = 0.0
+    mujoco.mj_setConst(model, mujoco.MjData(model))
+
+
 def _air(elements):
     """The ``<option>`` attributes of air: MuJoCo's fluid model when a balloon, balls or rain are in
     the scene, none for cloth alone.
@@ -521,12 +626,13 @@ def _flex_xml(name, V, F, pinned, mass, colour, thick):
     mass = max(float(mass), MIN_CLOTH_VERTEX_MASS * len(V))
     points = " ".join(repr(float(c)) for c in np.asarray(V).ravel())
     elements = " ".join(str(int(k)) for k in np.asarray(F).ravel())
+    pins = f'<pin id="{" ".join(str(k) for k in pinned)}"/>' if len(pinned) else ""  # a cape has none
     return (f'<flexcomp name="{name}" type="direct" dim="2" point="{points}" element="{elements}" '
             f'mass="{mass!r}" radius="{thick!r}" rgba="{_rgba(colour)}">'
             f'<contact {ELEMENT_BITS} selfcollide="none" solref="{CLOTH_CONTACT_TIME} 1" '
             f'friction="0.6 0.005 0.001"/>'
             f'<edge equality="true" solref="{CONTACT_TIME} 1" damping="{CLOTH_EDGE_DAMPING}"/>'
-            f'<pin id="{" ".join(str(k) for k in pinned)}"/></flexcomp>')
+            f'{pins}</flexcomp>')
 
 
 def _grid_triangles(rows, columns, ring):

@@ -8,6 +8,8 @@
   (fig. 15's scarves at the wrists).
 - :class:`Skirt`: strands hanging in a ring around a marker (the hips) that swing with it and are
   pushed aside by the legs (a grass skirt; the paper's cloth skirts of figs. 9 and 13 need cloth).
+- :class:`Cape`: a sheet hanging from two markers (the shoulders) down the figure's back
+  (the cloth of the paper's figs. 9 and 13, draped from the shoulders instead of the hips).
 - :class:`Rain`: drops falling over the figure that bounce off it (fig. 12's rain), each sent
   back up when it reaches the ground.
 
@@ -32,6 +34,7 @@ SCARF_WIDTH = 0.05
 SKIRT_LENGTH = 0.22
 SKIRT_RADIUS = 0.1
 SKIRT_WIDTH = 0.03
+CAPE_LENGTH = 0.35
 RAIN_RADIUS = 0.008
 # The largest length or radius an element may be given, in figure heights: twelve times the largest
 # default (the scarf's 0.4), room for any prop a figure holds or kicks, and already more than the
@@ -158,6 +161,42 @@ class Skirt:
 
 
 @dataclass(frozen=True)
+class Cape:
+    """A sheet of cloth hanging from ``left`` to ``right`` (the shoulders) down the figure's back.
+
+    Its top edge runs between the two markers, just behind them, and follows them on every frame:
+    it turns when the shoulders turn. "Behind" is the horizontal way of ``(right - left) x up``,
+    so ``left`` is the figure's own left: a figure facing the camera has its left shoulder on the
+    picture's right. Given the other way round, the cape hangs in front.
+
+    Attributes
+    ----------
+    left, right : str
+        The markers of the figure's left and right shoulders.
+    length : float, optional
+        Metres; default :data:`CAPE_LENGTH` of the figure's height. Its width is the shoulders'
+        median distance over the clip.
+    colour : (r, g, b)
+    """
+
+    left: str
+    right: str
+    length: float | None = None
+    colour: tuple[int, int, int] = (150, 40, 60)
+
+    def __post_init__(self) -> None:
+        if self.left == self.right:
+            raise SceneError(f"a cape hangs between two markers, got {self.left!r} twice")
+        _positive(self.length, "a cape's length")
+        _colour(self.colour)
+
+    @property
+    def marker(self) -> str:
+        """The first of its two markers (every element names at least one)."""
+        return self.left
+
+
+@dataclass(frozen=True)
 class Rain:
     """``count`` drops falling over the figure's whole path, from above its head.
 
@@ -187,7 +226,7 @@ class Rain:
         _colour(self.colour)
 
 
-Element = Balloon | Balls | Scarf | Skirt | Rain
+Element = Balloon | Balls | Scarf | Skirt | Cape | Rain
 
 
 def _positive(value, what):

@@ -207,7 +207,7 @@ class _Cloth:
             rgb = np.round(model.flex_rgba[f, :3] * 255).astype(np.uint8)
             colours.append(np.tile(rgb, (len(F), 1)))
             bodies = model.flex_vertbodyid[start:start + count]
-            held = np.flatnonzero(bodies == scene.marker_bodies[marker])
+            held = np.flatnonzero(bodies == scene.marker_bodies[marker]) if marker >= 0 else empty
             pinned.append(held + n)
             markers.append(np.full(len(held), marker))
             n += count
@@ -218,16 +218,22 @@ class _Cloth:
         self.markers = np.concatenate(markers).astype(np.int64)
         # Every cloth's free vertices at once: the marker each hangs from, its slide joints' qpos
         # and qvel addresses (n, 3) and their damping.
+        # A cape's vertices hang from the world (marker -1): nothing to carry; its driven top row is
+        # written by _Kinematic.
         holders, qposes, dofs = [empty], [np.zeros((0, 3), np.int64)], [np.zeros((0, 3), np.int64)]
+        driven = set(scene.driven_bodies.tolist())
         for f, marker in scene.cloths:
             start, count = int(model.flex_vertadr[f]), int(model.flex_vertnum[f])
-            holder = scene.marker_bodies[marker]
-            bodies = [b for b in model.flex_vertbodyid[start:start + count] if b != holder]
+            holder = scene.marker_bodies[marker] if marker >= 0 else 0
+            bodies = [b for b in model.flex_vertbodyid[start:start + count]
+                      if b != holder and b not in driven]
             joints = np.array([model.body_jntadr[b] + np.arange(3) for b in bodies], np.int64).reshape(-1, 3)
             holders.append(np.full(len(joints), marker, np.int64))
             qposes.append(model.jnt_qposadr[joints])
             dofs.append(model.jnt_dofadr[joints])
-        self.holder = np.concatenate(holders)
+        holder = np.concatenate(holders)
+        self.by_marker = (holder >= 0).astype(np.float64)[:, None]  # 0 for a cape's: held by the world
+        self.holder = np.maximum(holder, 0)
         self.q, self.v = np.concatenate(qposes), np.concatenate(dofs)
         self.damping = model.dof_damping[self.v]
 
@@ -239,9 +245,9 @@ class _Cloth:
         if not len(self.q):
             return
         held = self.holder
-        carried = qvel[held, :3]
-        data.qpos[self.q] -= qpos[held, :3] - data.qpos[at[held]]
-        data.qvel[self.v] -= carried - data.qvel[speed[held]]
+        carried = qvel[held, :3] * self.by_marker
+        data.qpos[self.q] -= (qpos[held, :3] - data.qpos[at[held]]) * self.by_marker
+        data.qvel[self.v] -= carried - data.qvel[speed[held]] * self.by_marker
         data.qfrc_applied[self.v] = -self.damping * carried
         # No vertex moves faster than the cap (a limb that sweeps the cloth against its pinned
         # edge would otherwise squeeze it out at tens of metres a second).
@@ -313,6 +319,12 @@ class _Kinematic:
         self.is_ball, self.is_proxy = is_ball, is_proxy
         self.has_balls = bool(len(scene.balls))
         self.cloth = None
+        # The capes' driven top rows: their slide joints' addresses (D, 3) and their paths as joint
+        # positions (offsets from where each body was built).
+        bodies = scene.driven_bodies
+        joints = np.array([model.body_jntadr[b] + np.arange(3) for b in bodies], np.int64).reshape(-1, 3)
+        self.driven_q, self.driven_v = model.jnt_qposadr[joints], model.jnt_dofadr[joints]
+        self.driven = scene.driven_paths - model.body_pos[bodies] if len(bodies) else None
 
     def poses(self, t, fractions, moving):
         """The kinematic state at (t + each fraction): qpos, qvel and geom sizes, positions, bounds."""
@@ -347,11 +359,18 @@ class _Kinematic:
         aabb = np.zeros((F, N + K * SEGMENTS, 6))
         aabb[..., 3] = aabb[..., 4] = size[..., 0]
         aabb[..., 5] = rbound
-        return qpos, qvel, size, pos, rbound, aabb
+        driven = None
+        if self.driven is not None:
+            at = self.driven[t] + f[:, None, None] * (self.driven[nxt] - self.driven[t])  # (F, D, 3)
+            driven = at, (self.driven[nxt] - self.driven[t]) * self.fps if moving else np.zeros(at.shape[1:])
+        return qpos, qvel, size, pos, rbound, aabb, driven
 
     def write(self, data, poses, s):
         """Sub-step ``s`` of :meth:`poses` into the data and model."""
-        qpos, qvel, size, pos, rbound, aabb = poses
+        qpos, qvel, size, pos, rbound, aabb, driven = poses
+        if driven is not None:
+            data.qpos[self.driven_q] = driven[0][s]
+            data.qvel[self.driven_v] = driven[1]
         if self.cloth is not None:
             N = len(self.sphere[0])
             self.cloth.carry(data, self.qpos[:N, :3], self.qvel[:N, :3], qpos[s], qvel)
