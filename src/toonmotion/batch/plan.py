@@ -133,10 +133,7 @@ def deform_settings(output: OutputModel) -> DeformSettings | None:
     """
     if output.deform is None:
         return None
-    d = output.deform
-    anchor = DeformSettings.joint_anchor if d.joint_anchor is None else d.joint_anchor
-    return DeformSettings(preserve_area=d.preserve_area, stage_two=d.stage_two, weights=d.weights,
-                          joint_width=d.joint_width, skinning=d.skinning, joint_anchor=anchor)
+    return DeformSettings(**output.deform.model_dump(exclude_none=True))
 
 
 def _read(path: str, relative: str | None = None) -> InputFile:

@@ -26,6 +26,7 @@ from toonmotion.rig.character import Character
 
 
 @app.command()
+@options.deform_options
 def pose(
     project: options.Project,
     pose_file: Annotated[Path, typer.Argument(
@@ -35,12 +36,7 @@ def pose(
     background: Annotated[str, typer.Option(
         "--background", help="transparent, white, black or #rrggbb.")] = "transparent",
     overlay: options.Overlay = "",
-    no_area: options.NoArea = False,
-    stage_one_only: options.StageOne = False,
-    weights: options.Weights = "1,1,1",
-    joint_width: options.JointWidth = 1.5,
-    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
-    skinning: options.Skinning = "one-bone",
+    deform: DeformSettings = options.DEFAULT_DEFORM,
     accel: Annotated[str | None, typer.Option(
         "--accel", help="Cartoon filter: acceleration DX,DY at the root, pixels.")] = None,
     fixed: Annotated[str | None, typer.Option(
@@ -66,8 +62,7 @@ def pose(
         character, load_pose(pose_file, character.skeleton), edits=edits,
         accel=None if accel is None else options.point(accel, "--accel"),
         fixed=options.names(fixed) if fixed is not None else (), root=root,
-        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning,
-                                         joint_anchor))
+        settings=deform)
     picture = api.render_pose(character, frame, size=picture_size,
                               background=options.colour(background), overlays=options.overlays(overlay))
     save_png(output, picture)
@@ -106,6 +101,7 @@ def sketch(
 
 
 @app.command()
+@options.deform_options
 def animate(
     project: options.Project,
     keys_file: options.KeysFile,
@@ -125,12 +121,7 @@ def animate(
         "--save-frame-motion", help="Also write the joint positions in the written frames' pixels (.json: "
         "what tracking the frames finds; what 'lift' needs beside them).")] = None,
     solve_inbetweens: options.SolveInbetweens = False,
-    no_area: options.NoArea = False,
-    stage_one_only: options.StageOne = False,
-    weights: options.Weights = "1,1,1",
-    joint_width: options.JointWidth = 1.5,
-    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
-    skinning: options.Skinning = "one-bone",
+    deform: DeformSettings = options.DEFAULT_DEFORM,
 ) -> None:
     """Animate a rigged drawing through key-frames or a motion, to GIF, MP4 or PNGs.
 
@@ -142,8 +133,7 @@ def animate(
         if path is not None:
             options.suffix(path, ".json", "a motion file")
     exaggeration = options.filter_settings(exaggerate, sigma, shift)
-    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning, joint_anchor)
-    character, animation, what = make_animation(project, keys_file, settings=settings, fps=fps, ease=ease,
+    character, animation, what = make_animation(project, keys_file, settings=deform, fps=fps, ease=ease,
                                                 exaggeration=exaggeration, solve_inbetweens=solve_inbetweens)
     count, out_size = write(
         output, character, animation, kind=kind, size=picture_size, background=background, overlay=overlay

@@ -15,6 +15,7 @@ from toonmotion import api
 from toonmotion.cli import options
 from toonmotion.cli.animation import write
 from toonmotion.cli.app import app
+from toonmotion.deform.deformer import DeformSettings
 from toonmotion.errors import SettingsError
 from toonmotion.io.frames import load_frames
 from toonmotion.io.motion_json import load_motion, save_motion, save_motion_csv
@@ -164,6 +165,7 @@ def _drawn_on(text: str) -> tuple[int, int, int]:
 
 
 @app.command("retarget")
+@options.deform_options
 def retarget_command(
     motion_file: Annotated[Path, typer.Argument(metavar="MOTION.json", help="A captured motion.")],
     project: options.Project,
@@ -177,12 +179,7 @@ def retarget_command(
         "--exaggerate", help="Cartoon filter strength A on the retargeted motion.")] = None,
     sigma: options.Sigma = 3.0,
     shift: options.Shift = 0.0,
-    no_area: options.NoArea = False,
-    stage_one_only: options.StageOne = False,
-    weights: options.Weights = "1,1,1",
-    joint_width: options.JointWidth = 1.5,
-    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
-    skinning: options.Skinning = "one-bone",
+    deform: DeformSettings = options.DEFAULT_DEFORM,
 ) -> None:
     """Replay a captured motion on a rigged drawing (thesis 4.5); the result is kept in the project."""
     kind = animation_format(output)
@@ -193,8 +190,7 @@ def retarget_command(
     motion = api.exaggerate(motion, options.filter_settings(exaggerate, sigma, shift))
     animation = api.animate_character(
         character, motion,
-        settings=options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning,
-                                         joint_anchor)
+        settings=deform
     )
     count, _ = write(
         output, character, animation, kind=kind, size=picture_size, background=background, overlay=overlay

@@ -11,6 +11,7 @@ import typer
 from toonmotion import api
 from toonmotion.cli import options
 from toonmotion.cli.app import app
+from toonmotion.deform.deformer import DeformSettings
 from toonmotion.deform.tuning import CurveEdit, DragEdit
 from toonmotion.deform.tuning import describe as describe_tuning
 from toonmotion.errors import SettingsError
@@ -100,6 +101,7 @@ def edits(project: options.Project) -> None:
 
 
 @app.command()
+@options.deform_options
 def tune(
     project: options.Project,
     pose_file: Annotated[Path, typer.Argument(
@@ -112,12 +114,7 @@ def tune(
     undo_last: Annotated[bool, typer.Option("--undo", help="Take back the last edit.")] = False,
     preview: Annotated[Path | None, typer.Option(
         "-o", "--output", help="Also render the tuned pose to this PNG.")] = None,
-    no_area: options.NoArea = False,
-    stage_one_only: options.StageOne = False,
-    weights: options.Weights = "1,1,1",
-    joint_width: options.JointWidth = 1.5,
-    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
-    skinning: options.Skinning = "one-bone",
+    deform: DeformSettings = options.DEFAULT_DEFORM,
 ) -> None:
     """Fine-tune a deformed pose: sketch curves and point drags, saved in the pose or key file.
 
@@ -141,8 +138,7 @@ def tune(
     elif undo_last:
         tuned, taken = without_last_edit(tuned)
     # The edit is tried on the pose as 'pose' and 'animate' deform it given the same options.
-    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning, joint_anchor)
-    frame = api.pose_character(character, tuned.pose, edits=tuned.edits, settings=settings)
+    frame = api.pose_character(character, tuned.pose, edits=tuned.edits, settings=deform)
     # Drawn before anything is saved: an edit whose frame cannot be drawn is refused.
     picture = api.render_pose(character, frame) if preview is not None else None
     natural_size(api.pose_view(character, frame))

@@ -11,9 +11,11 @@ from toonmotion import api
 from toonmotion.cli import options
 from toonmotion.cli.animation import make_animation
 from toonmotion.cli.app import app
+from toonmotion.deform.deformer import DeformSettings
 
 
 @app.command()
+@options.deform_options
 def export(
     project: options.Project,
     keys_file: options.KeysFile,
@@ -38,12 +40,7 @@ def export(
         "--no-trim", help="Sprite sheet: keep whole frames instead of cropping to what is drawn.")] = False,
     max_size: Annotated[int, typer.Option(
         "--max-size", help="Sprite sheet: the largest width or height, pixels.")] = 4096,
-    no_area: options.NoArea = False,
-    stage_one_only: options.StageOne = False,
-    weights: options.Weights = "1,1,1",
-    joint_width: options.JointWidth = 1.5,
-    joint_anchor: options.JointAnchor = options.DEFAULT_JOINT_ANCHOR,
-    skinning: options.Skinning = "one-bone",
+    deform: DeformSettings = options.DEFAULT_DEFORM,
 ) -> None:
     """Export an animation for other tools: a skinned glTF or Spine rig, a sprite sheet, or frames.
 
@@ -53,13 +50,12 @@ def export(
     hash layout (Phaser, PixiJS, Godot). APNG, WebP and WebM keep soft transparent edges.
     """
     kind = api.export_format(output, format)
-    settings = options.deform_settings(no_area, stage_one_only, weights, joint_width, skinning, joint_anchor)
     exaggeration = options.filter_settings(exaggerate, sigma, shift)
-    character, animation, what = make_animation(project, keys_file, settings=settings, fps=fps, ease=ease,
+    character, animation, what = make_animation(project, keys_file, settings=deform, fps=fps, ease=ease,
                                                 exaggeration=exaggeration, solve_inbetweens=solve_inbetweens)
     colour = None if background is None else options.colour(background)
     with options.progress("exporting") as report:
-        done = api.export_animation(output, character, animation, format=kind, settings=settings,
+        done = api.export_animation(output, character, animation, format=kind, settings=deform,
                                     size=options.size(size), background=colour, padding=padding,
                                     trim=not no_trim, max_size=max_size, progress=report)
     typer.echo(

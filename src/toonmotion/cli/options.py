@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import functools
+import inspect
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any, TypeVar
 
 import numpy as np
 import typer
@@ -73,8 +75,48 @@ AnimationBackground = Annotated[
 Report = Callable[[str, int, int], None]
 
 
+Command = TypeVar("Command", bound=Callable[..., Any])
+# The placeholder default of a command's ``deform`` parameter, which deform_options fills in.
+DEFAULT_DEFORM = DeformSettings()
+
+# The deformation's options, which every command that deforms the drawing takes: (parameter, its
+# typer option, its default, from DeformSettings' own where it has one).
+_DEFORM_OPTIONS = (
+    ("no_area", NoArea, not DeformSettings.preserve_area),
+    ("stage_one_only", StageOne, not DeformSettings.stage_two),
+    ("weights", Weights, ",".join(f"{w:g}" for w in DeformSettings.weights)),
+    ("joint_width", JointWidth, DeformSettings.joint_width),
+    ("joint_anchor", JointAnchor, DeformSettings.joint_anchor),
+    ("skinning", Skinning, DeformSettings.skinning),
+)
+
+
+def deform_options(command: Command) -> Command:
+    """Give a command the deformation's options (``--no-area``, ``--stage-one``, ``--weights``,
+    ``--joint-width``, ``--joint-anchor``, ``--skinning``), after its own; it receives them as one
+    ``deform`` argument, a :class:`DeformSettings` (put this decorator under ``@app.command``).
+
+    Refused values raise :class:`SettingsError` when the command runs, as the command's own would.
+    """
+    signature = inspect.signature(command, eval_str=True)
+    own = [p for p in signature.parameters.values() if p.name != "deform"]
+    added = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, annotation=kind, default=default)
+             for name, kind, default in _DEFORM_OPTIONS]
+
+    @functools.wraps(command)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        given = {name: kwargs.pop(name) for name, _, _ in _DEFORM_OPTIONS}
+        return command(*args, deform=deform_settings(**given), **kwargs)
+
+    run.__signature__ = signature.replace(parameters=[*own, *added])  # type: ignore[attr-defined]
+    run.__annotations__ = {p.name: p.annotation for p in [*own, *added]}
+    del run.__wrapped__  # typer reads the signature above, not the command's
+    return run  # type: ignore[return-value]
+
+
 def deform_settings(no_area: bool, stage_one_only: bool, weights: str, joint_width: float,
                     skinning: str = "one-bone", joint_anchor: float = DEFAULT_JOINT_ANCHOR) -> DeformSettings:
+    """The deformation's options as settings (:func:`deform_options`)."""
     return DeformSettings(
         preserve_area=not no_area,
         stage_two=not stage_one_only,

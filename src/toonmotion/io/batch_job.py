@@ -130,13 +130,13 @@ class MotionModel(Model):
 
 class DeformModel(Model):
     """An output's ``deform = { ... }``: :class:`~toonmotion.deform.deformer.DeformSettings`, as the
-    animation commands' options set them."""
+    animation commands' options set them; what is not given keeps the settings' own default."""
 
-    preserve_area: StrictBool = True
-    stage_two: StrictBool = True
-    weights: tuple[Float, Float, Float] = (1.0, 1.0, 1.0)
-    joint_width: Annotated[Float, Field(ge=0)] = 1.5
-    skinning: Literal["one-bone", "weights"] = "one-bone"
+    preserve_area: StrictBool | None = None
+    stage_two: StrictBool | None = None
+    weights: tuple[Float, Float, Float] | None = None
+    joint_width: Annotated[Float, Field(ge=0)] | None = None
+    skinning: Literal["one-bone", "weights"] | None = None
     joint_anchor: Annotated[Float, Field(ge=0)] | None = None
 
 
