@@ -11,14 +11,8 @@ from toonmotion.errors import SceneError
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.depth_composite import composite
-from toonmotion.scene.build import (
-    CAPE_BODIES,
-    CAPE_COLUMNS,
-    SCARF_BODIES,
-    build_scene,
-    figure_height,
-    scene_bodies,
-)
+from toonmotion.scene.build import build_scene, figure_height, scene_bodies
+from toonmotion.scene.cloth import CAPE_BODIES, CAPE_COLUMNS, SCARF_BODIES
 from toonmotion.scene.elements import CAPE_LENGTH, SCARF_LENGTH, SCARF_WIDTH, Balls, Cape, Scarf, Skirt
 
 

@@ -10,8 +10,10 @@ from toonmotion.errors import SceneError
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
-from toonmotion.scene.build import CONTACT_TIME, SKIRT_ROWS, build_scene
+from toonmotion.scene.build import build_scene
+from toonmotion.scene.cloth import SKIRT_ROWS
 from toonmotion.scene.elements import Balloon, Balls, Rain, Scarf, Skirt
+from toonmotion.scene.mjcf import CONTACT_TIME
 from toonmotion.scene.simulate import SceneMotion
 
 FPS = 24.0

@@ -12,15 +12,8 @@ from toonmotion import limits
 from toonmotion.errors import LimitError, SceneError
 from toonmotion.io.image import save_png
 from toonmotion.io.proxy_json import save_proxy
-from toonmotion.scene.build import (
-    SCARF_BODIES,
-    SKIRT_ROWS,
-    STRING_LINKS,
-    build_scene,
-    check_scene,
-    figure_height,
-    scene_bodies,
-)
+from toonmotion.scene.build import STRING_LINKS, build_scene, check_scene, figure_height, scene_bodies
+from toonmotion.scene.cloth import SCARF_BODIES, SKIRT_ROWS
 from toonmotion.scene.elements import MAX_SIZE, Balloon, Balls, Cape, Rain, Scarf, Skirt
 
 HUGE = [

@@ -15,14 +15,8 @@ compensation; balls are free spheres on the ground plane Y = 0. Air (MuJoCo's fl
 density 1.2 kg/m^3) drags on everything that moves when the scene holds a balloon, balls or rain;
 a scene of cloth alone has no fluid model (:func:`_air`).
 
-Scarves and skirts are cloth: a MuJoCo flex (``flexcomp type="direct" dim="2"``) of triangles
-whose edges keep their lengths (soft equality constraints), declared inside the marker's body so
-that its pinned vertices (a scarf's knotted edge, a skirt's waistband) are points of that body
-and move exactly with the marker; every other vertex is a body of its own with three slide
-joints. :func:`_scarf_xml` and :func:`_skirt_xml` build them clear of the proxy's volumes over
-the whole clip (docs/scene3d.md, cloth). A cape hangs from two markers, so no one body can hold
-it: it is declared in the world, and its top row of vertices is **driven** like the proxy (heavy,
-its positions written every sub-step along a path that follows both shoulders, :func:`_cape_xml`).
+Scarves, skirts and capes are cloth, built by :mod:`toonmotion.scene.cloth`; where an element may
+start is :mod:`toonmotion.scene.clearance`'s.
 
 World: +Y up, metres, gravity -9.81 m/s^2 along Y (the proxy's frame).
 """
@@ -38,16 +32,24 @@ from numpy.typing import NDArray
 from toonmotion import limits
 from toonmotion.errors import SceneError
 from toonmotion.proxy3d.proxy import Proxy
+from toonmotion.scene.clearance import clear, first_frame_volumes, overlap
+from toonmotion.scene.cloth import (
+    CAPE_BODIES,
+    SCARF_BODIES,
+    SKIRT_ROWS,
+    cape_xml,
+    damp_cloth,
+    drive,
+    scarf_xml,
+    skirt_columns,
+    skirt_xml,
+    top_row,
+)
 from toonmotion.scene.elements import (
     BALL_RADIUS,
     BALLOON_RADIUS,
-    CAPE_LENGTH,
     MAX_SIZE,
     RAIN_RADIUS,
-    SCARF_LENGTH,
-    SCARF_WIDTH,
-    SKIRT_LENGTH,
-    SKIRT_RADIUS,
     STRING_LENGTH,
     Balloon,
     Balls,
@@ -57,60 +59,31 @@ from toonmotion.scene.elements import (
     Scarf,
     Skirt,
 )
+from toonmotion.scene.mjcf import (
+    CONTACT,
+    CONTACT_TIME,
+    DROP_BITS,
+    ELEMENT_BITS,
+    KINEMATIC_MASS,
+    PROXY_BITS,
+    load_mujoco,
+    rgba_text,
+    vec,
+)
 
 SEGMENTS = 3  # capsules per tapered cylinder
 STRING_LINKS = 8
-# The chains that scarves and skirts were before they became cloth (issue 45): kept for the record
-# of the limits' docs, no longer built.
-SCARF_LINKS = 10
-SKIRT_LINKS = 4
-CLOTH_DENSITY = 0.25  # kg per square metre of scarf or skirt: light cloth
-# A scarf's cloth: SCARF_ROWS rows of SCARF_COLUMNS vertices, the first row knotted (pinned).
-SCARF_ROWS = 13
-SCARF_COLUMNS = 3
-SCARF_BODIES = (SCARF_ROWS - 1) * SCARF_COLUMNS
-# A skirt's cloth: SKIRT_ROWS rings of ``strands`` vertices (at least MIN_SKIRT_COLUMNS), the
-# waistband ring pinned; the hem flares out by SKIRT_FLARE times the skirt's length.
-SKIRT_ROWS = 8
-MIN_SKIRT_COLUMNS = 6
-SKIRT_FLARE = 0.35
-# A cape's cloth: CAPE_ROWS rows of CAPE_COLUMNS vertices, the top row driven behind the shoulders.
-CAPE_ROWS = 10
-CAPE_COLUMNS = 5
-CAPE_BODIES = CAPE_ROWS * CAPE_COLUMNS
-CLOTH_RADIUS = 0.004  # the cloth's half thickness for contacts, as a fraction of the figure's height
-# Each cloth vertex weighs at least this (kg): lighter ones make the contacts and the edge
-# constraints stiffer than a 2 ms sub-step resolves (measured: 0.3 g vertices jitter on a fast hand).
-MIN_CLOTH_VERTEX_MASS = 0.001
-# Viscous damping of each free vertex, per kg of its mass (1/s): air's drag on a sheet. Quadratic
-# drag on cloth of CLOTH_DENSITY at 2 m/s, 0.5 * 1.2 * v^2 per square metre, decelerates it at
-# ~10 m/s^2, a linear rate of 5/s; lower rates (1.5/s measured) let a skirt on the jumping demo
-# fly up over the shoulders. Terminal speed g / 5 = 2 m/s: light cloth.
-CLOTH_DAMPING = 5.0
-# The cloth's contacts' time constant (s), softer than CONTACT_TIME: measured on a six-armed figure whose
-# forearms spin round the scarves' knots, 0.004 and 0.01 let them squeeze a scarf out to metres (even
-# with the speed cap of simulate.py); 0.02 keeps every scarf within its length of its knot.
-CLOTH_CONTACT_TIME = 0.02
-CLOTH_EDGE_DAMPING = 0.002  # the edges' damping (N s/m): kills the stretch modes' ringing
 MIN_LINK_MASS = 0.002  # kg: lighter links make the contacts stiff beyond what a sub-step resolves
 CHAIN_ARMATURE = 1e-4  # kg m^2 of rotor inertia on a chain's joints: keeps light links stable in contact
 # Proxy radii when the proxy has no collision volumes (lifted without drawn frames), as a fraction
 # of the figure's height.
 DEFAULT_LIMB_RADIUS = 0.035
-KINEMATIC_MASS = 1000.0  # kg: the proxy does not give way
 BALL_DENSITY = 300.0  # kg/m^3, a light rubber ball
 BALLOON_MASS = 0.01  # kg
 AIR_DENSITY = 1.2  # kg/m^3
 AIR_VISCOSITY = 0.000018  # Pa s
 STRING_RADIUS = 0.003  # m, physical; drawn at least api.scene3d.STRING_MIN_PX across
-# Collision bits: proxies (2) touch elements (3) only; elements touch the ground (1) and each other.
-PROXY_BITS = 'contype="2" conaffinity="0"'
-ELEMENT_BITS = 'contype="1" conaffinity="3"'
-# Rain (4) touches the proxy, the ground and the elements but not other drops.
-DROP_BITS = 'contype="4" conaffinity="3"'
 WATER_DENSITY = 1000.0
-CONTACT_TIME = 0.004  # seconds: the contacts' time constant (MuJoCo's solref), twice the longest step
-CONTACT = f'solref="{CONTACT_TIME} 1" condim="6" friction="0.9 0.005 0.002"'
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,11 +157,6 @@ def scene_bodies(elements: list[Element] | tuple[Element, ...]) -> int:
     221
     """
     return sum(_bodies(element) for element in elements)
-
-
-def skirt_columns(skirt: Skirt) -> int:
-    """The vertices round a skirt's ring: its ``strands``, at least :data:`MIN_SKIRT_COLUMNS`."""
-    return max(int(skirt.strands), MIN_SKIRT_COLUMNS)
 
 
 def _bodies(element):
@@ -309,13 +277,13 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
         The elements make more bodies than the limit ``scene_bodies``.
     """
     check_scene(proxy, elements)
-    mujoco = _mujoco()
+    mujoco = load_mujoco()
     names = list(proxy.names)
     height = figure_height(proxy)
     radii = _limb_radii(proxy, height)
     default_volumes = proxy.radii is None
     P0 = proxy.points[0]
-    volumes = _first_frame_volumes(proxy, radii)  # where elements must not start
+    volumes = first_frame_volumes(proxy, radii)  # where elements must not start
     held_xml: dict[int, list[str]] = {}
     element_xml = []
     cloths: list[tuple[str, int]] = []  # each cloth's flex and the marker holding it
@@ -324,7 +292,7 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
         if isinstance(element, Rain):
             continue
         if isinstance(element, Cape):
-            xml, path = _cape_xml(f"e{i}_cape", element, proxy, names.index(element.left),
+            xml, path = cape_xml(f"e{i}_cape", element, proxy, names.index(element.left),
                                   names.index(element.right), radii, height)
             element_xml.append(xml)
             cloths.append((f"e{i}_cape", -1))
@@ -335,11 +303,11 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             at.append(_balloon_xml(i, element, height))
         elif isinstance(element, Scarf):
             marker = names.index(element.marker)
-            at.append(_scarf_xml(f"e{i}_scarf", element, proxy, marker, radii, height))
+            at.append(scarf_xml(f"e{i}_scarf", element, proxy, marker, radii, height))
             cloths.append((f"e{i}_scarf", marker))
         elif isinstance(element, Skirt):
             marker = names.index(element.marker)
-            at.append(_skirt_xml(f"e{i}_skirt", element, proxy, marker, radii, height))
+            at.append(skirt_xml(f"e{i}_skirt", element, proxy, marker, radii, height))
             cloths.append((f"e{i}_skirt", marker))
     placed: list[tuple[NDArray[np.float64], float]] = []
     ball_names: list[str] = []
@@ -349,10 +317,10 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             marker = names.index(element.marker)
             for j, centre in enumerate(_place_balls(proxy, volumes, marker, element.count, r, placed)):
                 placed.append((centre, r))
-                rgba = _rgba(element.colours[j % len(element.colours)])
+                rgba = rgba_text(element.colours[j % len(element.colours)])
                 ball_names.append(f"e{i}_ball{j}")
                 element_xml.append(
-                    f'<body name="e{i}_ball{j}" pos="{_v(centre)}"><freejoint/><geom name="e{i}_ball{j}" '
+                    f'<body name="e{i}_ball{j}" pos="{vec(centre)}"><freejoint/><geom name="e{i}_ball{j}" '
                     f'type="sphere" size="{r!r}" density="{BALL_DENSITY}" rgba="{rgba}" {ELEMENT_BITS} '
                     f'{CONTACT}/></body>')
     drops: list[tuple[str, NDArray[np.float64]]] = []
@@ -362,18 +330,19 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             box = rain_box(proxy, height)
             rng = np.random.default_rng(element.seed)
             starts = [c for c in drops_in(rng, box, 4 * element.count, full_height=True)
-                      if _clear([c], r, volumes)][:element.count]
+                      if clear([c], r, volumes)][:element.count]
             starts += list(drops_in(rng, box, element.count - len(starts), full_height=False))
             for j, centre in enumerate(starts):
                 drops.append((f"e{i}_drop{j}", box))
                 element_xml.append(
-                    f'<body name="e{i}_drop{j}" pos="{_v(centre)}"><freejoint/><geom name="e{i}_drop{j}" '
-                    f'type="sphere" size="{r!r}" density="{WATER_DENSITY}" rgba="{_rgba(element.colour)}" '
-                    f'{DROP_BITS} solref="{CONTACT_TIME} 0.3" friction="0.2 0.005 0.0001"/></body>')
+                    f'<body name="e{i}_drop{j}" pos="{vec(centre)}"><freejoint/><geom name="e{i}_drop{j}" '
+                    f'type="sphere" size="{r!r}" density="{WATER_DENSITY}" '
+                    f'rgba="{rgba_text(element.colour)}" {DROP_BITS} solref="{CONTACT_TIME} 0.3" '
+                    'friction="0.2 0.005 0.0001"/></body>')
     bodies = []
     for n in range(len(names)):
         bodies.append(
-            f'<body name="m{n}" pos="{_v(P0[n])}"><freejoint/><geom name="m{n}" type="sphere" size="0.01" '
+            f'<body name="m{n}" pos="{vec(P0[n])}"><freejoint/><geom name="m{n}" type="sphere" size="0.01" '
             f'mass="{KINEMATIC_MASS}" {PROXY_BITS} {CONTACT}/>{"".join(held_xml.get(n, []))}</body>')
     for k in range(len(proxy.limbs)):
         capsules = "".join(
@@ -404,10 +373,10 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             if isinstance(e, Balloon)]
     flex = lambda name: int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, name))  # noqa: E731
     flexes = [(flex(name), marker) for name, marker in cloths]
-    _damp_cloth(model, [f for f, _ in flexes], [body(f"m{m}") if m >= 0 else 0 for _, m in flexes])
-    driven = np.array([_top_row(model, flex(name)) for name, _ in capes], np.int64).reshape(-1)
+    damp_cloth(model, [f for f, _ in flexes], [body(f"m{m}") if m >= 0 else 0 for _, m in flexes])
+    driven = np.array([top_row(model, flex(name)) for name, _ in capes], np.int64).reshape(-1)
     if len(driven):
-        _drive(mujoco, model, driven)
+        drive(mujoco, model, driven)
     balls = [geom(name) for name in ball_names]
     rain = [(geom(name), box) for name, box in drops]
     return SceneModel(
@@ -422,14 +391,6 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
     )
 
 
-def _mujoco():
-    try:
-        import mujoco
-    except ImportError:  # a required dependency, but a broken install must still say so
-        raise SceneError("scenes need the MuJoCo physics engine: pip install mujoco") from None
-    return mujoco
-
-
 def _limb_radii(proxy, height):
     if proxy.radii is not None:
         return np.array(proxy.radii)
@@ -440,7 +401,7 @@ def _balloon_xml(i, balloon, height):
     """A string of capsules straight up from the holding marker's body, the balloon at its top."""
     radius = balloon.radius or BALLOON_RADIUS * height
     link = (balloon.string_length or STRING_LENGTH * height) / STRING_LINKS
-    rgba = _rgba(balloon.colour)
+    rgba = rgba_text(balloon.colour)
     inner = (f'<body name="e{i}_balloon" pos="0 {link!r} 0" gravcomp="{balloon.lift!r}">'
              f'<joint type="ball" damping="0.0002"/><geom name="e{i}_balloon" type="sphere" '
              f'pos="0 {radius!r} 0" size="{radius!r}" mass="{BALLOON_MASS}" rgba="{rgba}" {ELEMENT_BITS} '
@@ -455,156 +416,6 @@ def _balloon_xml(i, balloon, height):
     return inner
 
 
-def _scarf_xml(name, scarf, proxy, marker, radii, height):
-    """A scarf: a strip of :data:`SCARF_ROWS` x :data:`SCARF_COLUMNS` vertices hanging from a knot
-    beside the marker (in the marker body's frame), its first row pinned.
-
-    The knot sits outside the marker's largest joint sphere over the clip (up to 2.5 times its
-    radius out), along the first way (:func:`_directions`) on which the knot stays clear of every
-    limb's volume on every frame (seen from the marker) and the strip is clear of the first
-    frame's volumes and the ground; the strip's width faces the camera.
-    """
-    width = scarf.width or SCARF_WIDTH * height
-    length = scarf.length or SCARF_LENGTH * height
-    thick = CLOTH_RADIUS * height
-    P = proxy.points
-    reach = _marker_reach(proxy, marker, radii) + thick + 0.1 * width
-    relative = _relative_volumes(proxy, marker, radii)
-    first = _first_frame_volumes(proxy, radii)
-    axis = np.asarray(proxy.camera.rotations[0])[2]
-    ways = _directions(P[0], marker)
-    candidates = []  # (way, across, knot, clear on every frame), the first way and nearest knot first
-    for way in ways:
-        across = _across(way, axis)
-        if P[0, marker, 1] + way[1] * (reach + length) <= width:  # into the ground
-            continue
-        for d in reach * np.linspace(1.0, 2.5, 7):
-            edge = way * d + np.outer(np.linspace(-0.5, 0.5, SCARF_COLUMNS), across * width)
-            strip = np.linspace(0.0, 1, 9)[:, None, None] * (way * length) + edge
-            if _gap_ok(P[0, marker] + strip, thick, [_stack(first)]):
-                candidates.append((way, across, way * d, _gap_ok(edge, thick, relative)))
-    # Clear on every frame if it can be; else clear on the first (a limb may sweep through the knot
-    # later: the contacts push the cloth aside); else down (or the first way off the ground), far out.
-    best = next((c for c in candidates if c[3]), candidates[0] if candidates else None)
-    if best is None:
-        way = next((w for w in ways if P[0, marker, 1] + w[1] * (reach + length) > width), ways[0])
-        best = (way, _across(way, axis), way * 2.5 * reach, False)
-    way, across, knot, _ = best
-    rows = np.linspace(0.0, 1.0, SCARF_ROWS)[:, None, None] * (way * length)
-    cols = np.linspace(-0.5, 0.5, SCARF_COLUMNS)[None, :, None] * (across * width)
-    V = (knot + rows + cols).reshape(-1, 3)
-    F = _grid_triangles(SCARF_ROWS, SCARF_COLUMNS, ring=False)
-    return _flex_xml(name, V, F, range(SCARF_COLUMNS), CLOTH_DENSITY * width * length, scarf.colour, thick)
-
-
-def _skirt_xml(name, skirt, proxy, marker, radii, height):
-    """A skirt: :data:`SKIRT_ROWS` rings of vertices round the marker, flaring towards the hem, the
-    waistband ring pinned. The waistband widens from the skirt's radius (up to three times it)
-    until it is clear of every limb's volume on every frame seen from the marker, and the cloth of
-    the first frame's volumes."""
-    length = skirt.length or SKIRT_LENGTH * height
-    radius = skirt.radius or SKIRT_RADIUS * height
-    thick = CLOTH_RADIUS * height
-    n = skirt_columns(skirt)
-    turns = 2 * np.pi * np.arange(n) / n
-    unit = np.stack([np.cos(turns), np.zeros(n), np.sin(turns)], axis=1)
-    P = proxy.points
-    relative = _relative_volumes(proxy, marker, radii)
-    first = [_stack(_first_frame_volumes(proxy, radii))]
-    f = np.linspace(0.0, 1.0, SKIRT_ROWS)
-
-    def rings(r):
-        return (r + SKIRT_FLARE * length * f)[:, None, None] * unit + (-length * f)[:, None, None] * [0, 1, 0]
-
-    chosen = None
-    for r in np.linspace(radius, 3 * radius, 21):
-        V = rings(r)
-        if _gap_ok(V[0], thick, relative) and _gap_ok(P[0, marker] + V[1:].reshape(-1, 3), thick, first):
-            chosen = r
-            break
-    if chosen is None:  # started inside the body, the cloth would be flung out or crushed
-        raise SceneError(f"a skirt round {proxy.names[marker]!r} cannot hang clear of the body: its "
-                         f"waistband, up to {3 * radius:.2f} m across the marker, meets a limb's volume "
-                         "(a figure whose body lies level, or limbs wider than the skirt); give it another "
-                         "marker")
-    V = rings(chosen).reshape(-1, 3)
-    drop = P[0, marker, 1] - length - thick * 2
-    if drop < 0:  # the hem would start in the ground: shorten the fall, keep the flare
-        V[:, 1] *= max(P[0, marker, 1] - 2 * thick, 1e-3) / (length + thick * 2)
-    F = _grid_triangles(SKIRT_ROWS, n, ring=True)
-    area = 2 * np.pi * (chosen + 0.5 * SKIRT_FLARE * length) * length
-    return _flex_xml(name, V, F, range(n), CLOTH_DENSITY * area, skirt.colour, thick)
-
-
-def _cape_xml(name, cape, proxy, left, right, radii, height):
-    """A cape: :data:`CAPE_ROWS` x :data:`CAPE_COLUMNS` vertices hanging straight down from a top
-    row that runs from the ``left`` marker to the ``right`` one, set back behind them; and that top
-    row's path over the clip, ``(T, CAPE_COLUMNS, 3)``.
-
-    The top row keeps one width, the shoulders' median distance over the clip, centred between them
-    on every frame: a lifted clip's shoulders may come closer or part (measured on the demo's proxy:
-    0.46 m on its first frame, 0.23 m on the next), and a top row squeezed to half its width buckled
-    the cape and flung it over the head.
-
-    Behind is the horizontal way of ``(right - left) x up`` on each frame (the previous frame's
-    while the shoulders are one above the other), so the top row turns as the shoulders turn. It is
-    set back by the shoulders' largest joint sphere and the cloth's thickness, further (up to 2.5
-    times) until the sheet is clear of the first frame's volumes.
-
-    Raises
-    ------
-    SceneError
-        The shoulders are one above the other on the first frame, or no set-back clears the body.
-    """
-    length = cape.length or CAPE_LENGTH * height
-    thick = CLOTH_RADIUS * height
-    P = proxy.points
-    across = P[:, right] - P[:, left]
-    back = np.stack([-across[:, 2], np.zeros(len(P)), across[:, 0]], axis=1)  # (right - left) x up
-    size = np.linalg.norm(back, axis=1)
-    if size[0] < 1e-3 * height:
-        raise SceneError(f"a cape hangs from two markers side by side, but {cape.left!r} and {cape.right!r} "
-                         "are one above the other on the first frame; give the shoulders")
-    for t in range(len(P)):  # a frame whose shoulders are one above the other keeps the last way
-        back[t] = back[t] / size[t] if size[t] >= 1e-3 * height else back[t - 1]
-    reach = max(_marker_reach(proxy, left, radii), _marker_reach(proxy, right, radii)) + 2 * thick
-    width = float(np.median(np.linalg.norm(across, axis=1)))
-    way = across / np.maximum(np.linalg.norm(across, axis=1), 1e-300)[:, None]
-    s = np.linspace(-0.5, 0.5, CAPE_COLUMNS) * width
-    top = (P[:, left] + P[:, right])[:, None] / 2 + s[None, :, None] * way[:, None]  # (T, CAPE_COLUMNS, 3)
-    fall = np.linspace(0.0, 1.0, CAPE_ROWS)[:, None, None] * [0.0, -length, 0.0]
-    first = [_stack(_first_frame_volumes(proxy, radii))]
-    for d in reach * np.linspace(1.0, 2.5, 7):
-        V = top[0] + back[0] * d + fall
-        if _gap_ok(V, thick, first):
-            break
-    else:
-        raise SceneError(f"a cape from {cape.left!r} to {cape.right!r} cannot hang clear of the body behind "
-                         f"them (set back up to {2.5 * reach:.2f} m): a figure whose body runs level behind "
-                         "its shoulders, or the shoulders swapped (the cape hangs behind (right - left) x "
-                         "up: give the figure's own left first)")
-    if V[-1, 0, 1] < thick:  # the hem would start in the ground: shorten the fall
-        V[1:, :, 1] = V[0, :, 1] + (V[1:, :, 1] - V[0, :, 1]) * max(V[0, 0, 1] - 2 * thick, 1e-3) / length
-    F = _grid_triangles(CAPE_ROWS, CAPE_COLUMNS, ring=False)
-    xml = _flex_xml(name, V.reshape(-1, 3), F, (), CLOTH_DENSITY * width * length, cape.colour, thick)
-    return xml, top + back[:, None] * d
-
-
-def _top_row(model, flex):
-    """A cape's driven vertices' bodies: the first :data:`CAPE_COLUMNS` of its flex."""
-    start = model.flex_vertadr[flex]
-    return model.flex_vertbodyid[start:start + CAPE_COLUMNS]
-
-
-def _drive(mujoco, model, bodies):
-    """Make ``bodies`` (cape vertices moved by hand) as heavy as the proxy and undamped, so the cloth
-    they hold does not drag them off their path within a sub-step."""
-    model.body_mass[bodies] = KINEMATIC_MASS
-    for b in bodies:
-        model.dof_damping[model.body_dofadr[b] + np.arange(model.body_dofnum[b])] = 0.0
-    mujoco.mj_setConst(model, mujoco.MjData(model))
-
-
 def _air(elements):
     """The ``<option>`` attributes of air: MuJoCo's fluid model when a balloon, balls or rain are in
     the scene, none for cloth alone.
@@ -617,120 +428,6 @@ def _air(elements):
     if any(isinstance(e, Balloon | Balls | Rain) for e in elements):
         return f'density="{AIR_DENSITY}" viscosity="{AIR_VISCOSITY}"'
     return 'density="0" viscosity="0"'
-
-
-def _flex_xml(name, V, F, pinned, mass, colour, thick):
-    """A ``flexcomp`` of vertices ``V`` (in its body's frame) and triangles ``F``, ``pinned`` vertices
-    fixed to the body, edges of constant length, colliding with the proxy, the ground and the other
-    elements but not itself."""
-    mass = max(float(mass), MIN_CLOTH_VERTEX_MASS * len(V))
-    points = " ".join(repr(float(c)) for c in np.asarray(V).ravel())
-    elements = " ".join(str(int(k)) for k in np.asarray(F).ravel())
-    pins = f'<pin id="{" ".join(str(k) for k in pinned)}"/>' if len(pinned) else ""  # a cape has none
-    return (f'<flexcomp name="{name}" type="direct" dim="2" point="{points}" element="{elements}" '
-            f'mass="{mass!r}" radius="{thick!r}" rgba="{_rgba(colour)}">'
-            f'<contact {ELEMENT_BITS} selfcollide="none" solref="{CLOTH_CONTACT_TIME} 1" '
-            f'friction="0.6 0.005 0.001"/>'
-            f'<edge equality="true" solref="{CONTACT_TIME} 1" damping="{CLOTH_EDGE_DAMPING}"/>'
-            f'{pins}</flexcomp>')
-
-
-def _grid_triangles(rows, columns, ring):
-    """Two triangles per cell of a ``rows`` x ``columns`` grid of vertices (row major); ``ring``
-    joins the last column to the first (a cylinder)."""
-    cells = columns if ring else columns - 1
-    i, j = np.meshgrid(np.arange(rows - 1), np.arange(cells), indexing="ij")
-    a = i * columns + j
-    b = i * columns + (j + 1) % columns
-    c, d = a + columns, b + columns
-    return np.stack([np.stack([a, c, b], -1), np.stack([b, c, d], -1)], axis=2).reshape(-1, 3)
-
-
-def _damp_cloth(model, flexes, holders):
-    """Damp each cloth vertex's slide joints by :data:`CLOTH_DAMPING` times its mass (air's drag),
-    and take the vertex out of MuJoCo's fluid model.
-
-    The fluid model takes a body without geoms for the box of its inertia: a cloth vertex became a
-    1 cm cube of water whose drag, with the implicit integrator, blew the simulation up (measured:
-    a scarf on a circling hand, QACC at a cloth vertex's DOF after 0.23 s). Its inertia is unused
-    otherwise (a vertex only slides), so it is shrunk a million times, which shrinks the box to
-    nothing, and the damping stands in for air.
-    """
-    for f, holder in zip(flexes, holders, strict=True):
-        start, count = model.flex_vertadr[f], model.flex_vertnum[f]
-        for b in model.flex_vertbodyid[start:start + count]:
-            if b == holder:  # a pinned vertex: a point of its holder's body
-                continue
-            dofs = model.body_dofadr[b] + np.arange(model.body_dofnum[b])
-            model.dof_damping[dofs] = CLOTH_DAMPING * model.body_mass[b]
-            model.body_inertia[b] *= 1e-6
-
-
-def _across(way, axis):
-    """A unit vector across ``way`` facing the camera's ``axis`` as far as it can."""
-    c = np.cross(way, axis)
-    if np.linalg.norm(c) < 1e-6:
-        c = np.cross(way, [0.0, 1.0, 0.0]) if abs(way[1]) < 0.9 else np.cross(way, [1.0, 0.0, 0.0])
-    return c / np.linalg.norm(c)
-
-
-def _marker_reach(proxy, marker, radii):
-    """The largest radius of any limb end at ``marker`` over the clip (its joint sphere's)."""
-    L = np.asarray(proxy.limbs)
-    ends = [radii[:, k, e] for k in range(len(L)) for e in (0, 1) if L[k, e] == marker]
-    return float(max((np.max(r) for r in ends), default=0.0))
-
-
-def _relative_volumes(proxy, marker, radii):
-    """Every frame's limb volumes ``(A, B, r)`` seen from ``marker`` (its point at the origin),
-    stacked: where a point that moves with the marker must not be."""
-    P = proxy.points - proxy.points[:, marker:marker + 1]
-    L = np.asarray(proxy.limbs)
-    R = np.asarray(radii).max(axis=2)
-    return [(P[:, L[:, 0]].reshape(-1, 3), P[:, L[:, 1]].reshape(-1, 3), R.reshape(-1))]
-
-
-def _stack(volumes):
-    if not volumes:
-        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
-    a, b, r = zip(*volumes, strict=True)
-    return np.array(a), np.array(b), np.array(r)
-
-
-def _gap_ok(points, radius, volumes, gap=1e-3):
-    """Whether balls of ``radius`` at ``points`` ``(..., 3)`` touch none of the capsules in
-    ``volumes`` (a list of stacked ``(A, B, r)``), vectorised."""
-    q = np.asarray(points, dtype=float).reshape(-1, 3)
-    for A, B, r in volumes:
-        if len(A) == 0:
-            continue
-        AB = B - A
-        den = np.maximum((AB * AB).sum(-1), 1e-300)
-        s = np.clip(((q[:, None] - A) * AB).sum(-1) / den, 0.0, 1.0)
-        d = np.linalg.norm(q[:, None] - (A + s[..., None] * AB), axis=-1)
-        if (d < r + radius + gap).any():
-            return False
-    return True
-
-
-def _directions(P, marker):
-    """Ways a chain may hang from a marker, best first: down, then out sideways away from the
-    figure's middle, then the other horizontal ways and up."""
-    away = P[marker] - P.mean(axis=0)
-    away[1] = 0.0
-    n = np.linalg.norm(away)
-    away = away / n if n > 1e-9 else np.array([1.0, 0.0, 0.0])
-    side = np.array([-away[2], 0.0, away[0]])
-    return [np.array([0.0, -1.0, 0.0]), away, side, -side, -away, np.array([0.0, 1.0, 0.0])]
-
-
-def _clear(points, radius, volumes, gap=1e-3):
-    """Whether balls of ``radius`` at ``points`` touch none of ``volumes`` ``(a, b, r)``."""
-    for q in points:
-        for a, b, r in volumes:
-            if np.linalg.norm(q - _closest_on_segment(q, a, b)) < r + radius + gap:
-                return False
-    return True
 
 
 def rain_box(proxy: Proxy, height: float) -> NDArray[np.float64]:
@@ -763,53 +460,11 @@ def _place_balls(proxy, volumes, marker, count, r, placed):
         c = path[int(round((k + 1) * (T - 1) / (count + 1)))].copy()
         c[1] = r
         for _ in range(50):
-            push = _overlap(c, r, volumes, placed + [(o, r) for o in out])
+            push = overlap(c, r, volumes, placed + [(o, r) for o in out])
             if push is None:
                 break
             c += push
         out.append(c)
     return out
 
-
-def _first_frame_volumes(proxy, radii):
-    """Frame 0's capsules ``(a, b, radius)``, one per limb at its larger radius."""
-    P = proxy.points[0]
-    return [(P[p], P[c], float(radii[0, k].max())) for k, (p, c) in enumerate(proxy.limbs)]
-
-
-def _overlap(c, r, capsules, balls, gap=1e-3):
-    """A horizontal move that takes the ball at ``c`` out of the first thing it overlaps, or None."""
-    for a, b, radius in capsules:
-        q = _closest_on_segment(c, a, b)
-        d = c - q
-        depth = radius + r + gap - np.linalg.norm(d)
-        if depth > 0:
-            return _horizontal(d) * depth
-    for o, ro in balls:
-        d = c - o
-        depth = ro + r + gap - np.linalg.norm(d)
-        if depth > 0:
-            return _horizontal(d) * depth
-    return None
-
-
-def _horizontal(d):
-    h = np.array([d[0], 0.0, d[2]])
-    n = np.linalg.norm(h)
-    return h / n if n > 1e-9 else np.array([1.0, 0.0, 0.0])
-
-
-def _closest_on_segment(p, a, b):
-    ab = b - a
-    denominator = float(ab @ ab)
-    s = 0.0 if denominator == 0 else float(np.clip((p - a) @ ab / denominator, 0, 1))
-    return a + s * ab
-
-
-def _v(x):
-    return " ".join(repr(float(c)) for c in x)
-
-
-def _rgba(colour):
-    return " ".join(f"{c / 255:.6g}" for c in colour) + " 1"
 

@@ -25,7 +25,8 @@ from numpy.typing import NDArray
 from toonmotion.errors import SceneError
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.proxy import Proxy
-from toonmotion.scene.build import SEGMENTS, SceneModel, _mujoco, drops_in
+from toonmotion.scene.build import SEGMENTS, SceneModel, drops_in
+from toonmotion.scene.mjcf import load_mujoco
 
 MAX_STEP = 0.002  # seconds: the longest sub-step (the contacts' time constant is twice this)
 # Seconds the cloth hangs from the still first pose before frame 0, so it is seen hanging, not in
@@ -101,7 +102,7 @@ def simulate(scene: SceneModel, proxy: Proxy, *, progress: Progress | None = Non
     -------
     SceneMotion
     """
-    mujoco = _mujoco()
+    mujoco = load_mujoco()
     try:
         return _simulate(mujoco, scene, proxy, progress)
     except mujoco.FatalError as error:  # MuJoCo's own errors (its arena full, say): one line
