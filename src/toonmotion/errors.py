@@ -123,3 +123,8 @@ class SceneError(ToonmotionError):
 class BatchError(ToonmotionError):
     """A batch job cannot run: a malformed job file, an input it names that is missing, a name
     given twice, a pair naming a character or motion the job lacks, a cluster that cannot be reached."""
+
+
+class MessageError(ToonmotionError):
+    """An editor's message is not what the protocol says (:mod:`toonmotion.web.messages`): not
+    JSON, an unknown type, a field of the wrong kind or out of range."""

@@ -16,9 +16,10 @@ from toonmotion import api
 from toonmotion.errors import MeshError, ProjectError
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.samples import sample_character
+from toonmotion.web import editing as editing_module
 from toonmotion.web import session
+from toonmotion.web.editing import Editing
 from toonmotion.web.server import MAX_MESSAGE_BYTES, create_app
-from toonmotion.web.session import Editing
 from toonmotion.web.wire import decode_vertices
 
 TOKEN = "secret-token"
@@ -861,7 +862,8 @@ def test_a_binary_frame_ends_the_live_session_with_a_close_that_says_why(client,
 
 def test_tracking_and_retargeting_need_their_inputs(client):
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
-        track = _send(socket, {"type": "track", "joints": []})
+        joint = {"name": "a", "position": [1, 2], "size": [8, 8]}
+        track = _send(socket, {"type": "track", "joints": [joint]})
         retarget = _send(socket, {"type": "retarget"})
         frame = _send(socket, {"type": "frame", "frame": 0, "source": "capture"})
     assert "no footage yet" in track["message"]
@@ -1066,13 +1068,13 @@ def test_the_editor_prepares_its_compiled_deformer_before_the_first_drag(project
 
 def test_a_deformer_prepared_for_a_character_replaced_meanwhile_is_not_kept(project, monkeypatch):
     editing = Editing.open(project)
-    build = session._deformer_for
+    build = editing_module._deformer_for
 
     def rigged_again_meanwhile(character):
         editing.character = api.load_project(project)
         return build(character)
 
-    monkeypatch.setattr(session, "_deformer_for", rigged_again_meanwhile)
+    monkeypatch.setattr(editing_module, "_deformer_for", rigged_again_meanwhile)
     editing.prepare_deformer()
     assert editing._deformer is None
 
@@ -1083,7 +1085,7 @@ def test_a_deformer_that_cannot_be_prepared_is_left_to_the_first_drag(project, m
     def broken(character):
         raise MeshError("the mesh is degenerate")
 
-    monkeypatch.setattr(session, "_deformer_for", broken)
+    monkeypatch.setattr(editing_module, "_deformer_for", broken)
     editing.prepare_deformer()  # nothing raised, nothing printed: the drag reports it
     assert editing._deformer is None
     with pytest.raises(MeshError, match="degenerate"):
@@ -1241,7 +1243,7 @@ def test_a_drag_is_the_librarys_drag_and_its_mesh(client, project):
         assert refused["type"] == "error" and refused["message"].startswith("no joint is called 'tail'")
         refused = _send(socket, {"id": 3, "type": "drag", "positions": rest.tolist(), "joint": "right_hand",
                                  "to": [0, 0], "pinned": "right_elbow"})
-        assert refused["message"] == "'pinned' must list the names of the pinned joints"
+        assert refused["message"] == "'pinned' must list the names of the pinned joints, got 'right_elbow'"
 
 
 def test_every_page_is_told_of_another_pages_change_and_undo_says_what_it_undid(editable):

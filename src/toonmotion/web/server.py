@@ -12,7 +12,8 @@ Errors come back as one line: a 4xx reply ``{"error": "..."}`` over HTTP, a
 ``{"type": "error", "message": "..."}`` message over the WebSocket; a malformed message never
 closes the connection and never shows a traceback.
 
-What the WebSocket carries, and the open project's state, are :mod:`toonmotion.web.session`'s.
+What the WebSocket carries is :mod:`toonmotion.web.messages`'s, the open project
+:mod:`toonmotion.web.editing`'s, and the replies :mod:`toonmotion.web.session`'s.
 Messages are answered one at a time, in a worker thread of their own (:func:`create_app`'s
 ``answers``), never on the event loop: a slow pose holds up the poses after it, as before, but not
 the server's other pages' HTTP requests, their messages being read, progress or broadcasts.
@@ -50,25 +51,11 @@ from toonmotion.io.atomic import atomic_path
 from toonmotion.io.frames import load_frames
 from toonmotion.io.image import load_image, png_bytes
 from toonmotion.io.skeleton_json import load_skeleton_file
-from toonmotion.web.session import (
-    EXPORT_FILE,
-    EXPORTS,
-    FOOTAGE,
-    MAX_MESSAGE_BYTES,
-    UPLOAD_PARTS,
-    UPLOADS,
-    Editing,
-    answer,
-    bug,
-    describe,
-    exaggeration_of,
-    export,
-    one_line,
-    open_drawing,
-    suggest,
-    suggested_joints,
-    track,
-)
+from toonmotion.web import messages
+from toonmotion.web.editing import EXPORT_FILE, EXPORTS, FOOTAGE, UPLOAD_PARTS, UPLOADS, Editing
+from toonmotion.web.messages import MAX_MESSAGE_BYTES, bug, one_line
+from toonmotion.web.session import answer, describe
+from toonmotion.web.slow_requests import export, open_drawing, suggest, suggested_joints, track
 
 __all__ = ["MAX_MESSAGE_BYTES", "PAGE_FILES", "create_app", "new_token", "sign_in_code"]
 
@@ -464,8 +451,10 @@ async def _receive(request: Request, file: Path, what: str, *, already: int = 0,
 def _animate_for_export(editing: Editing, text: str) -> None:
     """Solve the animation an export message asks for, in the answers' thread (the export then
     only renders it); a bad message is the export's to refuse."""
-    with contextlib.suppress(ToonmotionError, ValueError, AttributeError):
-        editing.animated(exaggeration_of(json.loads(text)))
+    with contextlib.suppress(ToonmotionError):
+        message = messages.read(messages.parse(text))
+        if isinstance(message, messages.Export):
+            editing.animated(message.exaggeration())
 
 
 def _host_name(host: str | None) -> str:
