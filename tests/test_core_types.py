@@ -11,8 +11,8 @@ from toonmotion.animate.motion import Motion, motion_from_timeline
 from toonmotion.animate.timeline import Keyframe, Timeline
 from toonmotion.deform.deformer import Deformation, Deformer, DeformSettings
 from toonmotion.deform.depth import Overlap
-from toonmotion.deform.joint_solve import SolveResult
 from toonmotion.deform.needles import NeedleModel, needle_model
+from toonmotion.deform.solve_result import SolveResult
 from toonmotion.deform.tuning import CurveEdit, DragEdit
 from toonmotion.errors import (
     EditError,

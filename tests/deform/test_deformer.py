@@ -20,7 +20,7 @@ from toonmotion.deform.depth import (
     set_region_depth,
     triangle_layers,
 )
-from toonmotion.deform.joint_solve import joint_area
+from toonmotion.deform.joint_area import joint_area
 from toonmotion.errors import PoseError, SettingsError
 from toonmotion.geometry.polygon import triangle_areas
 from toonmotion.rig.pose import Pose, descendants, rest_pose, rotate_about

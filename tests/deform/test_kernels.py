@@ -74,7 +74,8 @@ def test_anchors_let_go_in_a_solve_are_a_solver_built_without_them(rigs, name, c
     the Woodbury identity) ends where a solver factorised without those anchors ends, with the
     same energy and iterations: every other anchor held, none held, and every anchor held by a
     sixteenth (a solver factorised with a sixteenth of the weight)."""
-    from toonmotion.deform.joint_solve import Anchors, JointSolver
+    from toonmotion.deform.joint_area import Anchors
+    from toonmotion.deform.joint_solve import JointSolver
 
     deformer = rigs.deformer(name, compiled=compiled)
     solver, anchors = deformer.solver, deformer.anchors

@@ -11,16 +11,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.deform.joint_solve import (
-    EDGE_TERMS,
-    JointSolver,
-    SolveResult,
-    joint_anchors,
-    joint_area,
-    joint_radii,
-)
+from toonmotion.deform.joint_area import joint_anchors, joint_area, joint_radii
+from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver
 from toonmotion.deform.needles import needle_model, stage_one, stretch_maps, triangle_shapes
 from toonmotion.deform.skinning import heat_weights, skinned_needles, skinned_stage_one
+from toonmotion.deform.solve_result import SolveResult
 from toonmotion.deform.unfold import rings_round, topology, untangle
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.arrays import frozen_array
@@ -91,7 +86,7 @@ class DeformSettings:
         thesis' edge-length term (eq. 3.7), which cannot tell a triangle from its mirror image.
     joint_anchor : float
         How firmly stage two holds the point of the drawing at each joint where the skeleton
-        puts it (``w4`` of :class:`~toonmotion.deform.joint_solve.Anchors`, against eq. 3.8's
+        puts it (``w4`` of :class:`~toonmotion.deform.joint_area.Anchors`, against eq. 3.8's
         weights summing to 1); 0 is the thesis, which let the drawn knees of the bundled
         character's crouch settle 20-24 px from the skeleton's. Where holding the joints leaves a
         triangle inverted that a solve holding none does not, the anchors give way a step at a
@@ -203,7 +198,7 @@ class Deformer:
         The skeleton's joints drawn inside the figure, which stage two holds at the joints.
     joint_width_px : (b,) float
         Each bone's joint width: how far round the joints at its ends stage two frees vertices
-        (:func:`~toonmotion.deform.joint_solve.joint_radii`, the larger end), at least the mesh
+        (:func:`~toonmotion.deform.joint_area.joint_radii`, the larger end), at least the mesh
         spacing.
     solver : JointSolver
     """

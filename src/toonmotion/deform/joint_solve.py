@@ -1,7 +1,7 @@
 """Stage two: nonlinear least squares over the joint areas (thesis 3.4.3, eq. 3.2-3.10).
 
-Only the *free* vertices move (the joint areas, see :func:`joint_area`); every other vertex
-keeps its stage-one position. The energy (eq. 3.8) is the weighted sum of
+Only the *free* vertices move (the joint areas, :mod:`toonmotion.deform.joint_area`); every
+other vertex keeps its stage-one position. The energy (eq. 3.8) is the weighted sum of
 
 * ``E1``, rotation- and scale-invariant curve Laplacians of the free outline vertices (3.3);
 * ``E2``, mean value coordinates of the free inner vertices (3.6);
@@ -47,9 +47,7 @@ then one complex coefficient and the whole system is one ``m x m`` complex solve
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -57,19 +55,17 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 
+from toonmotion.deform.anderson import Anderson
+from toonmotion.deform.energy_terms import anchor_rows, area_form, every_row
+from toonmotion.deform.joint_area import Anchors
+from toonmotion.deform.solve_result import SolveResult
 from toonmotion.errors import MeshError, SettingsError
-from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.coordinates import (
     as_complex,
     as_points,
-    barycentric,
-    mean_value_weights,
-    rsi_laplacian_coefficients,
 )
 from toonmotion.geometry.polygon import triangle_areas
-from toonmotion.rig.binding import Binding, bone_half_thickness
-from toonmotion.rig.skeleton import MIN_BONE_LENGTH, Skeleton
-from toonmotion.shape.mesh import Mesh, unique_edges
+from toonmotion.shape.mesh import Mesh
 
 # A change of eq. 3.8's energy (px^2) this small is round-off: a solve whose plain step changes the
 # energy by no more than the tolerance's share plus this has converged (at the rest pose the energy
@@ -85,158 +81,6 @@ EDGE_TERMS = ("rigid", "length")
 
 # Sets of anchors let go whose Woodbury operands a solver keeps (each a few solves to make).
 _RELEASES = 64
-
-
-@dataclass(frozen=True, eq=False)
-class SolveResult:
-    """Outcome of one stage-two solve.
-
-    Attributes
-    ----------
-    U : (n, 2) float
-        All vertices: the free ones solved, the rest as given.
-    iterations : int
-        Gauss-Newton iterations run.
-    energy_start, energy : float
-        Eq. 3.8 at the starting positions and at the result (pixels squared).
-    converged : bool
-        The last iteration lowered the energy by less than the tolerance (a fraction).
-
-    Construction copies ``U`` (read-only) and raises ``ValueError`` unless it is ``(n, 2)``,
-    the iteration count a whole number >= 0 and the energies numbers.
-    """
-
-    U: NDArray[np.float64]
-    iterations: int
-    energy_start: float
-    energy: float
-    converged: bool
-
-    _what = "a stage-two result"  # how errors name it
-
-    def __post_init__(self) -> None:
-        what, iterations = self._what, self.iterations
-        if isinstance(iterations, bool) or not isinstance(iterations, int | np.integer) or iterations < 0:
-            raise ValueError(f"{what}'s iterations must be a whole number >= 0, got {iterations!r}")
-        for name in ("energy_start", "energy"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float | np.number):
-                raise ValueError(f"{what}'s {name} must be a number, got {value!r}")
-            object.__setattr__(self, name, float(value))
-        U = frozen_array(self.U, dtype=np.float64, shape=(None, 2), name=f"{what}'s U")
-        object.__setattr__(self, "U", U)
-        object.__setattr__(self, "iterations", int(iterations))
-        object.__setattr__(self, "converged", bool(self.converged))
-
-
-@dataclass(frozen=True, eq=False)
-class Anchors:
-    """Points of the rest mesh that stage two holds where stage one puts them: a term ``E4``,
-    ``weight`` times the squared distance of each point from there, beside eq. 3.8's.
-
-    The thesis' stage two frees the joint areas and lets them settle as their outline, inner
-    shape and edges ask (eq. 3.8); nothing keeps the joint itself where the skeleton puts it.
-    Where a joint area is wide and stiff (knees in wide trousers), it settles as a block, and
-    the drawn knee ended 20-24 px from the skeleton's knee on the bundled character's crouch.
-    Stage one puts every point at a joint at that joint (both bones' needles turn about it), so
-    anchoring the joints' own points there keeps the drawing on the skeleton the animator drew.
-
-    Attributes
-    ----------
-    points : (a,) int
-        Which of the points asked for (:func:`joint_anchors`) each anchor is.
-    corners : (a, 3) int
-        The rest triangle holding each point.
-    barycentric : (a, 3) float
-        Each point's weights on its triangle's corners.
-    weight : float
-        ``w4``, >= 0; 0 leaves the thesis' energy alone.
-
-    Construction copies the arrays (read-only) and raises :class:`SettingsError` for a weight
-    that is not a finite number >= 0.
-    """
-
-    points: NDArray[np.int64]
-    corners: NDArray[np.int64]
-    barycentric: NDArray[np.float64]
-    weight: float
-
-    def __post_init__(self) -> None:
-        corners = frozen_array(self.corners, dtype=np.int64, shape=(None, 3), name="anchor corners")
-        object.__setattr__(self, "points", frozen_array(self.points, dtype=np.int64, shape=(len(corners),),
-                                                        name="anchored points"))
-        object.__setattr__(self, "corners", corners)
-        object.__setattr__(self, "barycentric", frozen_array(self.barycentric, dtype=np.float64,
-                                                             shape=corners.shape, name="anchor weights"))
-        if not (np.isfinite(self.weight) and self.weight >= 0):
-            raise SettingsError(f"the joint anchor weight must be a finite number >= 0, got {self.weight}")
-        object.__setattr__(self, "weight", float(self.weight))
-
-    def subset(self, keep: NDArray[np.bool_]) -> Anchors:
-        """The anchors where ``keep`` (``(a,) bool``) is True."""
-        keep = np.asarray(keep, dtype=bool)
-        return Anchors(self.points[keep], self.corners[keep], self.barycentric[keep], self.weight)
-
-
-def joint_anchors(mesh: Mesh, points: NDArray[np.float64], weight: float) -> Anchors:
-    """:class:`Anchors` for the rest ``points`` (``(p, 2)``, the skeleton's joints) that lie in
-    ``mesh``; a joint drawn outside the figure is not anchored."""
-    triangle, bary = barycentric(mesh.V, mesh.F, points)
-    inside = np.flatnonzero(triangle >= 0)
-    return Anchors(inside, np.asarray(mesh.F)[triangle[inside]].reshape(-1, 3), bary[inside], weight)
-
-
-def joint_area(
-    mesh: Mesh, skeleton: Skeleton, binding: Binding, mask: NDArray[np.bool_], *, width: float = 1.5,
-    radius: NDArray[np.float64] | None = None,
-) -> NDArray[np.bool_]:
-    """Vertices that stage two moves: the joint areas, ``(n,) bool``.
-
-    The thesis' joint area is the vertices of joint triangles (those spanning two bones), a
-    band about one triangle wide. On a sharply bent elbow the two limb regions overlap on the
-    inside of the bend by about the limb's half-thickness, and a one-triangle band cannot
-    unfold that. So around every joint where two or more bones meet we also free the vertices
-    of those bones within ``width`` times the thinner bone's half-thickness (the figure's
-    distance to its outline along the bone's middle; :func:`joint_radii`, or ``radius`` when
-    the caller has them already). ``width=0`` gives the thesis' band alone.
-    The default, 1.5, is also :class:`~toonmotion.deform.deformer.DeformSettings`'s
-    ``joint_width``, which :class:`~toonmotion.deform.deformer.Deformer` passes.
-    """
-    if not (np.isfinite(width) and width >= 0):
-        raise SettingsError(f"the joint area width must be a finite number >= 0, got {width}")
-    free = binding.joint_area.copy()
-    if width == 0 or len(mesh.V) == 0:
-        return free
-    if radius is None:
-        radius = joint_radii(skeleton, mask, width=width, floor=mesh.spacing)
-    for j, meeting in enumerate(_meeting_bones(skeleton)):
-        if radius[j] > 0:
-            joint = skeleton.positions[j]
-            near = np.hypot(mesh.V[:, 0] - joint[0], mesh.V[:, 1] - joint[1]) < radius[j]
-            free |= near & np.isin(binding.bone, meeting)
-    return free
-
-
-def joint_radii(skeleton: Skeleton, mask: NDArray[np.bool_], *, width: float, floor: float
-                ) -> NDArray[np.float64]:
-    """How far round each joint :func:`joint_area` frees vertices, ``(j,)`` pixels: ``width``
-    times the thinnest half-thickness of the bones meeting there (each at least ``floor``), 0
-    where fewer than two bones meet."""
-    thickness = bone_half_thickness(skeleton, mask, floor=floor)
-    return np.array([width * thickness[meeting].min() if len(meeting) >= 2 else 0.0
-                     for meeting in _meeting_bones(skeleton)])
-
-
-def _meeting_bones(skeleton):
-    """The bones of length that meet at each joint; joints at one place (AD's root and hip)
-    count as one."""
-    bones = skeleton.bones
-    usable = skeleton.bone_lengths > MIN_BONE_LENGTH
-    out = []
-    for joint in skeleton.positions:
-        here = np.flatnonzero(np.hypot(*(skeleton.positions - joint).T) <= MIN_BONE_LENGTH)
-        out.append(np.flatnonzero(usable & (np.isin(bones[:, 0], here) | np.isin(bones[:, 1], here))))
-    return out
 
 
 class JointSolver:
@@ -288,10 +132,10 @@ class JointSolver:
         # the Hermitian form area(z) = Re(z^H M z) / 2, its gradient M z.
         self._all_V = mesh.V
         moving = free[mesh.F].any(axis=1)
-        self._area_form = _area_form(np.asarray(mesh.F)[moving], len(free))
+        self._area_form = area_form(np.asarray(mesh.F)[moving], len(free))
         self._still_F = np.asarray(mesh.F)[~moving]  # triangles no solve changes
         rest = as_complex(mesh.V)
-        every = _every_row(mesh)
+        every = every_row(mesh)
         A1 = every.laplacian[free[every.laplacian_vertex]]
         A2 = every.mean_value[free[every.mean_value_vertex]]
         if edge_term == "length":
@@ -311,7 +155,7 @@ class JointSolver:
         self._A3 = A3
         anchors = anchors if anchors is not None and anchors.weight > 0 else None
         self.anchors = anchors
-        A4 = None if anchors is None else _anchor_rows(anchors, len(mesh.V))
+        A4 = None if anchors is None else anchor_rows(anchors, len(mesh.V))
         self._A4, self._anchor_weight = A4, 0.0 if anchors is None else anchors.weight
         self._anchor_target = np.zeros(0, complex)
         # Each anchor's weight in this solve: w4 where held, 0 where let go (:meth:`_set_held`).
@@ -511,7 +355,7 @@ class JointSolver:
             The whole mesh's signed area (px^2, :func:`~toonmotion.geometry.polygon.triangle_areas`
             summed) to keep, a constraint (module docstring); None: no constraint.
         acceleration : int
-            Anderson acceleration over this many past iterations (:class:`_Anderson`); 0 runs the
+            Anderson acceleration over this many past iterations (:class:`Anderson`); 0 runs the
             plain local-global iterations. Either way the energy never goes up, and both reach
             the same minimum.
         held : (a,) bool or float, optional
@@ -547,7 +391,7 @@ class JointSolver:
             return SolveResult(U=as_points(z), iterations=int(iterations), energy_start=start,
                                energy=float(energy), converged=bool(converged))
         targets, energy = self._local(z)
-        mixer = _Anderson(acceleration) if acceleration else None
+        mixer = Anderson(acceleration) if acceleration else None
         iterations, converged = 0, False
         while iterations < max_iterations and not converged:
             iterations += 1
@@ -638,166 +482,4 @@ class JointSolver:
         r = e - targets
         return targets.ravel(), float(energy + self.weights[2] * np.vdot(r, r).real)
 
-
-class _Anderson:
-    """Anderson acceleration of a fixed-point iteration ``x -> G(x)`` (type II, as Peng et al.
-    2018 apply to local-global geometry solves): the next point is the combination of the last
-    few steps whose residuals ``G(x) - x`` combine to the smallest, extrapolating where plain
-    iterations creep along a long valley. Complex vectors are mixed as their real and imaginary
-    parts (the local step is not complex-linear).
-
-    >>> mixer = _Anderson(3)
-    >>> x = np.array([1.0 + 0j])
-    >>> for _ in range(3):  # G(x) = x / 2 + 1, fixed point 2: exact after two mixed steps
-    ...     x = mixer.mix(x, x / 2 + 1)
-    >>> np.round(x, 12).tolist()
-    [(2+0j)]
-    """
-
-    def __init__(self, depth: int) -> None:
-        self.size = depth
-        self.restart()
-
-    def restart(self, *, plain: bool = False) -> None:
-        """Forget the past steps (after a mixed point was refused, or gained too little to go on
-        with); ``plain``: the next step is to be a plain one (:attr:`depth` is 0 until then)."""
-        self.depth = 0 if plain else self.size
-        self._last: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
-        self._df: list[NDArray[np.float64]] = []
-        self._dg: list[NDArray[np.float64]] = []
-
-    def mix(self, x: NDArray[np.complex128], step: NDArray[np.complex128]) -> NDArray[np.complex128]:
-        """The next point after ``x``, whose plain step is ``step``."""
-        g = np.ascontiguousarray(step).view(np.float64)
-        f = g - np.ascontiguousarray(x).view(np.float64)
-        if self._last is not None:
-            self._df.append(f - self._last[0])
-            self._dg.append(g - self._last[1])
-            if len(self._df) > self.depth:
-                del self._df[0], self._dg[0]
-        self._last = (f, g)
-        if not self._df:
-            return np.array(step)
-        DF = np.stack(self._df, axis=1)
-        gram = DF.T @ DF
-        gram[np.diag_indices_from(gram)] *= 1 + 1e-10
-        try:
-            gamma = np.linalg.solve(gram, DF.T @ f)
-        except np.linalg.LinAlgError:
-            self.restart()
-            return np.array(step)
-        return (g - np.stack(self._dg, axis=1) @ gamma).view(np.complex128)
-
-
-@dataclass(frozen=True, eq=False)
-class _EveryRow:
-    """Eq. 3.8's rows with every vertex free: a solver for any joint area takes its rows from
-    these (the rows of a free vertex, or of a triangle or edge touching one, do not depend on
-    which others are free), so a widened joint area costs a factorisation, not a rebuild."""
-
-    laplacian: sp.csr_matrix  # E1, a row per outline vertex, loop by loop
-    laplacian_vertex: NDArray[np.int64]
-    mean_value: sp.csr_matrix  # E2, a row per inner vertex
-    mean_value_vertex: NDArray[np.int64]
-    triangle_edges: NDArray[np.int64]  # (3t, 2): E3 rigid, three rows per triangle
-    triangle_edge_rows: sp.csr_matrix
-    edges: NDArray[np.int64]  # (e, 2): E3 length, a row per edge
-    edge_rows: sp.csr_matrix
-
-
-_EVERY_ROW: weakref.WeakKeyDictionary[Mesh, _EveryRow] = weakref.WeakKeyDictionary()
-
-
-def _every_row(mesh):
-    """The mesh's :class:`_EveryRow`, built on first use and kept while the mesh lives."""
-    if mesh not in _EVERY_ROW:
-        every = np.ones(len(mesh.V), bool)
-        inner = np.arange(mesh.n_outline, len(mesh.V))
-        triangle_edges, triangle_rows, _ = _triangle_edge_rows(mesh, every)
-        edges, edge_rows = _edge_rows(mesh, every)
-        _EVERY_ROW[mesh] = _EveryRow(
-            _laplacian_rows(mesh, as_complex(mesh.V), every).tocsr(),
-            np.concatenate(mesh.boundary) if mesh.boundary else np.zeros(0, np.int64),
-            _mean_value_rows(mesh, every).tocsr(), inner,
-            triangle_edges, triangle_rows.tocsr(), edges, edge_rows.tocsr())
-    return _EVERY_ROW[mesh]
-
-
-def _anchor_rows(anchors, n):
-    """E4 rows: one per anchored point, its barycentric combination of its triangle's corners."""
-    a = len(anchors.corners)
-    rows = np.repeat(np.arange(a), 3)
-    return sp.csr_matrix((anchors.barycentric.ravel().astype(complex), (rows, anchors.corners.ravel())),
-                         shape=(a, n))
-
-
-def _area_form(F, n):
-    """``M``, ``(n, n)`` Hermitian, with ``Re(z^H M z) / 2`` the total signed area of triangles
-    ``F`` (as :func:`~toonmotion.geometry.polygon.triangle_areas`, positive counter-clockwise
-    on screen): each corner's gradient is ``i/2 (next corner - previous corner)``."""
-    F = np.asarray(F)
-    rows = np.concatenate([F.ravel(), F.ravel()])
-    cols = np.concatenate([np.roll(F, -1, axis=1).ravel(), np.roll(F, 1, axis=1).ravel()])
-    vals = np.concatenate([np.full(F.size, 0.5j), np.full(F.size, -0.5j)])
-    return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
-
-
-def _laplacian_rows(mesh, rest, free):
-    """E1 rows: one per free outline vertex, ``u - (u_prev + u_next)/2 - c (u_next - u_prev)``."""
-    rows, cols, vals = [], [], []
-    count = 0
-    for loop in mesh.boundary:
-        prev, after = np.roll(loop, 1), np.roll(loop, -1)
-        keep = free[loop]
-        c = rsi_laplacian_coefficients(mesh.V[prev[keep]], mesh.V[loop[keep]], mesh.V[after[keep]])
-        k = int(keep.sum())
-        r = np.arange(count, count + k)
-        rows += [r, r, r]
-        cols += [loop[keep], prev[keep], after[keep]]
-        vals += [np.ones(k, complex), -0.5 + c, -0.5 - c]
-        count += k
-    return _matrix(rows, cols, vals, count, len(mesh.V))
-
-
-def _mean_value_rows(mesh, free):
-    """E2 rows: one per free inner vertex, ``u_i - sum_j w_ij u_j``."""
-    inner = free.copy()
-    inner[: mesh.n_outline] = False
-    r, c, w = mean_value_weights(mesh.V, mesh.F)
-    keep = inner[r]
-    index = np.cumsum(inner) - 1
-    ids = np.flatnonzero(inner)
-    rows = [index[ids], index[r[keep]]]
-    cols = [ids, c[keep]]
-    vals = [np.ones(len(ids), complex), -w[keep].astype(complex)]
-    return _matrix(rows, cols, vals, len(ids), len(mesh.V))
-
-
-def _edge_rows(mesh, free):
-    """E3 rows: one per edge touching a free vertex, ``u_i - u_j``."""
-    edges = unique_edges(mesh.F)
-    edges = edges[free[edges[:, 0]] | free[edges[:, 1]]]
-    k = np.arange(len(edges))
-    A = _matrix([k, k], [edges[:, 0], edges[:, 1]], [np.ones(len(k), complex), -np.ones(len(k), complex)],
-                len(edges), len(mesh.V))
-    return edges, A
-
-
-def _triangle_edge_rows(mesh, free):
-    """E3 rows, rigid form: three per triangle touching a free vertex, one for each edge."""
-    triangles = np.flatnonzero(free[mesh.F].any(axis=1))
-    F = mesh.F[triangles]
-    edges = np.stack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1).reshape(-1, 2)
-    k = np.arange(len(edges))
-    A = _matrix([k, k], [edges[:, 0], edges[:, 1]], [np.ones(len(k), complex), -np.ones(len(k), complex)],
-                len(edges), len(mesh.V))
-    return edges, A, F
-
-
-def _matrix(rows, cols, vals, shape0, shape1):
-    if not rows:
-        return sp.csr_matrix((shape0, shape1), dtype=complex)
-    return sp.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(shape0, shape1)
-    )
 
