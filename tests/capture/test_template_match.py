@@ -6,15 +6,9 @@ import math
 import cv2
 import numpy as np
 
-from toonmotion.capture.template_match import (
-    SPIN_TURNS,
-    BoneRule,
-    Templates,
-    locate,
-    match,
-    plan_joint,
-    search_round,
-)
+from toonmotion.capture.coarse_search import locate, search_round
+from toonmotion.capture.joint_plan import BoneRule, Templates, plan_joint
+from toonmotion.capture.template_match import SPIN_TURNS, match
 from toonmotion.capture.track_search import REACQUIRE_CONFIDENCE
 
 SIDE = 21

@@ -9,7 +9,7 @@ import pytest
 
 from tests.conftest import SHARED_DATA, _require
 from toonmotion.capture.foreground import flat_figure_masks
-from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.capture.tracker import TrackSetup, track
 from toonmotion.testing.mocap_tracking import (
     render_bvh_clip,

@@ -9,7 +9,7 @@ import pytest
 
 from tests.conftest import SHARED_DATA, _require
 from toonmotion.capture.foreground import FlatBackgroundMasks, flat_figure_masks, flat_threshold
-from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.capture.track_figure import FIGURE_SLACK, FigureMasks, figure_cells, on_figure, onto_figure
 from toonmotion.capture.tracker import TrackSettings, TrackSetup, track
 from toonmotion.errors import TrackingError

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from tests.capture.test_tracker import _errors, _setup, _wander
-from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.capture.track_light import Relit, light_levels, relight
 from toonmotion.capture.tracker import TrackSettings, track
 from toonmotion.errors import ToonmotionError

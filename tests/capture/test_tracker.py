@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from toonmotion.capture import track_search
-from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.capture.track_scale import WORKING_SIDE
 from toonmotion.capture.track_search import REACQUIRE_CONFIDENCE
 from toonmotion.capture.tracker import (

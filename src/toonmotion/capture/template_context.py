@@ -26,14 +26,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.template_match import (
-    Context,
-    Templates,
-    confidence,
-    distinct_size,
-    is_distinct,
-    sample,
-)
+from toonmotion.capture.joint_plan import Context, Templates
+from toonmotion.capture.patches import confidence, distinct_size, is_distinct, sample
 
 # The context's side, times the rectangle's larger side. Over the drawings' footage (43 clips,
 # 287.2 px summed without a context), 2 placed the joints 236.0 px off summed, 2.5 241.7, 3
@@ -84,7 +78,7 @@ def at_level(xy: NDArray[np.float64], n: int) -> NDArray[np.float64]:
 def cut_context(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int]
                 ) -> Context | None:
     """The context of a ``size`` rectangle at ``centre`` turned by ``angle`` radians, grown further
-    where it is not distinct (:func:`~toonmotion.capture.template_match.distinct_size`); None where
+    where it is not distinct (:func:`~toonmotion.capture.patches.distinct_size`); None where
     it is not distinct even so (all inside a fill, it would match anywhere in it).
     """
     centre = np.asarray(centre, dtype=float)
@@ -115,7 +109,7 @@ def place_by_context(pyramid: Pyramid, context: Context, centre: NDArray[np.floa
     xy : (2,) float
         The joint's place there, full-resolution (x, y) pixels, to within a fraction of a level's pixel.
     confidence : float
-        How well the context matches there (:func:`~toonmotion.capture.template_match.confidence`).
+        How well the context matches there (:func:`~toonmotion.capture.patches.confidence`).
 
     Examples
     --------

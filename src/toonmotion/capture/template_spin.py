@@ -1,6 +1,6 @@
 """Looking for a joint at turns all round at once, where no bone gives its rectangle's angle.
 
-:func:`~toonmotion.capture.template_match.locate` turns the search window for each turn it tries
+:func:`~toonmotion.capture.coarse_search.locate` turns the search window for each turn it tries
 and matches the anchor's coarse template in each (``cv2.matchTemplate``, which transforms the
 template anew every call): 18 turns cost 18 searches. Here the *template* turns instead: the disc
 inscribed in the anchor's coarse template, turned by each of
@@ -10,7 +10,7 @@ turn's sums of squared differences come from one product of spectra and one batc
 transforms (``scipy.fft``): the 18 turns in about a fifth of the time (130-350 us against
 640-1700 us for windows 15-45 px round).
 
-The cost per cell is :func:`~toonmotion.capture.template_match.locate`'s (eq. 4.6's mixed cost
+The cost per cell is :func:`~toonmotion.capture.coarse_search.locate`'s (eq. 4.6's mixed cost
 with the joint's colour weight, ``w_beta = 1 / radius^2``, plain cells first, off-figure cells
 left out) over the disc's pixels only: the part of the rectangle every turn keeps in view (a
 square's corners turn out of it).
@@ -25,16 +25,10 @@ import numpy as np
 import scipy.fft as sp_fft
 from numpy.typing import NDArray
 
-from toonmotion.capture.template_match import (
-    SPIN_TURNS,
-    UPDATE_CONFIDENCE,
-    JointPlan,
-    Patch,
-    coarse_geometric,
-    confidence,
-    sample,
-    ssd_at,
-)
+from toonmotion.capture.coarse_search import coarse_geometric
+from toonmotion.capture.joint_plan import UPDATE_CONFIDENCE, JointPlan
+from toonmotion.capture.patches import Patch, confidence, sample, ssd_at
+from toonmotion.capture.template_match import SPIN_TURNS
 from toonmotion.capture.track_figure import figure_cells
 
 _SUM = np.ones((1, 3), np.float32)  # cv2.transform by it sums the channels
@@ -50,7 +44,7 @@ class TurnedDiscs:
         The template.
     turns : tuple of float
         Radians; a disc turned by ``a`` is the template's look where its rectangle is turned by
-        ``a`` (:func:`~toonmotion.capture.template_match.sample`'s convention).
+        ``a`` (:func:`~toonmotion.capture.patches.sample`'s convention).
     side : int
         The disc's diameter, coarse pixels: the template's shorter side.
     discs : (n, side, side, 3) float32
@@ -93,7 +87,7 @@ def locate_all_round(small: NDArray[np.uint8], discs: TurnedDiscs, centre: NDArr
                      ) -> tuple[NDArray[np.float64], float, float]:
     """Look for a joint at half resolution, up to ``radius`` pixels (full resolution) from
     ``centre``, its rectangle turned by each of ``discs.turns``, as
-    :func:`~toonmotion.capture.template_match.locate` does at turns of the rectangle's angle.
+    :func:`~toonmotion.capture.coarse_search.locate` does at turns of the rectangle's angle.
 
     Returns
     -------

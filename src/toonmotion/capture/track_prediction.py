@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.template_match import VISIBLE_CONFIDENCE
+from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH
 
 # A root that hides coasts at its mean velocity over this many visible steps (at most).

@@ -5,14 +5,14 @@ A frame is searched in four passes over the skeleton:
 
 1. **Down** (parents before children). A joint seen last drawing is matched round its
    prediction (eq. 4.4-4.6). A joint with a parent found this frame is held near its bone's last
-   length, a kinematic term beside eq. 4.6 (:class:`~toonmotion.capture.template_match.BoneRule`);
+   length, a kinematic term beside eq. 4.6 (:class:`~toonmotion.capture.joint_plan.BoneRule`);
    one with a texture of its own weighs its colour :data:`TEXTURED_COLOUR_WEIGHT` times as much.
    A *hidden* joint is looked for afresh: round its parent, if that was found, at every place its
    bone can reach in directions widening from where it was last (:data:`SPAN_STEP` a drawing),
-   its rectangle turned with its bone there (:func:`~toonmotion.capture.template_match.search_round`);
+   its rectangle turned with its bone there (:func:`~toonmotion.capture.coarse_search.search_round`);
    else near where its parent carries it (a parent hidden too is first put where its own parent
    carries it), in a window that widens for every drawing it stays hidden
-   (:func:`~toonmotion.capture.template_match.locate`; with no bone to give its angle, at turns
+   (:func:`~toonmotion.capture.coarse_search.locate`; with no bone to give its angle, at turns
    all round, :func:`~toonmotion.capture.template_spin.locate_all_round`); after a held drawing,
    as every window, as many times as wide as the frames it was held. A joint with a texture of its own not
    found round its prediction is looked for at once in the same way. The best places are then matched
@@ -20,7 +20,7 @@ A frame is searched in four passes over the skeleton:
    :data:`REACQUIRE_CONFIDENCE` confident (a joint with a texture of its own, within its window
    of where it is carried, as plainly as a joint that shows), within :data:`REACH_SLACK` times the
    longest its bone has been seen. A joint with a texture of its own
-   (:func:`~toonmotion.capture.template_match.is_textured`) is looked for where it looks alike:
+   (:func:`~toonmotion.capture.patches.is_textured`) is looked for where it looks alike:
    its places are picked by look, it is not held to its bone's last length, a weak match is
    taken wherever it lies, and one at least :data:`WEAK_CONFIDENCE` confident even beside a joint
    that shows (not on it); a flat-coloured one, whose look-alikes are all over a cartoon, is held
@@ -46,25 +46,18 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from toonmotion.capture.template_context import CONTEXT_CONFIDENCE, Pyramid, place_by_context
-from toonmotion.capture.template_match import (
-    SPIN_TURNS,
-    TURN_CONFIDENCE,
+from toonmotion.capture.coarse_search import locate, rank_turns, search_round
+from toonmotion.capture.joint_plan import (
     UPDATE_CONFIDENCE,
     VISIBLE_CONFIDENCE,
     BoneRule,
     JointPlan,
-    Match,
     Templates,
-    is_textured,
-    likeness,
-    locate,
-    match,
     plan_joint,
-    rank_turns,
-    sample,
-    search_round,
 )
+from toonmotion.capture.patches import is_textured, likeness, sample
+from toonmotion.capture.template_context import CONTEXT_CONFIDENCE, Pyramid, place_by_context
+from toonmotion.capture.template_match import SPIN_TURNS, TURN_CONFIDENCE, Match, match
 from toonmotion.capture.template_spin import TurnedDiscs, locate_all_round
 from toonmotion.capture.track_figure import FigureMasks, onto_figure
 from toonmotion.capture.track_prediction import bone_turn, hidden_at, turns
@@ -113,7 +106,7 @@ REACH_SLACK = 1.2
 # larger side from where it was expected (predicted; carried, when hidden), times the pace (as
 # the windows widen after a held drawing): a weak match may refine where a joint is (its looks
 # partly covered, or changed as its limb bends), but not carry it off along a flat limb that
-# looks alike all the way. A hidden joint whose template is textured (template_match.is_textured)
+# looks alike all the way. A hidden joint whose template is textured (patches.is_textured)
 # is the exception: it is found again by a weak match wherever its search reaches, since where it
 # is carried is only a guess, the longer it hides the worse, and a texture of its own is not found
 # on another limb. (Held to its guess, a hand lost on twos as its arm swung down stayed 116 px off
@@ -130,12 +123,12 @@ WEAK_REACH = 0.25
 # to 287.6 at seed 5 and from 134.3 to 137.2 on footage of the shared drawings.)
 REFIT_TURN = math.radians(5)
 # A joint found is ambiguous when the places joined to its match that match as well as it
-# (template_match.ALIKE_LEVEL) reach farther than this fraction of its rectangle's larger side from
+# (joint_plan.ALIKE_LEVEL) reach farther than this fraction of its rectangle's larger side from
 # it: a flat fill, where the texture cannot say where along it the joint is. Its predicted motion
 # does not know either, and a knee of the demo's flat-blue trousers slid 80 px up the leg going by
 # it; the joint is put among those places where its neighbours carry it (FrameSearch._settle).
 AMBIGUOUS_SPREAD = 0.125
-# A joint with a texture of its own (template_match.is_textured) weighs its colour this many times
+# A joint with a texture of its own (patches.is_textured) weighs its colour this many times
 # as much as eq. 4.6's w_alpha: its colour cost has one sharp minimum, which the distances from the
 # prediction and from its bone's last length should not outweigh. At w_alpha = 1 / 255^2 a wave's
 # hand swinging 21 px a drawing on twos was taken 11 px short of it, where it matched at 0.09, over
@@ -146,7 +139,7 @@ AMBIGUOUS_SPREAD = 0.125
 TEXTURED_COLOUR_WEIGHT = 16.0
 # A joint with a texture of its own re-cuts its latest template where the two agree and the place
 # looks like its anchor, which never learns, with a likeness of at least this, whatever the light
-# (template_match.likeness); a flat-coloured one where it is found plainly (UPDATE_CONFIDENCE, the
+# (patches.likeness); a flat-coloured one where it is found plainly (UPDATE_CONFIDENCE, the
 # higher of the two templates' confidences). At 0.8 of either confidence, a textured square passing
 # behind an occluder at 0.5-0.75 px a frame was lost to it, each frame's latest (a little more
 # occluder) matching the next at 0.8 or better; at 0.6 of likeness still. Asked for 0.5 of the
@@ -164,7 +157,7 @@ _HIDDEN = float(np.nextafter(VISIBLE_CONFIDENCE, 0))
 
 
 class Plans:
-    """Each joint's :class:`~toonmotion.capture.template_match.JointPlan`, and its plan with the
+    """Each joint's :class:`~toonmotion.capture.joint_plan.JointPlan`, and its plan with the
     search widened, and with its colour weighed more: ``plans(m)``, ``plans(m, factor)``,
     ``plans(m, factor, colour)`` (cached).
 
@@ -452,7 +445,7 @@ class FrameSearch:
     def _learn(self, image, t, m):
         """Re-cut joint ``m``'s latest template where it was found at ``t``, its two templates
         agreeing: with a texture of its own, if the patch there looks like its anchor at least
-        :data:`ANCHOR_LIKENESS` (:func:`~toonmotion.capture.template_match.likeness`); else if it
+        :data:`ANCHOR_LIKENESS` (:func:`~toonmotion.capture.patches.likeness`); else if it
         was found plainly (``UPDATE_CONFIDENCE``)."""
         textured = self._textured[m]
         if not textured and self.C[t, m] < UPDATE_CONFIDENCE:

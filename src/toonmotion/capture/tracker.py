@@ -28,14 +28,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.capture.joint_plan import UPDATE_CONFIDENCE, VISIBLE_CONFIDENCE, Templates
+from toonmotion.capture.patches import distinct_size
 from toonmotion.capture.template_context import Pyramid, at_level, cut_templates
-from toonmotion.capture.template_match import (
-    OTHERS,
-    UPDATE_CONFIDENCE,
-    VISIBLE_CONFIDENCE,
-    Templates,
-    distinct_size,
-)
+from toonmotion.capture.template_match import OTHERS
 from toonmotion.capture.track_checks import (
     Frames,
     check_corrections,
@@ -514,7 +510,7 @@ def _held_on(frames, first, settings):
 def _plans(setup, settings, image, centres):
     """The joints' :class:`~toonmotion.capture.track_search.Plans` for ``setup`` and ``settings``:
     templates cut from ``image`` at ``centres`` (grown where the rectangle is not distinct,
-    :func:`~toonmotion.capture.template_match.distinct_size`), windows as the rectangles ask."""
+    :func:`~toonmotion.capture.patches.distinct_size`), windows as the rectangles ask."""
     r = [settings.search if settings.search is not None else max(MIN_SEARCH, SEARCH_FRACTION * max(w, h))
          for w, h in setup.sizes]
     whole = [(max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5)))) for w, h in setup.sizes]
