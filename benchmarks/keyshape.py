@@ -182,8 +182,9 @@ def sequences(args):
 
 
 def video_line(name, frames, outlines, key_frames, truth, largest):
+    from toonmotion.keyshape.image_model import build_image_model
     from toonmotion.keyshape.matte import fit_matte
-    from toonmotion.keyshape.video import build_image_model, region_mask, shrunk, track_layer
+    from toonmotion.keyshape.video import region_mask, shrunk, track_layer
 
     first = key_frames[0]
     full_frames, full_outlines = frames, outlines

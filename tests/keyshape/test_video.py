@@ -14,8 +14,9 @@ from tests.conftest import run_cli
 from toonmotion import api
 from toonmotion.errors import KeyShapeError
 from toonmotion.io.keyshape_json import load_contours, load_keymotion, save_contours
+from toonmotion.keyshape.image_model import build_image_model
 from toonmotion.keyshape.matte import fit_matte
-from toonmotion.keyshape.video import build_image_model, region_mask
+from toonmotion.keyshape.video import region_mask
 from toonmotion.sample_cartoons import BAR, bouncing_ball, morphing_character
 
 
