@@ -61,7 +61,7 @@ from pathlib import Path  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from toonmotion.capture.tracker import TrackSettings  # noqa: E402
+from toonmotion.capture.track_settings import TrackSettings  # noqa: E402
 from toonmotion.testing.mocap_tracking import render_bvh_clip, track_from_truth, tracking_scores  # noqa: E402
 
 cv2.setNumThreads(1)

@@ -48,7 +48,7 @@ import numpy as np  # noqa: E402
 
 from toonmotion.animate.motion import motion_for  # noqa: E402
 from toonmotion.capture.footage import capture_motion, suggested_sizes  # noqa: E402
-from toonmotion.capture.tracker import TrackSettings  # noqa: E402
+from toonmotion.capture.track_settings import TrackSettings  # noqa: E402
 from toonmotion.io.frames import load_frames  # noqa: E402
 from toonmotion.io.motion_json import load_motion  # noqa: E402
 from toonmotion.io.pose_json import save_keyframes  # noqa: E402

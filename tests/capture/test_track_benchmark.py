@@ -10,7 +10,8 @@ import pytest
 from tests.conftest import SHARED_DATA, _require
 from toonmotion.capture.foreground import flat_figure_masks
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
-from toonmotion.capture.tracker import TrackSetup, track
+from toonmotion.capture.track_settings import TrackSetup
+from toonmotion.capture.tracker import track
 from toonmotion.testing.mocap_tracking import (
     render_bvh_clip,
     track_from_truth,
@@ -180,7 +181,8 @@ def test_tracking_both_ways_keeps_more_of_a_run():
     run gained 6.99 -> 6.09 until hidden joints were looked for where they look alike rather than
     where their bones last were; now one way keeps it as well, 5.78 against 5.80.)"""
     from toonmotion.capture.track_search import MAX_WIDEN
-    from toonmotion.capture.tracker import SEARCH_FRACTION, TrackSettings
+    from toonmotion.capture.track_settings import TrackSettings
+    from toonmotion.capture.tracker import SEARCH_FRACTION
 
     run = render_bvh_clip(_require(SHARED_DATA / "mocap") / "cmu_02_03_run.bvh", style="flat")
     one_way = tracking_scores(track_from_truth(run)[0], run.truth)["mean_px"]

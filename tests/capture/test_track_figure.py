@@ -11,7 +11,8 @@ from tests.conftest import SHARED_DATA, _require
 from toonmotion.capture.foreground import FlatBackgroundMasks, flat_figure_masks, flat_threshold
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.capture.track_figure import FIGURE_SLACK, FigureMasks, figure_cells, on_figure, onto_figure
-from toonmotion.capture.tracker import TrackSettings, TrackSetup, track
+from toonmotion.capture.track_settings import TrackSettings, TrackSetup
+from toonmotion.capture.tracker import track
 from toonmotion.errors import TrackingError
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.testing.mocap_tracking import render_bvh_clip

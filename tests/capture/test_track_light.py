@@ -6,7 +6,8 @@ import pytest
 from tests.capture.test_tracker import _errors, _setup, _wander
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.capture.track_light import Relit, light_levels, relight
-from toonmotion.capture.tracker import TrackSettings, track
+from toonmotion.capture.track_settings import TrackSettings
+from toonmotion.capture.tracker import track
 from toonmotion.errors import ToonmotionError
 
 

@@ -8,7 +8,7 @@ from toonmotion.animate.motion import motion_for
 from toonmotion.capture.footage import capture_motion, first_figure
 from toonmotion.capture.setup import rectangle_sizes
 from toonmotion.capture.track_path import best_paths
-from toonmotion.capture.tracker import TrackSettings
+from toonmotion.capture.track_settings import TrackSettings
 from toonmotion.io.frames import load_frames
 from toonmotion.io.motion_json import load_motion
 from toonmotion.rig.skeleton import Skeleton

@@ -13,13 +13,8 @@ from toonmotion.capture import track_search
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.capture.track_scale import WORKING_SIDE
 from toonmotion.capture.track_search import REACQUIRE_CONFIDENCE
-from toonmotion.capture.tracker import (
-    Tracking,
-    TrackSettings,
-    TrackSetup,
-    retrack,
-    track,
-)
+from toonmotion.capture.track_settings import Tracking, TrackSettings, TrackSetup
+from toonmotion.capture.tracker import retrack, track
 from toonmotion.errors import TrackingError
 from toonmotion.rig.skeleton import Skeleton
 
@@ -885,7 +880,7 @@ def test_a_hidden_joint_goes_by_its_parent_and_its_children_found_and_a_root_by_
     child is hidden too, stays with the neck (a grandchild's move is mostly the arm's turn about
     it; going by it put the shoulder 5 px off). With the neck hidden too, the neck, a root with
     nothing to carry it, goes with the hand, and the arm with it."""
-    from toonmotion.capture.track_search import _place_hidden, moves_below
+    from toonmotion.capture.track_hidden import moves_below, place_hidden
 
     parents = np.array([-1, 0, 1, 2])
     before = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 20.0], [10.0, 40.0]])
@@ -897,7 +892,7 @@ def test_a_hidden_joint_goes_by_its_parent_and_its_children_found_and_a_root_by_
         seen = np.array(seen)
         assert np.isnan(moves_below(P, 1, seen, parents, direct=True)[:2]).all()
         np.testing.assert_allclose(moves_below(P, 1, seen, parents)[:3], [[10.0, 0.0]] * 3)
-        _place_hidden(P, 1, before, seen, parents, np.full(4, 50.0))
+        place_hidden(P, 1, before, seen, parents, np.full(4, 50.0))
         np.testing.assert_allclose(P[1, :3], expected)
 
 

@@ -80,7 +80,7 @@ from toonmotion.capture.footage import (
 )
 from toonmotion.capture.foreground import border_colour
 from toonmotion.capture.retarget import retarget
-from toonmotion.capture.tracker import TrackSettings
+from toonmotion.capture.track_settings import TrackSettings
 from toonmotion.deform.deformer import Deformer, DeformSettings
 from toonmotion.io.project import load_project, save_project
 from toonmotion.keyshape.contour import ContourCapture

@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from toonmotion.animate.motion import Motion
 from toonmotion.capture.footage import Capture, capture_motion, correct_motion, suggest_joints
-from toonmotion.capture.tracker import TrackSettings
+from toonmotion.capture.track_settings import TrackSettings
 from toonmotion.errors import SettingsError
 from toonmotion.progress import Progress
 from toonmotion.rig.skeleton import Skeleton

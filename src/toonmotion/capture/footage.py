@@ -29,7 +29,8 @@ from toonmotion.capture.foreground import (
     without_frame,
 )
 from toonmotion.capture.setup import check_setup, rectangle_sizes, suggest_setup
-from toonmotion.capture.tracker import Tracking, TrackSettings, TrackSetup, retrack, track
+from toonmotion.capture.track_settings import Tracking, TrackSettings, TrackSetup
+from toonmotion.capture.tracker import retrack, track
 from toonmotion.errors import SettingsError
 from toonmotion.progress import Progress
 from toonmotion.rig.skeleton import Skeleton

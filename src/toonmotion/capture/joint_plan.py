@@ -6,11 +6,12 @@ or the joint hidden."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.capture.patches import (
     Patch,
@@ -173,3 +174,56 @@ def bone_cost(predicted, angle, R, bone, step=1.0):
     cost = bone.weight * (reach - bone.length) ** 2
     cost[reach > bone.longest] = np.inf
     return cost
+
+
+class Plans:
+    """Each joint's :class:`~toonmotion.capture.joint_plan.JointPlan`, and its plan with the
+    search widened, and with its colour weighed more: ``plans(m)``, ``plans(m, factor)``,
+    ``plans(m, factor, colour)`` (cached).
+
+    Parameters
+    ----------
+    sizes : (k, 2) int
+        Template widths and heights, whole pixels (at least 1).
+    parents : (k,) int
+        Each joint's parent, -1 for a root.
+    radius : (k,) float
+        Each joint's search radius, pixels.
+    w_alpha : float
+    w_beta : float or None
+        As :class:`~toonmotion.capture.track_settings.TrackSettings`; None: ``1 / r^2``.
+    rotate : bool
+        Rectangles turn with their bones.
+    frame_shape : tuple
+        ``(h, w, ...)`` of the frames: no search goes wider than the frame.
+
+    Attributes
+    ----------
+    parents : (k,) int
+        The joint whose bone turns each rectangle, -1 for none.
+    hangs_from : (k,) int
+        Each joint's parent in the skeleton, -1 for a root.
+    """
+
+    def __init__(self, sizes: Sequence[tuple[int, int]], parents: ArrayLike, radius: ArrayLike, *,
+                 w_alpha: float, w_beta: float | None, rotate: bool, frame_shape: tuple[int, ...]) -> None:
+        self._w_alpha, self._w_beta = w_alpha, w_beta
+        self._widest = math.hypot(frame_shape[0], frame_shape[1])
+        radii = np.asarray(radius, dtype=float)
+        self._joints = [((int(w), int(h)), float(r)) for (w, h), r in zip(sizes, radii, strict=True)]
+        self.hangs_from = np.asarray(parents, dtype=int)
+        self.parents = self.hangs_from if rotate else np.full(len(self.hangs_from), -1)
+        self._cache: dict[tuple[int, float, float], JointPlan] = {}
+
+    def __len__(self) -> int:
+        return len(self._joints)
+
+    def __call__(self, m: int, factor: float = 1.0, colour: float = 1.0) -> JointPlan:
+        if (m, factor, colour) not in self._cache:
+            size, r = self._joints[m]
+            r = min(r * factor, self._widest)
+            w_beta = (1.0 / r) ** 2 if self._w_beta is None else self._w_beta
+            parent, hangs_from = int(self.parents[m]), int(self.hangs_from[m])
+            self._cache[m, factor, colour] = plan_joint(size, r, colour * self._w_alpha, w_beta, parent,
+                                                        hangs_from, pace=factor)
+        return self._cache[m, factor, colour]

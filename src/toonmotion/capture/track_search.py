@@ -41,25 +41,24 @@ Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` co
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from toonmotion.capture.coarse_search import locate, rank_turns, search_round
 from toonmotion.capture.joint_plan import (
     UPDATE_CONFIDENCE,
     VISIBLE_CONFIDENCE,
     BoneRule,
-    JointPlan,
+    Plans,
     Templates,
-    plan_joint,
 )
 from toonmotion.capture.patches import is_textured, likeness, sample
 from toonmotion.capture.template_context import CONTEXT_CONFIDENCE, Pyramid, place_by_context
 from toonmotion.capture.template_match import SPIN_TURNS, TURN_CONFIDENCE, Match, match
 from toonmotion.capture.template_spin import TurnedDiscs, locate_all_round
 from toonmotion.capture.track_figure import FigureMasks, onto_figure
+from toonmotion.capture.track_hidden import carried_by_parent, lengthen, moves_below, place_hidden
 from toonmotion.capture.track_prediction import bone_turn, hidden_at, turns
 
 # A hidden joint's window widens by WIDEN_STEP of its search radius for every drawing it stays
@@ -156,59 +155,6 @@ BONE_WEIGHT = 1.0
 _HIDDEN = float(np.nextafter(VISIBLE_CONFIDENCE, 0))
 
 
-class Plans:
-    """Each joint's :class:`~toonmotion.capture.joint_plan.JointPlan`, and its plan with the
-    search widened, and with its colour weighed more: ``plans(m)``, ``plans(m, factor)``,
-    ``plans(m, factor, colour)`` (cached).
-
-    Parameters
-    ----------
-    sizes : (k, 2) int
-        Template widths and heights, whole pixels (at least 1).
-    parents : (k,) int
-        Each joint's parent, -1 for a root.
-    radius : (k,) float
-        Each joint's search radius, pixels.
-    w_alpha : float
-    w_beta : float or None
-        As :class:`~toonmotion.capture.tracker.TrackSettings`; None: ``1 / r^2``.
-    rotate : bool
-        Rectangles turn with their bones.
-    frame_shape : tuple
-        ``(h, w, ...)`` of the frames: no search goes wider than the frame.
-
-    Attributes
-    ----------
-    parents : (k,) int
-        The joint whose bone turns each rectangle, -1 for none.
-    hangs_from : (k,) int
-        Each joint's parent in the skeleton, -1 for a root.
-    """
-
-    def __init__(self, sizes: Sequence[tuple[int, int]], parents: ArrayLike, radius: ArrayLike, *,
-                 w_alpha: float, w_beta: float | None, rotate: bool, frame_shape: tuple[int, ...]) -> None:
-        self._w_alpha, self._w_beta = w_alpha, w_beta
-        self._widest = math.hypot(frame_shape[0], frame_shape[1])
-        radii = np.asarray(radius, dtype=float)
-        self._joints = [((int(w), int(h)), float(r)) for (w, h), r in zip(sizes, radii, strict=True)]
-        self.hangs_from = np.asarray(parents, dtype=int)
-        self.parents = self.hangs_from if rotate else np.full(len(self.hangs_from), -1)
-        self._cache: dict[tuple[int, float, float], JointPlan] = {}
-
-    def __len__(self) -> int:
-        return len(self._joints)
-
-    def __call__(self, m: int, factor: float = 1.0, colour: float = 1.0) -> JointPlan:
-        if (m, factor, colour) not in self._cache:
-            size, r = self._joints[m]
-            r = min(r * factor, self._widest)
-            w_beta = (1.0 / r) ** 2 if self._w_beta is None else self._w_beta
-            parent, hangs_from = int(self.parents[m]), int(self.hangs_from[m])
-            self._cache[m, factor, colour] = plan_joint(size, r, colour * self._w_alpha, w_beta, parent,
-                                                        hangs_from, pace=factor)
-        return self._cache[m, factor, colour]
-
-
 class FrameSearch:
     """The joints' search, frame after frame of one run (module docstring).
 
@@ -299,7 +245,7 @@ class FrameSearch:
         # A joint not found goes no farther in one frame than its search could have reached.
         reach = np.array([plans(m, pace).radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
                           for m in range(k)])
-        _place_hidden(P, t, coast, seen, plans.hangs_from, reach)
+        place_hidden(P, t, coast, seen, plans.hangs_from, reach)
         # A joint leaving the picture stays at its edge.
         np.clip(P[t], 0.0, [image.shape[1] - 1, image.shape[0] - 1], out=P[t])
         if self._near is not None:  # a hidden joint is behind the figure, so on it
@@ -315,7 +261,7 @@ class FrameSearch:
         """Put each ambiguous joint found at ``t`` (its alike places reach farther than
         :data:`AMBIGUOUS_SPREAD` of its rectangle from its match), parents first, among those places
         where its parent and its children found unambiguously carry it, as a hidden joint is placed
-        (:func:`_place_hidden`): at that place itself if it lies within a pixel of one, else at the
+        (:func:`place_hidden`): at that place itself if it lies within a pixel of one, else at the
         nearest. Where its wider view (:mod:`~toonmotion.capture.template_context`) matches plainly
         enough, that places the joint instead (neighbours inside the same fill drift as it does). A
         root with neither keeps its match."""
@@ -328,7 +274,7 @@ class FrameSearch:
         for m in np.flatnonzero(ambiguous):
             guess = self._placed_by_context(t, m)
             if guess is None:
-                guess = _carried(P, t, m, coast, hangs_from, firm_moves[m])
+                guess = carried_by_parent(P, t, m, coast, hangs_from, firm_moves[m])
             if guess is None:
                 continue
             distance = np.hypot(*(self._alike[m] - guess).T)
@@ -514,82 +460,3 @@ class FrameSearch:
         return BoneRule(P[t, g], length, weight, reach)
 
 
-def _place_hidden(P, t, coast, seen, hangs_from, reach):
-    """Put every joint not found, parents first: at the mean of where its parent carries it and
-    where its children found put it (for a root, the joints found anywhere below it,
-    :func:`moves_below`); a root with neither coasts.
-    None moves farther than its ``reach`` (pixels, ``(k,)``) beyond its parent's own move (its
-    own move, for a root): a bone seen end-on that turns half round in one frame would otherwise
-    fling it across the figure."""
-    moves, direct = moves_below(P, t, seen, hangs_from), moves_below(P, t, seen, hangs_from, direct=True)
-    for m in range(len(seen)):
-        if seen[m]:
-            continue
-        g = hangs_from[m]
-        # Only children found count, but for a root: a grandchild's move is mostly its parent's
-        # turn about the joint (a hand sweeping round a shoulder).
-        guess = _carried(P, t, m, coast, hangs_from, direct[m] if g >= 0 else moves[m])
-        carried = P[t - 1, m] + (P[t, g] - P[t - 1, g] if g >= 0 else 0.0)
-        step = (coast[m] if guess is None else guess) - carried
-        length = float(np.hypot(*step))
-        P[t, m] = carried + (step if length <= reach[m] else step * (reach[m] / length))
-
-
-def _carried(P, t, m, coast, hangs_from, below):
-    """Where joint ``m``'s neighbours carry it at ``t``: the mean of where its parent carries it
-    (:func:`~toonmotion.capture.track_prediction.hidden_at`; a root has none) and where ``below``,
-    its move by the joints below it (NaN: none), puts it; None with neither."""
-    guesses = [] if hangs_from[m] < 0 else [hidden_at(P, t, m, coast[m], hangs_from)]
-    if np.isfinite(below).all():
-        guesses.append(P[t - 1, m] + below)
-    return np.mean(guesses, axis=0) if guesses else None
-
-
-def moves_below(P: NDArray[np.float64], t: int, seen: NDArray[np.bool_], hangs_from: NDArray[np.int_],
-                *, direct: bool = False) -> NDArray[np.float64]:
-    """How far each joint moved from ``t - 1`` to ``t`` by the joints hanging from it, ``(k, 2)``:
-    the mean move of its children, a child found at ``t`` (``seen``) by its own move, one not
-    found by its children's, recursively (with ``direct``, not at all); NaN where no joint below
-    it (no child, with ``direct``) was found."""
-    k = len(seen)
-    # Plain Python over the joints: this runs three times a frame, and numpy's overhead on arrays
-    # of a few joints was a tenth of the tracking time.
-    found, parents = seen.tolist(), hangs_from.tolist()
-    steps: list[list[float]] = (P[t] - P[t - 1]).tolist()
-    kids: list[list[int]] = [[] for _ in range(k)]
-    for m, g in enumerate(parents):
-        if g >= 0:
-            kids[g].append(m)
-    moves: list[list[float] | None] = [None] * k
-    for m in range(k - 1, -1, -1):  # children come after their parents
-        ways = [steps[c] if found[c] else (None if direct else moves[c]) for c in kids[m]]
-        below = [b for b in ways if b is not None and math.isfinite(b[0]) and math.isfinite(b[1])]
-        if below:
-            moves[m] = [sum(b[0] for b in below) / len(below), sum(b[1] for b in below) / len(below)]
-    return np.array([[math.nan, math.nan] if move is None else move for move in moves])
-
-
-def hidden_for(C: NDArray[np.float64], drawings: list[int], history: NDArray[np.int_]) -> NDArray[np.int_]:
-    """For each joint, the drawings it has been hidden for up to ``drawings[-1]`` (0: visible),
-    counting only frames in its history (from ``history``)."""
-    hidden = (C[drawings] < VISIBLE_CONFIDENCE) & (np.array(drawings)[:, None] >= history)
-    return np.cumprod(hidden[::-1], axis=0).sum(axis=0)
-
-
-def longest_bones(P: NDArray[np.float64], C: NDArray[np.float64], drawings: list[int],
-                  hangs_from: NDArray[np.int_]) -> NDArray[np.float64]:
-    """Each joint's bone (from its parent) at its longest over ``drawings``, pixels; 0 for roots."""
-    longest = np.zeros(len(hangs_from))
-    for s in drawings:
-        lengthen(longest, P[s], C[s], hangs_from)
-    return longest
-
-
-def lengthen(longest: NDArray[np.float64], points: NDArray[np.float64], confidence: NDArray[np.float64],
-             hangs_from: NDArray[np.int_]) -> None:
-    """Raise ``longest`` to the bones seen (both ends visible) at ``points``."""
-    child = np.flatnonzero(hangs_from >= 0)
-    visible = confidence >= VISIBLE_CONFIDENCE
-    seen = child[visible[child] & visible[hangs_from[child]]]
-    length = np.hypot(*(points[seen] - points[hangs_from[seen]]).T)
-    longest[seen] = np.maximum(longest[seen], length)

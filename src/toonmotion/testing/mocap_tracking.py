@@ -37,7 +37,8 @@ from toonmotion.capture.mocap import (
     standard_skeleton_parents,
 )
 from toonmotion.capture.synthetic import limb_figure_frames
-from toonmotion.capture.tracker import TrackSettings, TrackSetup, track
+from toonmotion.capture.track_settings import TrackSettings, TrackSetup
+from toonmotion.capture.tracker import track
 from toonmotion.io.bvh import load_bvh
 from toonmotion.rig.skeleton import Skeleton
 
