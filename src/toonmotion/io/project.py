@@ -21,26 +21,27 @@ import dataclasses
 import hashlib
 import json
 import re
-import typing
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Any
 
 import numpy as np
-from pydantic import ConfigDict, Field, StrictStr, create_model, model_validator
 
 from toonmotion import __version__
-from toonmotion.errors import ProjectError, ProjectVersionError, ToonmotionError
+from toonmotion.errors import ProjectError, ToonmotionError
 from toonmotion.io.atomic import write_bytes, write_text
 from toonmotion.io.image import load_image, png_bytes
+from toonmotion.io.project_schema import (
+    FORMAT,
+    PROJECT,
+    VERSION,
+    BindingModel,
+    CorrectionEditModel,
+    CurveSkeletonModel,
+    DepthEditModel,
+    MeshModel,
+    ProjectFile,
+)
 from toonmotion.io.schema import (
-    Float,
-    Int,
-    Joints,
-    JsonFormat,
-    Model,
-    Point,
-    problem,
-    read_json,
     read_versioned,
 )
 from toonmotion.io.skeleton_json import skeleton_from_joints, skeleton_to_dict
@@ -48,174 +49,11 @@ from toonmotion.rig.binding import Binding, Correction, binding_from_bones
 from toonmotion.rig.character import Character, RigSettings
 from toonmotion.rig.edits import DepthEdit
 from toonmotion.rig.skeleton import Skeleton
-from toonmotion.shape.curve_skeleton import NODE_KINDS, CurveSkeleton
+from toonmotion.shape.curve_skeleton import CurveSkeleton
 from toonmotion.shape.mesh import Mesh, check_mesh
 from toonmotion.shape.silhouette import Part, Silhouette
 
-FORMAT = "toonmotion.project"
-VERSION = 3
 PROJECT_FILE = "project.json"
-
-
-class _Part(Model):
-    outer: list[Point]
-    holes: list[list[Point]] = []
-
-
-class _Silhouette(Model):
-    tolerance: Annotated[Float, Field(ge=0)]
-    parts: list[_Part]
-
-
-class _Node(Model):
-    position: Point
-    kind: Literal[NODE_KINDS]  # type: ignore[valid-type]
-    radius: Annotated[Float, Field(ge=0)]
-
-
-class _Branch(Model):
-    nodes: tuple[Int, Int]
-    path: list[Point] = Field(min_length=2)
-
-
-class _CurveSkeleton(Model):
-    nodes: list[_Node]
-    branches: list[_Branch]
-
-
-class _Skeleton(Model):
-    joints: Joints
-
-
-class _Mesh(Model):
-    spacing: Annotated[Float, Field(gt=0)]
-    vertices: list[Point] = Field(min_length=3)
-    triangles: list[tuple[Int, Int, Int]] = Field(min_length=1)
-    boundary: list[list[Int]] = Field(min_length=1)
-
-
-class _Binding(Model):
-    bones: list[StrictStr]
-    vertex_bone: list[Int]
-    fallback: list[Int] = []
-
-    @model_validator(mode="before")
-    @classmethod
-    def _corrections_are_edits(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "corrections" in data:
-            raise problem("a version 3 project keeps its corrections in 'edits', not in the binding")
-        return data
-
-
-class _CorrectionEdit(Model):
-    kind: Literal["correction"]
-    bone: StrictStr
-    curve: list[Point] = Field(min_length=3)
-
-
-class _DepthEdit(Model):
-    kind: Literal["depth"]
-    value: Int
-    bone: StrictStr | None = None
-    at: Point | None = None
-
-
-_Edit = Annotated[_CorrectionEdit | _DepthEdit, Field(discriminator="kind")]
-
-
-class _Strict(Model):
-    model_config = ConfigDict(strict=True)
-
-
-# RigSettings' own fields, types and defaults (the dataclass checks ranges when it is built),
-# but projects saved before the decomposition rule was a setting were rigged by the thesis's.
-_HINTS = typing.get_type_hints(RigSettings)
-_SAVED_BEFORE = {"decomposition": "straight"}
-_Settings = create_model(  # type: ignore[call-overload]
-    "_Settings",
-    __base__=_Strict,
-    **{f.name: (_HINTS[f.name], _SAVED_BEFORE.get(f.name, f.default))
-       for f in dataclasses.fields(RigSettings)},
-)
-
-
-class ProjectFile(Model):
-    """``project.json`` as this toonmotion writes it (version 3)."""
-
-    format: Literal["toonmotion.project"]
-    version: Literal[3]
-    toonmotion: StrictStr
-    width: Annotated[Int, Field(gt=0)]
-    height: Annotated[Int, Field(gt=0)]
-    texture: StrictStr
-    mask: StrictStr
-    settings: _Settings
-    silhouette: _Silhouette
-    curve_skeleton: _CurveSkeleton
-    skeleton: _Skeleton
-    mesh: _Mesh
-    binding: _Binding
-    depth: dict[str, Int] = {}
-    edits: list[_Edit] = []
-    undone: list[_Edit] = []
-
-
-def _version_1_to_2(data: dict[str, Any]) -> dict[str, Any]:
-    """Version 1 had no depth layers: every region is at depth 0."""
-    data.setdefault("depth", {})
-    return data
-
-
-def _version_2_to_3(data: dict[str, Any]) -> dict[str, Any]:
-    """Versions 1 and 2 kept corrections in the binding and depth as a result only: they become
-    an edit history of the corrections followed by a depth edit per region not at depth 0."""
-    binding = data.get("binding")
-    corrections: Any = []
-    if isinstance(binding, dict) and "corrections" in binding:
-        binding = dict(binding)
-        corrections = binding.pop("corrections")
-        data["binding"] = binding
-    if not isinstance(corrections, list):
-        return data  # left for validation to refuse
-    edits = [{"kind": "correction", **c} if isinstance(c, dict) else c for c in corrections]
-    depth, bones = data.get("depth"), binding.get("bones") if isinstance(binding, dict) else None
-    if isinstance(depth, dict) and isinstance(bones, list):
-        edits += [{"kind": "depth", "value": depth[bone], "bone": bone}
-                  for bone in bones if isinstance(bone, str) and depth.get(bone, 0) != 0]
-    data["edits"] = edits
-    return data
-
-
-class _ProjectFormat(JsonFormat[ProjectFile]):
-    """The project format, with the messages ``toonmotion`` has always given for projects."""
-
-    def read(self, path: Path) -> Any:
-        if not path.is_file():
-            raise ProjectError(f"no project at {path}: give a project folder made by 'toonmotion rig'")
-        return read_json(path, ProjectError)
-
-    def not_this_format(self, path: Path) -> ToonmotionError:
-        return ProjectError(f"{path} is not a toonmotion project (no 'format': {FORMAT!r})")
-
-    def unreadable_version(self, path: Path, version: Any) -> ToonmotionError:
-        if isinstance(version, int) and not isinstance(version, bool) and version > VERSION:
-            return ProjectVersionError(
-                f"{path} is project version {version}, newer than this toonmotion "
-                f"{__version__} reads (version {VERSION}); upgrade toonmotion"
-            )
-        return ProjectVersionError(
-            f"{path} has unknown project version {version!r}; this toonmotion reads versions "
-            f"{', '.join(map(str, self.readable))}"
-        )
-
-    def invalid(self, path: Path, text: str, error: type[ToonmotionError] | None) -> ToonmotionError:
-        return ProjectError(f"{path} is not a valid project: {text}")
-
-
-PROJECT = _ProjectFormat(models={FORMAT: ProjectFile}, version=VERSION, error=ProjectError,
-                         title="toonmotion project", label="project",
-                         migrations={1: _version_1_to_2, 2: _version_2_to_3})
-READABLE = PROJECT.readable
 
 
 def save_project(path: str | Path, character: Character) -> None:
@@ -401,9 +239,10 @@ def _edit_to_dict(edit: Correction | DepthEdit) -> dict[str, Any]:
     return out
 
 
-def _edit_from_model(m: _CorrectionEdit | _DepthEdit, bone_names: tuple[str, ...]) -> Correction | DepthEdit:
+def _edit_from_model(m: CorrectionEditModel | DepthEditModel, bone_names: tuple[str, ...]
+                     ) -> Correction | DepthEdit:
     edit: Correction | DepthEdit
-    if isinstance(m, _CorrectionEdit):
+    if isinstance(m, CorrectionEditModel):
         edit = Correction(curve=np.array(m.curve, dtype=float), bone=m.bone)
     else:
         try:
@@ -450,7 +289,7 @@ def _from_model(m: ProjectFile, folder: Path) -> Character:
                      undone=undone)
 
 
-def _curve_skeleton(m: _CurveSkeleton) -> CurveSkeleton:
+def _curve_skeleton(m: CurveSkeletonModel) -> CurveSkeleton:
     k = len(m.nodes)
     if any(not (0 <= i < k) for b in m.branches for i in b.nodes):
         raise ProjectError("a curve-skeleton branch names a node that does not exist")
@@ -463,7 +302,7 @@ def _curve_skeleton(m: _CurveSkeleton) -> CurveSkeleton:
     )
 
 
-def _mesh(m: _Mesh, size: tuple[int, int]) -> Mesh:
+def _mesh(m: MeshModel, size: tuple[int, int]) -> Mesh:
     V = np.array(m.vertices, dtype=float)
     # The rest mesh is traced from the drawing's pixels: it lies on the canvas.
     outside = (V < -1.0).any(axis=1) | (V[:, 0] > size[0]) | (V[:, 1] > size[1])
@@ -485,7 +324,7 @@ def _mesh(m: _Mesh, size: tuple[int, int]) -> Mesh:
     return mesh
 
 
-def _binding(m: _Binding, mesh: Mesh, skeleton: Skeleton, corrections: tuple[Correction, ...]) -> Binding:
+def _binding(m: BindingModel, mesh: Mesh, skeleton: Skeleton, corrections: tuple[Correction, ...]) -> Binding:
     if tuple(m.bones) != skeleton.bone_names:
         raise ProjectError("the binding's bone list does not match the skeleton's bones")
     bone = np.array(m.vertex_bone, dtype=np.int64)
