@@ -34,7 +34,7 @@ import logging
 import secrets
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
@@ -46,16 +46,16 @@ from fastapi.responses import FileResponse, JSONResponse, RedirectResponse, Resp
 from starlette.exceptions import HTTPException
 
 from toonmotion import api, limits
-from toonmotion.errors import Cancelled, LinkError, ToonmotionError
+from toonmotion.errors import LinkError, ToonmotionError
 from toonmotion.io.atomic import atomic_path
 from toonmotion.io.frames import load_frames
 from toonmotion.io.image import load_image, png_bytes
 from toonmotion.io.skeleton_json import load_skeleton_file
-from toonmotion.web import messages
 from toonmotion.web.editing import EXPORT_FILE, EXPORTS, FOOTAGE, UPLOAD_PARTS, UPLOADS, Editing
 from toonmotion.web.messages import MAX_MESSAGE_BYTES, bug, one_line
 from toonmotion.web.session import answer, describe
-from toonmotion.web.slow_requests import export, open_drawing, suggest, suggested_joints, track
+from toonmotion.web.slow_requests import export, suggested_joints
+from toonmotion.web.socket_flow import animate_for_export, cancels, progress_sender, slow_handler
 
 __all__ = ["MAX_MESSAGE_BYTES", "PAGE_FILES", "create_app", "new_token", "sign_in_code"]
 
@@ -369,13 +369,13 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                 text = waiting.popleft() if waiting else await inbox.get()
                 if text is None:
                     return
-                slow = _slow(text)
+                slow = slow_handler(text)
                 if slow is not None:  # long: off the event loop, with progress messages
                     ident = json.loads(text).get("id")
                     stop = threading.Event()
-                    progress = _progress(socket, loop, ident, stop)
+                    progress = progress_sender(socket, loop, ident, stop)
                     if slow is export:  # the animation is solved where messages are answered
-                        await loop.run_in_executor(answers, _animate_for_export, editing, text)
+                        await loop.run_in_executor(answers, animate_for_export, editing, text)
                     job = asyncio.ensure_future(asyncio.to_thread(slow, editing, text, progress))
                     while not job.done():
                         heard = asyncio.ensure_future(inbox.get())
@@ -384,7 +384,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                             heard.cancel()
                             continue
                         other = heard.result()
-                        if other is not None and _cancels(other, ident):
+                        if other is not None and cancels(other, ident):
                             stop.set()
                             continue
                         waiting.append(other)  # answered after it, in order
@@ -393,7 +393,7 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                     reply = job.result()
                     if waiting and waiting[-1] is None:
                         return
-                elif _cancels(text, None):
+                elif cancels(text, None):
                     continue  # a cancel that came after its request was answered
                 else:
                     reply = await loop.run_in_executor(answers, answer, editing, text)
@@ -448,15 +448,6 @@ async def _receive(request: Request, file: Path, what: str, *, already: int = 0,
             out.write(chunk)
 
 
-def _animate_for_export(editing: Editing, text: str) -> None:
-    """Solve the animation an export message asks for, in the answers' thread (the export then
-    only renders it); a bad message is the export's to refuse."""
-    with contextlib.suppress(ToonmotionError):
-        message = messages.read(messages.parse(text))
-        if isinstance(message, messages.Export):
-            editing.animated(message.exaggeration())
-
-
 def _host_name(host: str | None) -> str:
     """The name in a ``Host`` header, without its port (``[::1]:8000`` -> ``[::1]``)."""
     host = (host or "").strip().lower()
@@ -465,41 +456,3 @@ def _host_name(host: str | None) -> str:
     return host.rsplit(":", 1)[0] if host.count(":") == 1 else host
 
 
-def _progress(socket: WebSocket, loop: asyncio.AbstractEventLoop, ident: Any,
-              stop: threading.Event) -> Callable[[int, int], None]:
-    """A slow request's ``progress(index, count)``, called off the loop: a progress message to
-    the page with the request's id, or :class:`Cancelled` once ``stop`` is set."""
-    def progress(index: int, count: int) -> None:
-        if stop.is_set():
-            raise Cancelled("cancelled")
-        said = {"id": ident, "type": "progress", "index": index, "count": count}
-        asyncio.run_coroutine_threadsafe(socket.send_text(json.dumps(said)), loop)
-
-    return progress
-
-
-def _cancels(text: str, ident: Any) -> bool:
-    """Whether ``text`` is ``{"type": "cancel", "id": ident}`` (any id when ``ident`` is None)."""
-    if len(text) > 200 or '"cancel"' not in text:
-        return False
-    try:
-        message = json.loads(text)
-    except (ValueError, RecursionError):
-        return False
-    return isinstance(message, dict) and message.get("type") == "cancel" and (
-        ident is None or message.get("id") == ident)
-
-
-def _slow(text: str) -> Callable[..., dict[str, Any]] | None:
-    """The handler of a message that runs off the event loop (an export, a tracking, joints
-    suggested on footage), or None (checked cheaply; a bad message goes to ``answer``)."""
-    slow = ("export", "track", "open_drawing", "suggest")
-    if len(text) > MAX_MESSAGE_BYTES or not any(f'"{kind}"' in text for kind in slow):
-        return None
-    try:
-        message = json.loads(text)
-    except (ValueError, RecursionError):
-        return None
-    kind = message.get("type") if isinstance(message, dict) else None
-    handlers = {"export": export, "track": track, "open_drawing": open_drawing, "suggest": suggest}
-    return handlers.get(kind) if isinstance(kind, str) else None
