@@ -466,7 +466,7 @@ def test_export_writes_a_glb_a_spine_rig_and_a_sprite_sheet(posable, tmp_path, c
 
 
 def test_export_keeps_transparency_in_webm_and_plays_a_motion(posable, tmp_path, capsys):
-    from toonmotion.io.video import read_webm_rgba
+    from toonmotion.io.ffmpeg_video import read_webm_rgba
 
     project = str(posable / "hero")
     motion = tmp_path / "motion.json"

@@ -6,12 +6,12 @@ import pytest
 from PIL import Image, ImageSequence
 
 from toonmotion.errors import ExportError, ToonmotionError
+from toonmotion.io.ffmpeg_video import read_webm_rgba
 from toonmotion.io.video import (
     FORMATS,
     TRANSPARENT_FORMATS,
     animation_format,
     frame_durations,
-    read_webm_rgba,
     save_animation,
 )
 

@@ -5,7 +5,7 @@ generator is streamed: MP4, WebM and PNG frames never hold more than one frame; 
 every GIF, APNG and WebP frame at once). GIF and MP4 have no partial transparency, so frames are
 composited over a background colour; APNG, WebP, WebM and PNG frames keep alpha
 (:data:`TRANSPARENT_FORMATS`). APNG and WebP are lossless: every visible pixel decodes back
-exactly. WebM is lossy; :func:`read_webm_rgba` decodes it with its alpha.
+exactly. WebM is lossy; :func:`~toonmotion.io.ffmpeg_video.read_webm_rgba` decodes it with its alpha.
 
 Nothing is half-written: single files go to a temporary file beside the target that is
 renamed over it after the last frame, and PNG frames go to a temporary folder and are moved
@@ -19,7 +19,6 @@ import os
 import shutil
 import tempfile
 from collections.abc import Iterable, Sequence
-from itertools import chain
 from numbers import Integral
 from pathlib import Path
 
@@ -32,6 +31,7 @@ from toonmotion import limits
 from toonmotion.errors import ExportError
 from toonmotion.geometry.arrays import frame_rate
 from toonmotion.io.atomic import atomic_path, sweep_leftovers, temporary_prefix
+from toonmotion.io.ffmpeg_video import save_mp4, save_webm
 from toonmotion.render.composite import over, premultiply
 
 FORMATS = ("gif", "mp4", "png", "apng", "webp", "webm")
@@ -44,14 +44,6 @@ _ACCEPTED = (
     "a .gif or .mp4 file, a .webm, .webp or .png (.apng) file to keep transparency, "
     "a folder for PNG frames, or a pattern like frames/frame_%04d.png"
 )
-# x264 constant rate factor: 18 is visually lossless for flat cartoon colours.
-_CRF = 18
-# VP9 in constant-quality mode (-b:v 0). Flat colour fills lose little at any low CRF (2-3 levels on
-# average, mostly the YUV conversion's); what the CRF decides is ringing at edges, which shows most in
-# the alpha plane as a faint fringe on transparent pixels beside the outlines. Measured on the sample
-# character at 96x120: CRF 10 keeps that fringe at alpha <= 11 (4 %), on 3 % of transparent pixels,
-# at about half the size of lossless VP9; CRF 20 saved a quarter more but let the fringe reach 26.
-_VP9_CRF = 10
 # The largest WebP canvas side.
 _WEBP_MAX_SIDE = 16383
 
@@ -130,7 +122,7 @@ def save_animation(path: str | os.PathLike[str], frames: Iterable[NDArray[np.uin
     4:2:0 and lossy (constant quality): alpha comes back within a few levels (more right at
     sharp edges), colours within the YUV conversion's error, and any width and height, odd
     ones too, are kept as they are. Not every player shows its alpha; ffmpeg needs
-    ``-c:v libvpx-vp9`` before ``-i``, as :func:`read_webm_rgba` does.
+    ``-c:v libvpx-vp9`` before ``-i``, as :func:`~toonmotion.io.ffmpeg_video.read_webm_rgba` does.
 
     Examples
     --------
@@ -154,13 +146,13 @@ def save_animation(path: str | os.PathLike[str], frames: Iterable[NDArray[np.uin
     if kind == "gif":
         return _save_gif(Path(path), _held(frames, "GIF"), float(fps), background)
     if kind == "mp4":
-        return _save_mp4(Path(path), frames, float(fps), background)
+        return save_mp4(Path(path), (_flatten(rgba, background) for rgba in frames), float(fps), background)
     if kind == "apng":
         return _save_apng(Path(path), _held(frames, "APNG"), float(fps))
     if kind == "webp":
         return _save_webp(Path(path), _held(frames, "WebP"), float(fps))
     if kind == "webm":
-        return _save_webm(Path(path), frames, float(fps))
+        return save_webm(Path(path), frames, float(fps))
     return _save_png(Path(path), frames)
 
 
@@ -281,115 +273,6 @@ def _clear_transparent(rgba):
     rgba = rgba.copy()
     rgba[clear] = 0
     return rgba
-
-
-def _save_mp4(path, frames, fps, background):
-    first = next(frames, None)
-    if first is None:
-        raise ExportError(f"no frames to write to {path.name}; the animation is empty")
-    H, W = first.shape[:2]
-    size = (W + W % 2, H + H % 2)
-    canvas = np.empty((size[1], size[0], 3), np.uint8)
-    canvas[...] = background
-
-    def picture(rgba):
-        canvas[:H, :W] = _flatten(rgba, background)
-        return canvas
-
-    # The temporary file has no .mp4 suffix, so name the container.
-    params = ["-crf", str(_CRF), "-movflags", "+faststart", "-f", "mp4"]
-    return _encode(path, chain([first], frames), fps, size, picture, codec="libx264",
-                   pix_fmt_in="rgb24", pix_fmt_out="yuv420p", output_params=params)
-
-
-def _save_webm(path, frames, fps):
-    first = next(frames, None)
-    if first is None:
-        raise ExportError(f"no frames to write to {path.name}; the animation is empty")
-    H, W = first.shape[:2]
-    # libvpx encodes alpha as a second stream beside the colour one; alt-ref (hidden) frames
-    # would break their one-to-one pairing, so they are off. -b:v 0 makes -crf constant quality.
-    # cpu-used 2 (0 is slowest) and row multithreading keep encoding quick.
-    params = ["-crf", str(_VP9_CRF), "-b:v", "0", "-auto-alt-ref", "0", "-deadline", "good",
-              "-cpu-used", "2", "-row-mt", "1", "-f", "webm"]
-    return _encode(path, chain([first], frames), fps, (W, H), lambda rgba: rgba, codec="libvpx-vp9",
-                   pix_fmt_in="rgba", pix_fmt_out="yuva420p", output_params=params)
-
-
-def _encode(path, frames, fps, size, picture, *, codec, **options):
-    """Pipe ``picture(frame)`` for every frame to the bundled ffmpeg; the number of frames."""
-    import imageio_ffmpeg
-
-    count = 0
-    with atomic_path(path) as tmp:
-        writer = imageio_ffmpeg.write_frames(
-            str(tmp), size, fps=fps, codec=codec, quality=None, macro_block_size=1,
-            ffmpeg_log_level="error", **options,
-        )
-        writer.send(None)  # start ffmpeg
-        try:
-            for rgba in frames:
-                try:
-                    writer.send(picture(rgba).tobytes())
-                except OSError as error:
-                    message = str(error).splitlines()[0]
-                    raise ExportError(f"ffmpeg failed writing {path.name}: {message}") from None
-                count += 1
-        finally:
-            writer.close()  # waits for ffmpeg to finish (or stop) before the file is renamed or removed
-        if tmp.stat().st_size == 0:
-            raise ExportError(f"ffmpeg wrote nothing for {path.name}; check that it supports {codec}")
-    return count
-
-
-def read_webm_rgba(path: str | os.PathLike[str]) -> NDArray[np.uint8]:
-    """Decode a WebM (VP9) video with its alpha channel, through the bundled ffmpeg.
-
-    ffmpeg's own VP9 decoder drops the alpha plane, so libvpx's decoder is forced. A video
-    without alpha comes back opaque (alpha 255).
-
-    Parameters
-    ----------
-    path : str or Path
-        A ``.webm`` file, such as :func:`save_animation` writes.
-
-    Returns
-    -------
-    (T, H, W, 4) uint8
-        Every frame, RGBA. The whole video is held in memory.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> rgba = np.zeros((6, 10, 4), np.uint8)
-    >>> rgba[:, :5] = (40, 90, 200, 255)
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     count = save_animation(Path(folder) / "half.webm", [rgba] * 2, fps=10)
-    ...     read = read_webm_rgba(Path(folder) / "half.webm")
-    >>> read.shape, int(read[0, 3, 1, 3]), int(read[0, 3, 8, 3])
-    ((2, 6, 10, 4), 255, 0)
-    """
-    import imageio_ffmpeg
-
-    path = Path(path)
-    if not path.is_file():
-        raise ExportError(f"cannot read {path}: no such file")
-    reader = imageio_ffmpeg.read_frames(
-        str(path), pix_fmt="rgba", bits_per_pixel=32, input_params=["-c:v", "libvpx-vp9"]
-    )
-    try:
-        meta = next(reader)
-        W, H = meta["size"]
-        frames = [np.frombuffer(data, np.uint8).reshape(H, W, 4) for data in reader]
-    except (OSError, RuntimeError, ValueError, KeyError, StopIteration):
-        raise ExportError(
-            f"cannot decode {path.name} as a VP9 WebM video; check that it is one and that it plays"
-        ) from None
-    finally:
-        reader.close()
-    if not frames:
-        raise ExportError(f"no frames in {path.name}: ffmpeg decoded none; check that it plays")
-    return np.stack(frames)
 
 
 def _save_png(path, frames):
