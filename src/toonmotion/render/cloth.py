@@ -26,7 +26,16 @@ from numpy.typing import ArrayLike
 
 from toonmotion.errors import SceneError
 from toonmotion.proxy3d.camera import MIN_DEPTH, PerspectiveCamera
-from toonmotion.render.zbuffer import AMBIENT, LIGHT, SHADINGS, TOON_BANDS, Layer, _frame, _light, _to_camera
+from toonmotion.render.zbuffer import (
+    AMBIENT,
+    LIGHT,
+    SHADINGS,
+    TOON_BANDS,
+    Layer,
+    checked_frame,
+    checked_light,
+    to_camera,
+)
 
 
 def render_cloth(camera: PerspectiveCamera, frame: int, V: ArrayLike, F: ArrayLike, colours: ArrayLike, *,
@@ -69,7 +78,7 @@ def render_cloth(camera: PerspectiveCamera, frame: int, V: ArrayLike, F: ArrayLi
     """
     if shading not in SHADINGS:
         raise SceneError(f"shading must be one of {', '.join(SHADINGS)}; got {shading!r}")
-    t = _frame(camera, frame)
+    t = checked_frame(camera, frame)
     W, H, f = camera.width, camera.height, camera.focal
     if under is None:
         depth = np.full(H * W, np.inf)
@@ -86,8 +95,8 @@ def render_cloth(camera: PerspectiveCamera, frame: int, V: ArrayLike, F: ArrayLi
         if not np.isfinite(V).all():
             raise SceneError("the cloth's vertices must be finite")
         R, centre = camera.rotations[t], camera.centres[t]
-        _rasterise(_to_camera(V, R, centre), F, rgb, R @ _light(light), shading, f, W, H, depth, ids, colour,
-                   first_id)
+        _rasterise(to_camera(V, R, centre), F, rgb, R @ checked_light(light), shading, f, W, H, depth, ids,
+                   colour, first_id)
     layer = Layer(colour=colour.reshape(H, W, 3), depth=depth.reshape(H, W), coverage=ids.reshape(H, W) >= 0,
                   ids=ids.reshape(H, W))
     for array in (layer.colour, layer.depth, layer.coverage, layer.ids):
