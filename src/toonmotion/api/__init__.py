@@ -39,18 +39,20 @@ from toonmotion.api.animation import (
 from toonmotion.api.capture import track_footage
 from toonmotion.api.environment import EnvironmentItem, environment_report
 from toonmotion.api.export import Exported, export_animation, export_format
-from toonmotion.api.keyshapes import (
+from toonmotion.api.keyshape_retarget import (
     animate_drawing,
+    retarget_keyposes,
+    retarget_keyshapes,
+    retarget_line_of_action,
+    retarget_parts,
+)
+from toonmotion.api.keyshapes import (
     capture_contours,
     capture_parts,
     capture_video,
     keyshape_sheet,
     keyshape_space,
     pick_layer,
-    retarget_keyposes,
-    retarget_keyshapes,
-    retarget_line_of_action,
-    retarget_parts,
 )
 from toonmotion.api.posing import (
     PosedFrame,
