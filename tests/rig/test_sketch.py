@@ -10,7 +10,8 @@ from toonmotion.io.char_cfg import load_char_cfg
 from toonmotion.rig.kinematics import bone_angles
 from toonmotion.rig.pose import Pose, rotate_about
 from toonmotion.rig.skeleton import Skeleton
-from toonmotion.rig.sketch import match_sketch, sketch_graph, stroke_chains
+from toonmotion.rig.sketch import match_sketch, stroke_chains
+from toonmotion.rig.sketch_graph import sketch_graph
 from toonmotion.samples import sample_character
 from toonmotion.testing.sketching import figure_size, strokes_through, turned
 
