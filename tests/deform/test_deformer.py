@@ -294,12 +294,10 @@ def test_the_anchors_are_kept_where_the_drawing_folds_without_them_too(rigged, m
 
 
 @pytest.mark.parametrize("name", ["sample", "char2"])
-def test_an_anchor_gives_way_in_steps_and_keeps_its_joint_nearer(rigged, monkeypatch):
+def test_an_anchor_gives_way_in_steps_and_keeps_its_joint_nearer(rigged):
     """Where holding a joint folds the drawing, its anchor gives way a step at a time: over the
     extreme poses nothing is left inverted, and the drawn joints stay nearer the skeleton's than
     when an anchor is let go at once (the sample's neck bent 150 degrees: 18 px against 40)."""
-    import toonmotion.deform.deformer as deformer_module
-
     def worst(deformer):
         gaps, inverted = [], 0
         for _, pose in extreme_poses(deformer.character.skeleton):
@@ -309,8 +307,7 @@ def test_an_anchor_gives_way_in_steps_and_keeps_its_joint_nearer(rigged, monkeyp
         return max(gaps), inverted
 
     stepped, inverted = worst(rigged())
-    monkeypatch.setattr(deformer_module, "_GIVE", 0.0)
-    at_once, _ = worst(Deformer(rigged().character))
+    at_once, _ = worst(rigged(anchor_give=0.0))  # DeformSettings.anchor_give: let go at once
     print(f"\nworst joint gap over the extreme poses: {stepped:.1f} px in steps, {at_once:.1f} px at once")
     assert inverted == 0
     assert stepped < at_once

@@ -16,7 +16,7 @@ from toonmotion.deform.joint_solve import EDGE_TERMS, JointSolver
 from toonmotion.deform.needles import needle_model, stage_one, stretch_maps, triangle_shapes
 from toonmotion.deform.skinning import heat_weights, skinned_needles, skinned_stage_one
 from toonmotion.deform.solve_result import SolveResult
-from toonmotion.deform.unfold import rings_round, topology, untangle
+from toonmotion.deform.unfold import PASSES, PATCH_RINGS, rings_round, topology, untangle
 from toonmotion.errors import SettingsError
 from toonmotion.geometry.arrays import frozen_array
 from toonmotion.geometry.polygon import triangle_areas
@@ -25,20 +25,10 @@ from toonmotion.rig.pose import Pose, check_pose
 
 SKINNINGS = ("one-bone", "weights")
 
-# Stage two widens its joint area round triangles left with less than this fraction of their
-# rest area (folded, or crushed into a spike on the way to folding).
-_CRUSHED = 0.2
-# Stage two widens its joint area by square cells this many mesh spacings wide.
-_CELL = 4.0
 # Widened joint-area solvers a Deformer keeps (each a factorisation of a few hundred vertices, 2.4 MB
 # for 666 free of char2's 1,504): the benchmark's sequence widens through 10-20 of them, and a cache
 # of 8 refactorised them on every pass.
 _UNFOLD_SOLVERS = 32
-# An anchor that folds the drawing gives way in steps: its hold is multiplied by this, up to
-# this many times, then let go. Let go at once, char2's and the sample's joints drifted up to 100
-# and 40 px from the skeleton's where a quarter of the hold (a sixteenth) unfolded them (20, 18).
-_GIVE = 0.25
-_GIVE_STEPS = 3
 
 
 @dataclass(frozen=True)
@@ -90,8 +80,32 @@ class DeformSettings:
         weights summing to 1); 0 is the thesis, which let the drawn knees of the bundled
         character's crouch settle 20-24 px from the skeleton's. Where holding the joints leaves a
         triangle inverted that a solve holding none does not, the anchors give way a step at a
-        time (their weight quartered, three times, then let go), nearest the fold first (with
-        ``unfold`` > 0).
+        time (``anchor_give`` and ``anchor_give_steps``), nearest the fold first (with ``unfold``
+        > 0).
+
+    The unfolding loop's tuning (docs/tuning.md gives each its measurement):
+
+    crushed : float
+        A fraction of a triangle's rest area, 0 to 1: stage two widens its joint area round a
+        triangle left with no more than this (folded, or crushed into a spike on the way to
+        folding; an armpit's). 0 widens round inverted triangles only.
+    unfold_cell : float
+        Mesh spacings, > 0: the joint area widens by whole square cells this wide (those holding a
+        crushed triangle or the rings round it), so an animation widens it in a few coarse steps
+        and reuses one factorisation. Larger cells widen more at once.
+    unfold_rings : int
+        Rings of triangles round a crushed one whose cells are taken too, >= 0.
+    anchor_give : float
+        0 to 1: an anchor that folds the drawing has its hold multiplied by this, a step at a time
+        (0: let go at once, as the thesis lets every joint settle).
+    anchor_give_steps : int
+        Steps of ``anchor_give`` before an anchor is let go, >= 0.
+    untangle_passes : int
+        Passes of local untangling over the triangles still inverted after unfolding, >= 0
+        (:func:`~toonmotion.deform.unfold.untangle`).
+    untangle_rings : int
+        The largest patch untangling's last resort lays out again (Tutte's method), in rings round
+        an inverted triangle, >= 0.
 
     Construction raises :class:`SettingsError` for a value out of range.
     """
@@ -108,6 +122,13 @@ class DeformSettings:
     joint_anchor: float = 10.0
     acceleration: int = 5
     compiled: bool = False
+    crushed: float = 0.2
+    unfold_cell: float = 4.0
+    unfold_rings: int = 2
+    anchor_give: float = 0.25
+    anchor_give_steps: int = 3
+    untangle_passes: int = PASSES
+    untangle_rings: int = PATCH_RINGS
 
     def __post_init__(self) -> None:
         for name in ("preserve_area", "stage_two", "compiled"):
@@ -148,6 +169,26 @@ class DeformSettings:
         if not (isinstance(self.tolerance, (int, float)) and np.isfinite(self.tolerance)
                 and self.tolerance > 0):
             raise SettingsError(f"the stage-two tolerance must be a number > 0, got {self.tolerance!r}")
+        for name in ("unfold_rings", "anchor_give_steps", "untangle_passes", "untangle_rings"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (isinstance(value, int) and value >= 0):
+                raise SettingsError(f"{name} must be a whole number >= 0, got {value!r}")
+        for name, low, high in (("crushed", 0.0, 1.0), ("anchor_give", 0.0, 1.0)):
+            _number_in(self, name, low, high)
+        _number_in(self, "unfold_cell", 0.0, np.inf, low_open=True)
+
+
+def _number_in(settings: DeformSettings, name: str, low: float, high: float, *,
+               low_open: bool = False) -> None:
+    """Refuse ``settings.name`` unless a finite number from ``low`` to ``high`` (above ``low`` when
+    ``low_open``); keep it as a float."""
+    value = getattr(settings, name)
+    ok = (not isinstance(value, bool) and isinstance(value, int | float) and np.isfinite(value)
+          and (value > low if low_open else value >= low) and value <= high)
+    if not ok:
+        bound = f"> {low:g}" if low_open and high == np.inf else f"from {low:g} to {high:g}"
+        raise SettingsError(f"{name} must be a finite number {bound}, got {value!r}")
+    object.__setattr__(settings, name, float(value))
 
 
 @dataclass(frozen=True, eq=False)
@@ -224,7 +265,8 @@ class Deformer:
         self._F = np.asarray(mesh.F)
         self._unfold_solvers: dict[bytes, JointSolver] = {}
         self._topology: tuple | None = None  # for untangling, built when first needed
-        cell = np.floor((mesh.V - mesh.V.min(axis=0)) / (_CELL * mesh.spacing)).astype(np.int64)
+        cell = np.floor((mesh.V - mesh.V.min(axis=0)) / (settings.unfold_cell * mesh.spacing))
+        cell = cell.astype(np.int64)
         self._cell = cell[:, 0] * (cell[:, 1].max() + 1) + cell[:, 1]
 
     def drawn_joints(self, U: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -292,7 +334,7 @@ class Deformer:
             # Holding a joint there folds the drawing: the anchor nearest the fold gives way a
             # step, and the next solve starts from this one's result (it moves the joint little).
             k = self._nearest_anchor(folded, held)
-            held[k] = held[k] * _GIVE if held[k] > _GIVE ** _GIVE_STEPS else 0.0
+            held[k] = held[k] * s.anchor_give if held[k] > s.anchor_give ** s.anchor_give_steps else 0.0
             initial = U
         # Energies are eq. 3.8 (plus the anchors held) over the deformer's own joint area, whichever
         # solve ran (the start: the plain solve's, warm or not, or stage one's when the first solve
@@ -315,7 +357,7 @@ class Deformer:
                                   area=area, acceleration=s.acceleration, held=held)
             U, iterations = result.U, iterations + result.iterations
             areas = triangle_areas(U, self._F)
-            crushed = areas <= _CRUSHED * self._rest_triangle_areas
+            crushed = areas <= s.crushed * self._rest_triangle_areas
             if round_ == s.unfold or not crushed.any():
                 break
             wider = free | self._cells_round(crushed)
@@ -326,7 +368,8 @@ class Deformer:
         if s.unfold and folded.any():
             if self._topology is None:
                 self._topology = topology(self._F, len(U))
-            U = untangle(U, self._F, free, self._topology)
+            U = untangle(U, self._F, free, self._topology, passes=s.untangle_passes,
+                         patch_rings=s.untangle_rings)
             folded = triangle_areas(U, self._F) <= 0
         return U, free, result, solver, folded, iterations
 
@@ -339,11 +382,11 @@ class Deformer:
         return int(np.argmin(np.where(held > 0, gap, np.inf)))
 
     def _cells_round(self, crushed):
-        """Every vertex in a cell of :data:`_CELL` mesh spacings that holds a vertex of a
-        ``crushed`` triangle (or of the two rings of triangles round it): widening by whole cells
-        changes the joint area in a few coarse steps, so an animation soon stops widening it and
-        reuses one factorisation."""
-        near = rings_round(self._F, crushed, len(self.free))
+        """Every vertex in a cell of ``unfold_cell`` mesh spacings that holds a vertex of a
+        ``crushed`` triangle (or of the ``unfold_rings`` rings of triangles round it): widening by
+        whole cells changes the joint area in a few coarse steps, so an animation soon stops
+        widening it and reuses one factorisation."""
+        near = rings_round(self._F, crushed, len(self.free), self.settings.unfold_rings)
         return np.isin(self._cell, np.unique(self._cell[near]))
 
     def _solver_for(self, free):

@@ -23,9 +23,10 @@ from numpy.typing import NDArray
 
 from toonmotion.geometry.polygon import triangle_areas
 
-# At most this many passes of untangle, and rings round a triangle in its last resort.
-_PASSES = 10
-_PATCH_RINGS = 4
+# untangle's defaults (DeformSettings.untangle_passes and untangle_rings): at most this many
+# passes, and rings round a triangle in its last resort.
+PASSES = 10
+PATCH_RINGS = 4
 
 
 def rings_round(F: NDArray[np.int_], folded: NDArray[np.bool_], n: int, rings: int = 2
@@ -46,8 +47,8 @@ def topology(F: NDArray[np.int_], n: int) -> tuple[list[NDArray[np.intp]], list[
 
 
 def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bool_],
-             mesh_topology: tuple[list[NDArray[np.intp]], list[NDArray[np.int_]]] | None = None
-             ) -> NDArray[np.float64]:
+             mesh_topology: tuple[list[NDArray[np.intp]], list[NDArray[np.int_]]] | None = None, *,
+             passes: int = PASSES, patch_rings: int = PATCH_RINGS) -> NDArray[np.float64]:
     """``U`` with movable corners of inverted triangles moved so fewer (usually none) are inverted.
 
     Parameters
@@ -60,6 +61,10 @@ def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bo
         Vertices that may move (stage two's free vertices).
     mesh_topology : tuple, optional
         :func:`topology` of ``F``, when already built.
+    passes : int
+        Passes over the inverted triangles at most (0: none; the last resort still runs).
+    patch_rings : int
+        The largest patch the last resort lays out again, in rings round a triangle (0: none).
 
     Returns
     -------
@@ -80,7 +85,7 @@ def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bo
     F = np.asarray(F)
     incident, neighbours = mesh_topology if mesh_topology is not None else topology(F, len(U))
     reachable = np.flatnonzero(np.asarray(movable)[F].any(axis=1))  # a pass can move no others
-    for _ in range(_PASSES):
+    for _ in range(passes):
         folded = reachable[triangle_areas(U, F[reachable]) <= 0]
         if len(folded) == 0:
             break
@@ -108,18 +113,18 @@ def untangle(U: NDArray[np.float64], F: NDArray[np.int_], movable: NDArray[np.bo
             break
     for t in np.flatnonzero(triangle_areas(U, F) <= 0):
         if triangle_areas(U, F[t:t + 1])[0] <= 0:
-            U = _tutte_patch(U, F, t, movable, incident, neighbours)
+            U = _tutte_patch(U, F, t, movable, incident, neighbours, patch_rings)
     return U
 
 
-def _tutte_patch(U, F, t, movable, incident, neighbours):
+def _tutte_patch(U, F, t, movable, incident, neighbours, patch_rings):
     """``U`` with a patch round triangle ``t`` laid out again by Tutte's method (each inner vertex
     at the mean of its neighbours, the patch's edge held), for the smallest patch of up to
-    :data:`_PATCH_RINGS` rings that leaves no triangle of it inverted; ``U`` itself if none does.
+     ``patch_rings`` rings that leaves no triangle of it inverted; ``U`` itself if none does.
     With a convex edge Tutte's layout is never folded, and a small patch's edge nearly is."""
     folded = np.zeros(len(F), dtype=bool)
     folded[t] = True
-    for rings in range(1, _PATCH_RINGS + 1):
+    for rings in range(1, patch_rings + 1):
         patch = rings_round(F, folded, len(U), rings)
         # Inner vertices: no triangle outside the patch touches them; the rest of it is its edge.
         edge = np.zeros(len(U), dtype=bool)
