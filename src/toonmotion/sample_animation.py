@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from toonmotion.animate.animation import Animation, animate_timeline
 from toonmotion.animate.timeline import Keyframe, Timeline, make_timeline
+from toonmotion.deform.deformer import Deformer
+from toonmotion.rig.character import Character
 from toonmotion.rig.pose import Pose, descendants, rotate_about
 from toonmotion.rig.skeleton import Skeleton
 
@@ -45,6 +48,22 @@ def sample_keyframes(skeleton: Skeleton, *, fps: float = 12.0, ease: str = "in-o
     poses = {0: rest, 6: crouch, 12: hop, 18: crouch, 24: wave_a, 30: wave_b, 36: rest}
     keys = [Keyframe(frame, Pose(p)) for frame, p in poses.items()]
     return make_timeline(skeleton, keys, fps=fps, ease=ease)
+
+
+def sample_animated() -> tuple[Character, Animation]:
+    """The bundled character (``samples.sample_rig()``) animated through :func:`sample_keyframes`:
+    a whole animation in one call, for trying an export or a renderer.
+
+    Examples
+    --------
+    >>> hero, animation = sample_animated()
+    >>> len(animation.meshes), animation.meshes[0][1].shape == hero.mesh.V.shape
+    (37, True)
+    """
+    from toonmotion.samples import sample_rig
+
+    hero = sample_rig()
+    return hero, animate_timeline(Deformer(hero), sample_keyframes(hero.skeleton))
 
 
 def _shift(skeleton, positions, dy, *, legs_too=False):

@@ -169,11 +169,8 @@ def export_animation(
     Examples
     --------
     >>> import tempfile
-    >>> from toonmotion.samples import sample_rig
-    >>> from toonmotion.api import animate_character
-    >>> from toonmotion.sample_animation import sample_keyframes
-    >>> hero = sample_rig()
-    >>> animation = animate_character(hero, sample_keyframes(hero.skeleton))
+    >>> from toonmotion.sample_animation import sample_animated
+    >>> hero, animation = sample_animated()
     >>> folder = Path(tempfile.mkdtemp())
     >>> done = export_animation(folder / "hero.glb", hero, animation)
     >>> done.format, done.frames == len(animation.meshes), [p.name for p in done.files]

@@ -65,12 +65,9 @@ def save_animation_glb(path: str | Path, rig: DrawingRig) -> None:
     Examples
     --------
     >>> import tempfile
-    >>> from toonmotion.samples import sample_rig
-    >>> from toonmotion.api import animate_character
-    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> from toonmotion.sample_animation import sample_animated
     >>> from toonmotion.io.exchange.drawing_rig import drawing_rig
-    >>> hero = sample_rig()
-    >>> animation = animate_character(hero, sample_keyframes(hero.skeleton))
+    >>> hero, animation = sample_animated()
     >>> path = Path(tempfile.mkdtemp()) / "hero.glb"
     >>> save_animation_glb(path, drawing_rig(hero, animation, unit=PIXELS_PER_METRE))
     >>> glb = gl.GLTF2.load_binary(path)

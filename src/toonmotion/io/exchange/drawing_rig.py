@@ -94,11 +94,9 @@ def drawing_rig(character: Character, animation: Animation, *, settings: DeformS
 
     Examples
     --------
-    >>> from toonmotion.samples import sample_rig
-    >>> from toonmotion.api import animate_character
-    >>> from toonmotion.sample_animation import sample_keyframes
-    >>> hero = sample_rig()
-    >>> rig = drawing_rig(hero, animate_character(hero, sample_keyframes(hero.skeleton)))
+    >>> from toonmotion.sample_animation import sample_animated
+    >>> hero, animation = sample_animated()
+    >>> rig = drawing_rig(hero, animation)
     >>> rig.U.shape[1:] == hero.mesh.V.shape, bool(rig.V[:, 1].min() == 0)  # standing on y = 0
     (True, True)
     """

@@ -136,12 +136,10 @@ def save_spine(path: str | Path, rig: DrawingRig, *, name: str = "animation") ->
     Examples
     --------
     >>> import tempfile
-    >>> from toonmotion.samples import sample_rig
-    >>> from toonmotion.api import animate_character
-    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> from toonmotion.sample_animation import sample_animated
     >>> from toonmotion.io.exchange.drawing_rig import drawing_rig
-    >>> hero = sample_rig()
-    >>> rig = drawing_rig(hero, animate_character(hero, sample_keyframes(hero.skeleton)))
+    >>> hero, animation = sample_animated()
+    >>> rig = drawing_rig(hero, animation)
     >>> folder = Path(tempfile.mkdtemp())
     >>> save_spine(folder / "hero.json", rig, name="wave")
     >>> sorted(p.name for p in folder.iterdir())
@@ -192,12 +190,10 @@ def spine_skeleton(rig: DrawingRig, *, name: str = "animation") -> SpineSkeleton
 
     Examples
     --------
-    >>> from toonmotion.samples import sample_rig
-    >>> from toonmotion.api import animate_character
-    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> from toonmotion.sample_animation import sample_animated
     >>> from toonmotion.io.exchange.drawing_rig import drawing_rig
-    >>> hero = sample_rig()
-    >>> rig = drawing_rig(hero, animate_character(hero, sample_keyframes(hero.skeleton)))
+    >>> hero, animation = sample_animated()
+    >>> rig = drawing_rig(hero, animation)
     >>> spine = spine_skeleton(rig)
     >>> [bone.name for bone in spine.file.bones[:3]], spine.file.bones[-1].name
     (['root_1', 'root', 'hip'], 'bone:left_foot')
