@@ -11,7 +11,7 @@ from toonmotion.capture.footage import (
     suggest_joints,
     tracking_from_motion,
 )
-from toonmotion.errors import MotionError, SettingsError
+from toonmotion.errors import MotionError, SettingsError, TrackingError
 from toonmotion.rig.skeleton import Skeleton
 from toonmotion.samples import sample_character, sample_character_on
 
@@ -139,3 +139,15 @@ def test_the_first_figure_keeps_fills_near_the_papers_colour(background):
     truth = sample_character(scale=0.5)[0][..., 3] > 127
     found = first_figure(picture[None])
     assert (found & truth).sum() / (found | truth).sum() >= 0.95
+
+
+@pytest.mark.parametrize("frames, said", [
+    (np.zeros((40, 30, 3), np.uint8), "frames have shape (40, 30, 3); give a (T, h, w, 3) array"),
+    ([], "there are no frames to track"),
+    ([np.zeros((40, 30), np.uint8)], "frame 0 is a uint8 array of shape (40, 30); give (h, w, 3) uint8 RGB"),
+])
+def test_suggesting_joints_on_something_that_is_no_footage_is_refused_in_one_line(frames, said):
+    """One frame alone (an (H, W, 3) picture) used to end in a TypeError deep in the mask code."""
+    with pytest.raises(TrackingError) as refused:
+        suggest_joints(frames)
+    assert said in str(refused.value) and "\n" not in str(refused.value)

@@ -29,6 +29,7 @@ from toonmotion.capture.foreground import (
     without_frame,
 )
 from toonmotion.capture.setup import check_setup, rectangle_sizes, suggest_setup
+from toonmotion.capture.track_checks import check_count, read_frame
 from toonmotion.capture.track_settings import Tracking, TrackSettings, TrackSetup
 from toonmotion.capture.tracker import retrack, track
 from toonmotion.errors import SettingsError
@@ -138,7 +139,14 @@ def suggest_joints(
     >>> skeleton, sizes = suggest_joints(picture[None])
     >>> len(skeleton) == len(sizes) > 1
     True
+
+    Raises
+    ------
+    TrackingError
+        ``frames`` is not a sequence of ``(H, W, 3)`` uint8 frames (one frame alone, say).
     """
+    check_count(frames)
+    read_frame(frames, 0, None)
     return suggest_setup(first_figure(frames, colour=colour))
 
 
