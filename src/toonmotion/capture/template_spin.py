@@ -102,7 +102,7 @@ def locate_all_round(small: NDArray[np.uint8], discs: TurnedDiscs, centre: NDArr
     --------
     A smooth texture turned by 100 degrees (the rectangle's angle by -100) is found where it is:
 
-    >>> from toonmotion.capture.template_match import Templates, plan_joint
+    >>> from toonmotion.capture.joint_plan import Templates, plan_joint
     >>> noise = np.random.default_rng(1).uniform(0, 255, (200, 200, 3)).astype(np.float32)
     >>> image = cv2.normalize(cv2.GaussianBlur(noise, (0, 0), 3), None, 0, 255, cv2.NORM_MINMAX)
     >>> anchor = Templates.cut(image.astype(np.uint8), np.array([99.5, 99.5]), 0.0, (30, 30))

@@ -108,6 +108,7 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     >>> rng = np.random.default_rng(0)
     >>> scene = rng.integers(0, 256, (60, 90, 3), dtype=np.uint8)
     >>> frames = np.stack([np.roll(scene, (t, 2 * t), axis=(0, 1)) for t in range(5)])
+    >>> from toonmotion.rig.skeleton import Skeleton
     >>> setup = TrackSetup(Skeleton.from_joints([("dot", None, (30, 25))]), sizes=[[12, 12]])
     >>> np.round(track(frames, setup).positions[:, 0], 3).tolist()
     [[30.0, 25.0], [32.0, 26.0], [34.0, 27.0], [36.0, 28.0], [38.0, 29.0]]

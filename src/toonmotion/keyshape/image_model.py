@@ -95,6 +95,7 @@ def build_image_model(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], k
     --------
     >>> from toonmotion.sample_cartoons import bouncing_ball
     >>> from toonmotion.keyshape.matte import fit_matte
+    >>> from toonmotion.keyshape.video import region_mask
     >>> ball = bouncing_ball(frames=4)
     >>> matte = fit_matte(ball.frames[0], region_mask(ball.contours[0], ball.frames.shape[1:3]))
     >>> model = build_image_model(ball.frames, [0], ball.contours[:1], matte)
