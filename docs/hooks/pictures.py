@@ -51,7 +51,8 @@ def _make(out: Path) -> None:
     exaggerated = api.animate_character(hero, keys, exaggeration=api.FilterSettings(strength=1.5))
     plain = list(render_animation(hero, animation, background=(255, 255, 255)))
     filtered = list(render_animation(hero, exaggerated, background=(255, 255, 255)))
-    _rows([_strip([plain[i] for i in shown]), _strip([filtered[i] for i in shown])]).save(out / "exaggerated.png")
+    both = [_strip([plain[i] for i in shown]), _strip([filtered[i] for i in shown])]
+    _rows(both).save(out / "exaggerated.png")
 
     footage = np.stack([frame[..., :3] for frame in plain])
     skeleton, sizes = api.suggest_joints(footage)

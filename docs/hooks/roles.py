@@ -21,7 +21,8 @@ def on_page_content(html, page, config, files):
         short, name = match.group(1) == "~", match.group(2).strip()
         shown = name.rsplit(".", 1)[-1] if short else name
         last = name.rsplit(".", 1)[-1]
-        target = next((a for a in (name, f"toonmotion.api.{last}", f"toonmotion.{last}") if a in anchors), None)
+        candidates = (name, f"toonmotion.api.{last}", f"toonmotion.{last}")
+        target = next((a for a in candidates if a in anchors), None)
         code = f"<code>{shown}</code>"
         return f'<a href="#{target}">{code}</a>' if target else code
 
