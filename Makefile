@@ -59,7 +59,7 @@ demo: $(STAMP)
 	  --balloon right_hand --balls left_foot,right_foot -o demo/demo_scene.mp4
 
 test: $(STAMP) browser validator jscheck docs
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks docs/hooks
 	$(BIN)/mypy
 	$(BIN)/python -m pytest
 
