@@ -40,10 +40,10 @@ def test_each_flag_reaches_the_settings():
 
 
 def test_every_deforming_command_lists_the_same_six_options():
+    group = typer.main.get_command(app)
     for command in DEFORMING:
-        result = CliRunner().invoke(app, [command, "--help"], terminal_width=200)
-        assert result.exit_code == 0
-        missing = [flag for flag in FLAGS if flag not in result.output]
+        names = {name for param in group.commands[command].params for name in param.opts}
+        missing = [flag for flag in FLAGS if flag not in names]
         assert not missing, (command, missing)
 
 
