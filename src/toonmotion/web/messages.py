@@ -132,8 +132,8 @@ def required() -> Any:
 
 
 Frame = Annotated[StrictInt, Field(ge=0, le=2**31 - 1)]
-Colour = tuple[Annotated[StrictInt, Field(ge=0, le=255)], ...]
-Background = Annotated[Colour | None, Field(min_length=3, max_length=3),
+Byte = Annotated[StrictInt, Field(ge=0, le=255)]
+Background = Annotated[tuple[Byte, Byte, Byte] | None,
                        must("'background' must be null or [r, g, b], each 0 to 255")]
 Positions = Annotated[list[Point] | None,
                       must("'positions' must list [x, y] pairs of numbers, one for each joint")]

@@ -89,7 +89,7 @@ def export(editing: Editing, message: messages.Export,
     relative = f"{EXPORTS}/{name}{EXPORT_FORMATS[kind]}"
     target = editing.path(EXPORTS, f"{name}{EXPORT_FORMATS[kind]}")
     overlays = check_overlays(message.overlays)
-    size, background = message.size, _rgb(message.background)
+    size, background = message.size, message.background
 
     def report(stage: str, index: int, total: int) -> None:
         progress(index, total)
@@ -178,11 +178,6 @@ def _snapshot_folder(editing: Editing) -> Path:
     return root / f"drawing-{n}"
 
 
-def _rgb(value: tuple[int, ...] | None) -> tuple[int, int, int] | None:
-    """A message's ``background`` (checked: three bytes) as a colour, or None."""
-    return None if value is None else (value[0], value[1], value[2])
-
-
 @off_loop("track the footage")
 def track(editing: Editing, message: messages.Track,
           progress: Callable[[int, int], None]) -> dict[str, Any]:
@@ -206,7 +201,7 @@ def track(editing: Editing, message: messages.Track,
                                  both_ways=message.both_ways)
     if message.full_resolution:
         settings = replace(settings, working_side=None)
-    background = _rgb(message.background)
+    background = message.background
     capture = api.track_footage(frames, joints=(skeleton, sizes[order]), fps=fps, earlier=earlier,
                                 corrections=corrections, at=at, settings=settings, background=background,
                                 progress=lambda stage, index, total: progress(index, total))
@@ -235,7 +230,7 @@ def suggest(editing: Editing, message: messages.Suggest,
     :func:`track` (the figure of a sequence without a flat border is found over every frame)."""
     if editing.footage is None:
         raise TrackingError("there is no footage yet: send a video, a GIF or frames first")
-    background = _rgb(message.background)
+    background = message.background
     skeleton, sizes = api.suggest_joints(editing.footage[0], colour=background)
     return {"type": "suggested", "joints": suggested_joints(skeleton, sizes)}
 
