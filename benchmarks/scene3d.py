@@ -9,19 +9,19 @@ the prior (``--prior``, default the CMU jump) from the front, a balloon at its r
 balls at its feet. With --proxy and --frames, any proxy and its drawn frames are measured
 (``--balloon`` and ``--balls`` name its markers).
 
-Line 1 (best of ``--repeat`` runs, one core): ``simulate_ms``, ``render_ms``, ``composite_ms``
-per frame (MuJoCo's sub-steps; the ray-cast colour, depth and occlusion maps; the drawing's depth,
-alpha and the depth test) and their ``total_ms`` (goal <= 50), with the frame size, frame count,
-sub-steps, balls, the deepest contact and ``up_err_deg`` (goal <= 5): the largest angle, over the
-frames, between the picture's up and the scene's (against gravity) seen at the figure. Line 2:
-the frames per second of the whole ``toonmotion scene`` command writing an MP4 (start-up,
-reading, simulating, compositing and encoding). Line 3, the cloth scene: a scarf at ``--scarf``
-and a skirt round ``--skirt`` (MuJoCo flexes, rendered as triangles), the same stages and
-``total_ms`` (goal <= 80), ``instabilities`` (runs that stopped with an unstable simulation, goal
-0), the cloth's largest edge stretch and ``up_err_deg``; an element the scene refuses to build on
-the proxy (a skirt round a level body's hips) is listed under ``refused`` with its message.
-Line 4, the cape scene: a cape from ``--cape LEFT,RIGHT`` (its top row driven behind the two
-markers), measured as line 3 (``''`` for none).
+Line 1 (best of ``--repeat`` runs, one core): ``simulate_ms``, ``render_ms``, ``composite_ms`` per
+frame (MuJoCo's sub-steps; the ray-cast colour, depth and occlusion maps, ``--antialias`` rays a
+pixel side, by default ``scene``'s; the drawing's depth, alpha and the depth test) and their
+``total_ms`` (goal <= 50), with the frame size, frame count, sub-steps, balls, the deepest contact
+and ``up_err_deg`` (goal <= 5): the largest angle, over the frames, between the picture's up and the
+scene's (against gravity) seen at the figure. Line 2: the frames per second of the whole
+``toonmotion scene`` command writing an MP4 (start-up, reading, simulating, compositing and
+encoding). Line 3, the cloth scene: a scarf at ``--scarf`` and a skirt round ``--skirt`` (MuJoCo
+flexes, rendered as triangles), the same stages and ``total_ms`` (goal <= 80), ``instabilities``
+(runs that stopped with an unstable simulation, goal 0), the cloth's largest edge stretch and
+``up_err_deg``; an element the scene refuses to build on the proxy (a skirt round a level body's
+hips) is listed under ``refused`` with its message. Line 4, the cape scene: a cape from ``--cape
+LEFT,RIGHT`` (its top row driven behind the two markers), measured as line 3 (``''`` for none).
 """
 
 import os
@@ -40,6 +40,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from toonmotion import api  # noqa: E402
+from toonmotion.api.scene3d import ANTIALIAS  # noqa: E402
 from toonmotion.errors import SceneError  # noqa: E402
 from toonmotion.io.frames import lay_on, load_frames  # noqa: E402
 from toonmotion.io.proxy_json import load_proxy  # noqa: E402
@@ -64,7 +65,7 @@ def demo_scene(folder, prior):
     return folder / "proxy.json", folder / "frames"
 
 
-def stages(proxy, pictures, elements):
+def stages(proxy, pictures, elements, antialias):
     """Milliseconds per frame of each stage, one pass."""
     T = proxy.frame_count
     start = time.perf_counter()
@@ -74,7 +75,7 @@ def stages(proxy, pictures, elements):
     render = mix = 0.0
     for t in range(T):
         start = time.perf_counter()
-        layer = api.render_elements(proxy, motion, t)
+        layer = api.render_elements(proxy, motion, t, antialias=antialias)
         render += time.perf_counter() - start
         start = time.perf_counter()
         alpha, figure = drawing_alpha(pictures[t])
@@ -107,6 +108,8 @@ def main():
     parser.add_argument("--prior", type=Path, default=SHARED_MOCAP / "cmu_16_07_jump.bvh",
                         help="The demo's prior clip.")
     parser.add_argument("--repeat", type=int, default=3, help="Runs per stage; the best counts.")
+    parser.add_argument("--antialias", type=int, default=ANTIALIAS,
+                        help="Rays per pixel side, as scene --antialias (default: its default).")
     args = parser.parse_args()
     if (args.proxy is None) != (args.frames is None):
         parser.error("give --proxy and --frames together")
@@ -117,18 +120,20 @@ def main():
         pictures = load_frames(frames_path, alpha=True)[0]
         elements = [Balloon(args.balloon)] if args.balloon else []
         elements += [Balls(m) for m in args.balls.split(",") if m]
-        runs = [stages(proxy, pictures, elements) for _ in range(max(1, args.repeat))]
+        runs = [stages(proxy, pictures, elements, args.antialias) for _ in range(max(1, args.repeat))]
         best = {k: min(r[0][k] for r in runs) for k in runs[0][0]}
         motion = runs[0][1]
         total = sum(best.values())
         print(json.dumps({"scene": "demo" if args.proxy is None else str(proxy_path),
                           "size": [proxy.camera.width, proxy.camera.height], "frames": proxy.frame_count,
                           "substeps": motion.substeps, "balls": motion.balls.shape[1],
-                          **{k: round(v, 2) for k, v in best.items()}, "total_ms": round(total, 2),
+                          "antialias": args.antialias, **{k: round(v, 2) for k, v in best.items()},
+                          "total_ms": round(total, 2),
                           "goal_total_ms": 50, "deepest_contact_mm": round(motion.deepest * 1000, 2),
                           "up_err_deg": round(up_error(proxy), 2), "goal_up_err_deg": 5}),
               flush=True)
-        argv = ["scene", proxy_path, "--frames", frames_path, "-o", folder / "scene.mp4"]
+        argv = ["scene", proxy_path, "--frames", frames_path, "-o", folder / "scene.mp4",
+                "--antialias", args.antialias]
         argv += ["--balloon", args.balloon] if args.balloon else []
         argv += ["--balls", args.balls] if args.balls else []
         start = time.perf_counter()
@@ -140,10 +145,10 @@ def main():
         name = "demo" if args.proxy is None else str(proxy_path)
         cloth = [Scarf(args.scarf)] if args.scarf in proxy.names else []
         cloth += [Skirt(args.skirt)] if args.skirt in proxy.names else []
-        cloth_line(proxy, pictures, cloth, args.repeat, f"{name} cloth")
+        cloth_line(proxy, pictures, cloth, args, f"{name} cloth")
         pair = [m for m in args.cape.split(",") if m]
         if len(pair) == 2 and set(pair) <= set(proxy.names):
-            cloth_line(proxy, pictures, [Cape(*pair)], args.repeat, f"{name} cape")
+            cloth_line(proxy, pictures, [Cape(*pair)], args, f"{name} cape")
 
 
 def stretch(motion):
@@ -162,8 +167,8 @@ def named(element):
     return f"{type(element).__name__.lower()}@{held}"
 
 
-def cloth_line(proxy, pictures, elements, repeat, name):
-    """Lines 3 and 4: cloth ``elements`` on the proxy, timed, best of ``repeat``."""
+def cloth_line(proxy, pictures, elements, args, name):
+    """Lines 3 and 4: cloth ``elements`` on the proxy, timed, best of ``args.repeat``."""
     elements = list(elements)
     refused = {}  # an element that cannot be built on this proxy (said in one line), not simulated
     for element in list(elements):
@@ -176,9 +181,9 @@ def cloth_line(proxy, pictures, elements, repeat, name):
         print(json.dumps({"scene": name, "refused": refused}), flush=True)
         return
     runs, instabilities = [], 0
-    for _ in range(max(1, repeat)):
+    for _ in range(max(1, args.repeat)):
         try:
-            runs.append(stages(proxy, pictures, elements))
+            runs.append(stages(proxy, pictures, elements, args.antialias))
         except SceneError:
             instabilities += 1
     line = {"scene": name, "size": [proxy.camera.width, proxy.camera.height], "frames": proxy.frame_count,
@@ -189,7 +194,7 @@ def cloth_line(proxy, pictures, elements, repeat, name):
         best = {k: min(r[0][k] for r in runs) for k in runs[0][0]}
         motion = runs[0][1]
         line.update({"substeps": motion.substeps, "cloth_vertices": motion.cloth_vertices.shape[1],
-                     "cloth_triangles": len(motion.cloth_triangles),
+                     "cloth_triangles": len(motion.cloth_triangles), "antialias": args.antialias,
                      **{k: round(v, 2) for k, v in best.items()}, "total_ms": round(sum(best.values()), 2),
                      "goal_total_ms": 80, "stretch_max": round(stretch(motion), 3)})
     line.update({"up_err_deg": round(up_error(proxy), 2), "goal_up_err_deg": 5})

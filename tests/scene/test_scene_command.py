@@ -52,6 +52,8 @@ def test_no_elements_writes_the_drawing_and_says_so(files, capsys):
     (["--balls", "m2", "--shading", "glossy"], "shading must be one of"),
     (["--balls", "m2", "--ball-radius", "-1"], "a ball's radius must be a positive"),
     (["--balls", "m2", "--background", "transparent"], "--background takes white, black or #rrggbb"),
+    (["--balls", "m2", "--antialias", "5"], "--antialias"),
+    (["--balls", "m2", "--antialias", "0"], "--antialias"),
 ])
 def test_bad_input_is_one_line_exit_2_and_overwrites_nothing(files, capsys, argv, message):
     folder, _ = files
@@ -95,3 +97,22 @@ def test_passes_are_written_for_compositing_elsewhere(files, tmp_path):
         assert np.array_equal(np.asarray(Image.open(passes / f"occlusion_{t:04d}.png")), occlusion)
         assert np.array_equal(occlusion > 0, beauty[..., 3] > 0) and np.array_equal(occlusion > 0, depth > 0)
     assert any((o > 0).any() for _, _, o in expected)
+
+
+def test_antialias_sets_the_rays_a_pixel_and_one_ray_gives_hard_edges(files, tmp_path):
+    from toonmotion.api import composite_scene, simulate_scene
+    from toonmotion.scene.elements import Balls
+
+    folder, proxy = files
+    drawn, _ = load_frames(folder / "frames")
+    motion = simulate_scene(proxy, [Balls("m2", count=2)])
+    for k in (1, 3):
+        out = tmp_path / f"k{k}"
+        assert run_cli("scene", folder / "proxy.json", "--frames", folder / "frames", "--balls", "m2",
+                       "--ball-count", "2", "--antialias", str(k), "-o", out) == 0
+        made, _ = load_frames(out)
+        expected = np.stack(list(composite_scene(proxy, drawn, motion, antialias=k)))
+        assert np.array_equal(made, expected)
+    hard, soft = load_frames(tmp_path / "k1")[0], load_frames(tmp_path / "k3")[0]
+    assert (hard != soft).any()  # the edges differ; the insides of the balls do not
+    assert np.mean(np.any(hard != soft, axis=-1)) < 0.05

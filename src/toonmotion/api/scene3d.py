@@ -14,10 +14,17 @@ from toonmotion.errors import SceneError
 from toonmotion.io.frames import lay_on
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.proxy import Proxy
-from toonmotion.render.cloth import render_cloth
+from toonmotion.render.cloth import draw_cloth
 from toonmotion.render.depth_composite import composite, drawing_alpha, drawn_depth
 from toonmotion.render.sequence import animation_bones, render_animation
-from toonmotion.render.zbuffer import Layer, layer_passes, render_primitives
+from toonmotion.render.zbuffer import (
+    Layer,
+    cast_primitives,
+    checked_antialias,
+    checked_frame,
+    layer_passes,
+    window_of,
+)
 from toonmotion.rig.character import Character
 from toonmotion.scene.build import build_scene
 from toonmotion.scene.elements import Element
@@ -25,6 +32,7 @@ from toonmotion.scene.simulate import SceneMotion, simulate
 
 SHADINGS = ("toon", "smooth", "flat")
 STRING_MIN_PX = 1.5  # the narrowest a string is drawn, pixels: a line, not dashes
+ANTIALIAS = 2  # rays per pixel side in the composited frames and passes (see render_elements)
 
 
 def simulate_scene(proxy: Proxy, elements: Sequence[Element], *,
@@ -75,7 +83,8 @@ def simulate_scene(proxy: Proxy, elements: Sequence[Element], *,
     return simulate(build_scene(proxy, list(elements)), proxy, progress=progress)
 
 
-def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: str = "toon") -> Layer:
+def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: str = "toon",
+                    antialias: int = ANTIALIAS) -> Layer:
     """The elements seen from the proxy's camera on one frame: colour, depth and occlusion maps.
 
     The proxy itself is not drawn.
@@ -89,18 +98,23 @@ def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: s
     shading : str
         ``"toon"`` (Lambert light in three bands, to sit with a drawing), ``"smooth"`` or
         ``"flat"``.
+    antialias : int
+        Rays per pixel side, 1 (one ray a pixel: hard edges) to 4: ``k x k`` rays a pixel, their
+        fraction that hit is the layer's ``alpha`` and edges are blended. The default, 2, costs
+        about three times the time of one ray a pixel.
 
     Returns
     -------
     Layer
         :class:`toonmotion.render.zbuffer.Layer`: ``colour``, ``depth`` (metres along the camera's
-        axis, ``inf`` where nothing is seen), ``coverage`` (the occlusion map) and ``ids`` (spheres,
-        then capsules, then cloth triangles: :func:`toonmotion.render.cloth.render_cloth`).
+        axis, ``inf`` where nothing is seen), ``coverage`` (the occlusion map), ``ids`` (spheres,
+        then capsules, then cloth triangles: :func:`toonmotion.render.cloth.render_cloth`) and
+        ``alpha`` (the fraction of each pixel covered).
 
     Raises
     ------
     SceneError
-        An unknown shading, a frame the proxy does not have.
+        An unknown shading, a frame the proxy does not have, an ``antialias`` out of range.
 
     Examples
     --------
@@ -118,14 +132,18 @@ def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: s
     """
     if shading not in SHADINGS:
         raise SceneError(f"shading must be one of {', '.join(SHADINGS)}, got {shading!r}")
-    layer = render_primitives(proxy.camera, frame, spheres=motion.spheres[frame],
-                              capsules=_drawn_strings(proxy, motion.capsules[frame], frame),
-                              colours=motion.colours, shading=shading)
-    if len(motion.cloth_triangles) == 0:
-        return layer
-    return render_cloth(proxy.camera, frame, motion.cloth_vertices[frame], motion.cloth_triangles,
-                        motion.cloth_colours, shading=shading, under=layer,
-                        first_id=motion.spheres.shape[1] + motion.capsules.shape[1])
+    camera = proxy.camera
+    t = checked_frame(camera, frame)
+    spheres, strings = motion.spheres[t], _drawn_strings(proxy, motion.capsules[t], t)
+    cloth = motion.cloth_vertices[t] if len(motion.cloth_triangles) else None
+    # Rays only where an element may be seen: the spheres', capsules' and cloth's box on the picture.
+    window = window_of(camera, t, spheres=spheres, capsules=strings, points=cloth)
+    rays = cast_primitives(camera, t, spheres=spheres, capsules=strings, colours=motion.colours,
+                           shading=shading, antialias=antialias, window=window)
+    if cloth is not None:
+        draw_cloth(rays, camera, t, cloth, motion.cloth_triangles, motion.cloth_colours, shading=shading,
+                   first_id=motion.spheres.shape[1] + motion.capsules.shape[1])
+    return rays.layer()
 
 
 def _drawn_strings(proxy: Proxy, capsules: NDArray[np.float64], frame: int) -> NDArray[np.float64]:
@@ -136,9 +154,6 @@ def _drawn_strings(proxy: Proxy, capsules: NDArray[np.float64], frame: int) -> N
     if not len(C):
         return C
     camera = proxy.camera
-    known = isinstance(frame, int | np.integer) and not isinstance(frame, bool)
-    if not known or not 0 <= frame < camera.frame_count:
-        return C  # render_primitives refuses the frame
     depth = ((C[:, 0:3] + C[:, 3:6]) / 2 - camera.centres[frame]) @ camera.rotations[frame][2]
     least = STRING_MIN_PX / 2 * np.maximum(depth, 0.0) / camera.focal  # metres at that depth
     C[:, 6] = np.maximum(C[:, 6], least)
@@ -147,7 +162,8 @@ def _drawn_strings(proxy: Proxy, capsules: NDArray[np.float64], frame: int) -> N
 
 def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, shading: str = "toon",
                     background: tuple[int, int, int] = (255, 255, 255), limbs: ArrayLike | None = None,
-                    progress: Progress | None = None) -> Iterator[NDArray[np.uint8]]:
+                    progress: Progress | None = None, antialias: int = ANTIALIAS
+                    ) -> Iterator[NDArray[np.uint8]]:
     """The drawn frames with the simulated elements, in depth order (eq. 23-26), frame by frame.
 
     Parameters
@@ -168,6 +184,8 @@ def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, sha
         the picture), as :func:`animation_frames` gives for a rigged character.
     progress : callable, optional
         ``progress("composite", done, total)``.
+    antialias : int
+        Rays per pixel side, as :func:`render_elements`.
 
     Returns
     -------
@@ -178,8 +196,8 @@ def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, sha
     Raises
     ------
     SceneError
-        Frames whose count or size differ from the proxy's, an unknown shading (at the call,
-        before any frame is made).
+        Frames whose count or size differ from the proxy's, an unknown shading or an ``antialias``
+        out of range (at the call, before any frame is made).
 
     Examples
     --------
@@ -200,15 +218,16 @@ def composite_scene(proxy: Proxy, frames: ArrayLike, motion: SceneMotion, *, sha
     if labels is not None and labels.shape != pictures.shape[:3]:
         raise SceneError(f"the limb labels must be one per pixel of every frame, {pictures.shape[:3]}, got "
                          f"{labels.shape}")
-    return _composited(proxy, pictures, motion, shading, background, labels, progress)
+    checked_antialias(antialias)
+    return _composited(proxy, pictures, motion, shading, background, labels, progress, antialias)
 
 
-def _composited(proxy, pictures, motion, shading, background, labels, progress):
+def _composited(proxy, pictures, motion, shading, background, labels, progress, antialias):
     T = proxy.frame_count
     pixels = proxy.camera.project(proxy.points)
     depths = proxy.camera.depth(proxy.points)
     for t in range(T):
-        layer = render_elements(proxy, motion, t, shading=shading)
+        layer = render_elements(proxy, motion, t, shading=shading, antialias=antialias)
         alpha, figure = drawing_alpha(pictures[t])
         # The drawing's depth matters only where an element is seen over the figure.
         drawn = drawn_depth(np.where(layer.coverage, figure, 0.0), pixels[t], depths[t], proxy.limbs,
@@ -294,7 +313,7 @@ def _check_lifted_from(proxy, seen):
                          "proxy from this animation's frames (animate --save-frame-motion) at the same size")
 
 
-def scene_passes(proxy: Proxy, motion: SceneMotion, *, shading: str = "toon"
+def scene_passes(proxy: Proxy, motion: SceneMotion, *, shading: str = "toon", antialias: int = ANTIALIAS
                  ) -> Iterator[tuple[NDArray[np.uint8], NDArray[np.uint16], NDArray[np.uint8]]]:
     """The elements' beauty, depth and occlusion passes per frame, for compositing elsewhere.
 
@@ -305,12 +324,15 @@ def scene_passes(proxy: Proxy, motion: SceneMotion, *, shading: str = "toon"
         From :func:`simulate_scene`.
     shading : str
         As :func:`render_elements`.
+    antialias : int
+        Rays per pixel side, as :func:`render_elements`.
 
     Returns
     -------
     iterator of (beauty, depth, occlusion)
-        Per frame :func:`toonmotion.render.zbuffer.layer_passes`: RGBA, depth in millimetres
-        (16 bits; 0 where nothing is seen) and a 0/255 mask.
+        Per frame :func:`toonmotion.render.zbuffer.layer_passes`: RGBA (its alpha the fraction of
+        the pixel covered), depth in millimetres (16 bits; 0 where nothing is seen) and the
+        coverage as a 0-255 matte.
 
     Examples
     --------
@@ -326,5 +348,7 @@ def scene_passes(proxy: Proxy, motion: SceneMotion, *, shading: str = "toon"
     """
     if shading not in SHADINGS:
         raise SceneError(f"shading must be one of {', '.join(SHADINGS)}, got {shading!r}")
+    checked_antialias(antialias)
     frames = range(proxy.frame_count)
-    return (layer_passes(render_elements(proxy, motion, t, shading=shading)) for t in frames)
+    return (layer_passes(render_elements(proxy, motion, t, shading=shading, antialias=antialias))
+            for t in frames)

@@ -13,6 +13,7 @@ from PIL import Image
 from toonmotion import api
 from toonmotion.animate.motion import Motion
 from toonmotion.animate.timeline import Timeline
+from toonmotion.api.scene3d import ANTIALIAS
 from toonmotion.cli import options
 from toonmotion.cli.app import app
 from toonmotion.errors import SettingsError
@@ -22,6 +23,7 @@ from toonmotion.io.motion_json import is_motion_file, load_motion
 from toonmotion.io.pose_json import load_keyframes
 from toonmotion.io.proxy_json import load_proxy
 from toonmotion.io.video import animation_format, save_animation
+from toonmotion.render.zbuffer import MAX_ANTIALIAS
 from toonmotion.scene.build import DEFAULT_LIMB_RADIUS, check_scene
 from toonmotion.scene.elements import MAX_SIZE, Balloon, Balls, Cape, Element, Rain, Scarf, Skirt
 
@@ -64,6 +66,10 @@ def scene_command(
     string_length: Annotated[float | None, typer.Option(
         "--string-length", help=f"Metres, at most {_MOST} \\[default: 30% of the figure's height].")] = None,
     shading: Annotated[str, typer.Option("--shading", help="toon, smooth or flat.")] = "toon",
+    antialias: Annotated[int, typer.Option(
+        "--antialias", min=1, max=MAX_ANTIALIAS, help="Rays per pixel side for the elements' edges: 1 is "
+        f"hard edges, N blends N x N rays a pixel (1 to {MAX_ANTIALIAS}; time grows about as N x N)."
+    )] = ANTIALIAS,
     passes: Annotated[Path | None, typer.Option(
         "--passes", help="Also write the elements' passes per frame into this folder, for compositing "
         "elsewhere: beauty_NNNN.png (RGBA), depth_NNNN.png (16-bit millimetres, 0: nothing) and "
@@ -102,10 +108,10 @@ def scene_command(
             pictures, limbs = api.animation_frames(character, animation, proxy)
         motion = api.simulate_scene(proxy, elements, progress=report)
         made = api.composite_scene(proxy, pictures, motion, shading=shading, background=under, limbs=limbs,
-                                   progress=report)
+                                   progress=report, antialias=antialias)
         written = save_animation(output, _opaque(made), fps=proxy.fps)
         if passes is not None:
-            _write_passes(passes, api.scene_passes(proxy, motion, shading=shading))
+            _write_passes(passes, api.scene_passes(proxy, motion, shading=shading, antialias=antialias))
     deepest = f", deepest contact {motion.deepest * 1000:.1f} mm" if len(motion.balls[0]) else ""
     counts = [(sum(isinstance(e, kind) for e in elements), one, many) for kind, one, many in (
         (Balloon, "balloon", "balloons"), (Scarf, "scarf", "scarves"), (Skirt, "skirt", "skirts"),

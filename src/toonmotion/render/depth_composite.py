@@ -15,7 +15,8 @@ Per frame, with the drawing ``Y_h`` (``(H, W, 3)`` bytes) and the elements' rend
 - **The depth test** (eq. 25) and **the composite** (eq. 26): where an element is seen, the
   result is ``a * Y_h + (1 - a) * Y_r`` with ``a = 0`` on figure pixels the element is in front
   of, and elsewhere on the figure ``a = max(alpha, eta_h)``; off the figure ``a = alpha``. Where no
-  element is seen, the drawing is copied as it is.
+  element is seen, the drawing is copied as it is. On an element's edge, where it covers a
+  fraction ``c < 1`` of the pixel (the layer's ``alpha``), ``1 - a`` is scaled by ``c``.
 
 One departure from the paper, for users: eq. 25 keeps ``alpha`` (the inverted grey) where the
 figure is in front, so a figure filled with white would let an element behind it show through
@@ -149,16 +150,18 @@ def composite(drawing: ArrayLike, layer: Layer, drawn: ArrayLike, *, alpha: Arra
         h, w = layer.depth.shape
         raise SceneError(f"the render is {w}x{h} pixels but the drawing is {W}x{H}")
     out = colour.copy()  # C-ordered
-    _mix(out, layer.colour, layer.depth, layer.coverage, np.asarray(alpha, dtype=np.float64),
+    _mix(out, layer.colour, layer.depth, layer.coverage, layer.alpha, np.asarray(alpha, dtype=np.float64),
          np.asarray(figure, dtype=np.float64), np.asarray(drawn, dtype=np.float64))
     return out
 
 
 @njit(cache=True)
-def _mix(out, colour, depth, seen, alpha, occlusion, drawn):  # pragma: no cover - compiled
+def _mix(out, colour, depth, seen, cover, alpha, occlusion, drawn):  # pragma: no cover - compiled
     """Eq. 25-26 in place on ``out`` (the drawing's colour) where an element is ``seen``: the
     drawing's alpha where it is in front of the element (at least its occlusion map), none where
-    it is behind, its own off the figure; then the drawing over the element, rounded half to even."""
+    it is behind, its own off the figure; then the drawing over the element, rounded half to even.
+    Where the element covers a fraction ``cover`` < 1 of the pixel (its edge), only that fraction
+    of what it would show is shown."""
     H, W = seen.shape
     for i in range(H):
         for j in range(W):
@@ -168,6 +171,8 @@ def _mix(out, colour, depth, seen, alpha, occlusion, drawn):  # pragma: no cover
             o = occlusion[i, j]
             if o > 0:
                 a = max(a, o) if drawn[i, j] < depth[i, j] else 0.0
+            if cover[i, j] < 1.0:
+                a = 1.0 - (1.0 - a) * cover[i, j]
             for c in range(3):
                 mixed = a * out[i, j, c] + (1.0 - a) * colour[i, j, c]
                 out[i, j, c] = min(max(np.rint(mixed), 0), 255)

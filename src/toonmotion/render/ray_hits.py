@@ -14,14 +14,14 @@ from toonmotion.proxy3d.camera import MIN_DEPTH
 
 
 def _sphere_extent(z, m, r):
-    """Pixel bounds ``(x0, x1, y0, y1)`` of a sphere wholly in front of the camera; None otherwise."""
+    """Sample bounds ``(x0, x1, y0, y1)`` of a sphere wholly in front of the camera; None otherwise."""
     mx, my, mz = m
     if mz <= r:
         return None
     # Tangent planes through the camera: x_c / z_c on the sphere spans (mx mz -+ r rho) / (mz^2 - r^2).
     den = mz * mz - r * r
     rho_x, rho_y = math.sqrt(mx * mx + den), math.sqrt(my * my + den)
-    f, w, h = z.focal, z.width / 2, z.height / 2
+    f, w, h = z.focal, z.cx, z.cy
     return (f * (mx * mz - r * rho_x) / den + w, f * (mx * mz + r * rho_x) / den + w,
             f * (my * mz - r * rho_y) / den + h, f * (my * mz + r * rho_y) / den + h)
 

@@ -17,6 +17,11 @@ camera's axis (what :meth:`PerspectiveCamera.depth` gives), not along the ray: r
 unit depth, so a hit's ray parameter is its depth. Hits at depth ``MIN_DEPTH`` or less are not
 seen; a camera inside a primitive sees its inside. A capsule is the set of points within its
 radius of the segment ``ab``: a cylinder with hemispherical caps.
+
+Anti-aliasing: with ``antialias=k`` each pixel casts ``k x k`` rays on a grid centred on it (a
+:class:`SampleBuffer`'s samples), resolved into a pixel's coverage (``alpha``), mean colour and
+nearest depth by :mod:`toonmotion.render.samples`. Only a window of the picture is cast: the box
+the primitives (and cloth drawn in later) may cover, :func:`window_of`.
 """
 
 from __future__ import annotations
@@ -32,8 +37,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import SceneError
 from toonmotion.geometry.arrays import frozen_array
-from toonmotion.proxy3d.camera import PerspectiveCamera
+from toonmotion.proxy3d.camera import MIN_DEPTH, PerspectiveCamera
 from toonmotion.render.ray_hits import draw_capsules, draw_spheres
+from toonmotion.render.samples import resolve_samples
 
 SHADINGS = ("flat", "smooth", "toon")
 GREY = (180, 180, 180)
@@ -41,6 +47,8 @@ LIGHT = (-0.4, 0.8, 0.45)
 # Smooth and toon shading: AMBIENT + (1 - AMBIENT) * max(0, n . l), toon in TOON_BANDS levels.
 AMBIENT = 0.35
 TOON_BANDS = 3
+# Rays per pixel side at most: 4 x 4 = 16 rays a pixel, 16 times the memory and on the demo 7 times the time.
+MAX_ANTIALIAS = 4
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,17 +65,24 @@ class Layer:
         The occlusion map: True where any primitive is seen.
     ids : (H, W) int32
         Index of the primitive seen, spheres first and then capsules, -1 where nothing.
+    alpha : (H, W) float64
+        The fraction of the pixel the elements cover, 0 to 1: of its ``k x k`` rays when rendered
+        with ``antialias=k``, else 1 where ``coverage`` and 0 elsewhere.
+
+    With ``antialias=k > 1`` a pixel's colour is the mean of its rays that hit (its edge pixels
+    blend what they see), its depth and id the nearest of them.
     """
 
     colour: NDArray[np.uint8]
     depth: NDArray[np.float64]
     coverage: NDArray[np.bool_]
     ids: NDArray[np.int32]
+    alpha: NDArray[np.float64]
 
 
 def render_primitives(camera: PerspectiveCamera, frame: int, *, spheres: ArrayLike | None = None,
                       capsules: ArrayLike | None = None, colours: ArrayLike | None = None,
-                      shading: str = "toon", light: ArrayLike = LIGHT) -> Layer:
+                      shading: str = "toon", light: ArrayLike = LIGHT, antialias: int = 1) -> Layer:
     """Ray-cast spheres and capsules through ``camera`` on ``frame``, nearest hit per pixel.
 
     Parameters
@@ -87,6 +102,9 @@ def render_primitives(camera: PerspectiveCamera, frame: int, *, spheres: ArrayLi
         ``AMBIENT + (1 - AMBIENT) * max(0, n . l)``; ``"toon"``: that in three bands (a cel look).
     light : (3,) float
         Direction towards the light in the world; normalised here.
+    antialias : int
+        Rays per pixel side, 1 to :data:`MAX_ANTIALIAS`: ``k`` casts ``k x k`` rays a pixel on a
+        regular grid centred on it, and the layer's ``alpha`` is the fraction that hit.
 
     Returns
     -------
@@ -96,7 +114,8 @@ def render_primitives(camera: PerspectiveCamera, frame: int, *, spheres: ArrayLi
     ------
     SceneError
         A frame the camera does not have, an unknown shading, arrays of the wrong shape,
-        non-finite values, negative radii, colours that are not 0-255, a zero light direction.
+        non-finite values, negative radii, colours that are not 0-255, a zero light direction,
+        an ``antialias`` out of range.
 
     Examples
     --------
@@ -110,6 +129,19 @@ def render_primitives(camera: PerspectiveCamera, frame: int, *, spheres: ArrayLi
     >>> bool(layer.coverage[0, 0]), float(layer.depth[0, 0]), int(layer.ids[0, 0])
     (False, inf, -1)
     """
+    return cast_primitives(camera, frame, spheres=spheres, capsules=capsules, colours=colours,
+                           shading=shading, light=light, antialias=antialias).layer()
+
+
+def cast_primitives(camera: PerspectiveCamera, frame: int, *, spheres: ArrayLike | None = None,
+                    capsules: ArrayLike | None = None, colours: ArrayLike | None = None,
+                    shading: str = "toon", light: ArrayLike = LIGHT, antialias: int = 1,
+                    window: tuple[int, int, int, int] | None = None) -> SampleBuffer:
+    """:func:`render_primitives`'s rays, not yet resolved into pixels: more (cloth) can be drawn in.
+
+    Only the pixels in ``window`` (rows ``i0:i1``, columns ``j0:j1``; default, those the primitives
+    may cover, :func:`window_of`) are cast: the rest of the picture is nothing.
+    """
     if shading not in SHADINGS:
         raise SceneError(f"shading must be one of {', '.join(SHADINGS)}; got {shading!r}")
     t = checked_frame(camera, frame)
@@ -117,7 +149,9 @@ def render_primitives(camera: PerspectiveCamera, frame: int, *, spheres: ArrayLi
     C = _primitives(capsules, 7, "capsules", "(C, 7): end a x, y, z, end b x, y, z and radius")
     rgb = _colours(colours, len(S) + len(C))
     R, centre = camera.rotations[t], camera.centres[t]
-    z = _ZBuffer(camera, R @ checked_light(light), rgb, shading)
+    if window is None:
+        window = window_of(camera, t, spheres=S, capsules=C)
+    z = SampleBuffer(camera, checked_antialias(antialias), R @ checked_light(light), rgb, shading, window)
     a, b = to_camera(C[:, 0:3], R, centre), to_camera(C[:, 3:6], R, centre)
     point = np.all(C[:, 0:3] == C[:, 3:6], axis=1)  # a capsule whose ends coincide is a sphere
     ids = np.arange(len(S) + len(C), dtype=np.int32)
@@ -127,7 +161,7 @@ def render_primitives(camera: PerspectiveCamera, frame: int, *, spheres: ArrayLi
                  np.concatenate([to_camera(S[:, :3], R, centre), a[point]]),
                  np.concatenate([S[:, 3], C[point, 6]]))
         draw_capsules(z, ids[len(S):][~point], a[~point], b[~point], C[~point, 6])
-    return z.layer()
+    return z
 
 
 class _Rows(NamedTuple):
@@ -140,20 +174,34 @@ class _Rows(NamedTuple):
     j1: NDArray[np.intp]
 
 
-class _ZBuffer:
-    """The image's buffers, flat, and each pixel column's and row's ray in the camera's frame.
+class SampleBuffer:
+    """The image's rays, ``k x k`` a pixel, with their buffers (flat) and each ray's direction.
 
-    Primitives are drawn in batches: :meth:`rows` and :meth:`pixels` list the pixels each may
+    The rays lie on a grid of ``k W`` columns and ``k H`` rows, "samples": sample ``J`` is at
+    ``u = (J - (k - 1) / 2) / k`` in the camera's pixel coordinates, so pixel ``j``'s ``k`` samples
+    are centred on ``j`` (``k = 1``: the pixel's centre). Only a ``window`` of pixels may have rays
+    (rows ``i0:i1``, columns ``j0:j1``; default the whole picture): the grid starts at its corner,
+    and on it the camera has focal length ``k f`` and its principal point at ``(cx, cy)``, in
+    samples. :meth:`layer` resolves the samples into pixels.
+
+    Primitives are drawn in batches: :meth:`rows` and :meth:`pixels` list the samples each may
     cover, the caller finds its depth there, :meth:`keep` keeps the nearest hits.
     """
 
-    def __init__(self, camera, light, rgb, shading):
-        f, W, H = camera.focal, camera.width, camera.height
-        self.focal, self.width, self.height, self.shading = f, W, H, shading
-        self.light = tuple(light.tolist())
-        # A pixel's ray in the camera's frame is (x[j], y[i], 1): unit depth, as camera.rays gives.
-        self.x = (np.arange(W) - W / 2) / f
-        self.y = (np.arange(H) - H / 2) / f
+    def __init__(self, camera, antialias, light=(0.0, 0.0, 1.0), rgb=None, shading="flat", window=None):
+        rgb = np.zeros((0, 3)) if rgb is None else rgb
+        k = antialias
+        self.antialias, self.pixels_wide, self.pixels_high = k, camera.width, camera.height
+        self.window = (0, camera.height, 0, camera.width) if window is None else window
+        i0, i1, j0, j1 = self.window
+        W, H = k * (j1 - j0), k * (i1 - i0)
+        self.focal, self.width, self.height, self.shading = k * camera.focal, W, H, shading
+        self.cx = k * camera.width / 2 + (k - 1) / 2 - k * j0
+        self.cy = k * camera.height / 2 + (k - 1) / 2 - k * i0
+        self.light = tuple(np.asarray(light, dtype=np.float64).tolist())
+        # A sample's ray in the camera's frame is (x[j], y[i], 1): unit depth, as camera.rays gives.
+        self.x = (np.arange(W) - self.cx) / self.focal
+        self.y = (np.arange(H) - self.cy) / self.focal
         self.depth = np.full(H * W, np.inf)
         self.ids = np.full(H * W, -1, np.int32)
         # RGBA bytes packed in one uint32 per pixel: one scatter per hit.
@@ -205,7 +253,7 @@ class _ZBuffer:
         disc = beta * beta - 4 * alpha * gamma
         root = np.sqrt(np.maximum(disc, 0.0))
         # Column j's ray has x = (j - half) / f: the roots as columns, clamped before int().
-        half, scale = self.width / 2, self.focal / (2 * alpha)
+        half, scale = self.cx, self.focal / (2 * alpha)
         j0, j1 = rows.j0, rows.j1
         lo = np.minimum(np.maximum((root - beta) * scale + half, j0 - 1.0), j1 + 1.0)
         hi = np.minimum(np.maximum((root + beta) * -scale + half, j0 - 1.0), j1 + 1.0)
@@ -243,16 +291,73 @@ class _ZBuffer:
                 packed |= np.rint(self.rgb[:, channel][ids] * value).astype(np.uint32) << shift
             self.colour[flat] = packed
 
+    def rgba(self):
+        """The samples' colours, ``(k H * k W, 4)`` bytes R, G, B, A: a view to draw into."""
+        return self.colour.view(np.uint8).reshape(-1, 4)
+
     def layer(self):
-        """The buffers as a :class:`Layer` of read-only ``(H, W)`` arrays."""
-        H, W = self.height, self.width
-        ids = self.ids.reshape(H, W)
-        rgb = cv2.cvtColor(self.colour.view(np.uint8).reshape(H, W, 4), cv2.COLOR_RGBA2RGB)
-        layer = Layer(colour=np.asarray(rgb, np.uint8), depth=self.depth.reshape(H, W), coverage=ids >= 0,
-                      ids=ids)
-        for array in (layer.colour, layer.depth, layer.coverage, layer.ids):
+        """The samples resolved into pixels: a :class:`Layer` of read-only ``(H, W)`` arrays."""
+        k, (i0, i1, j0, j1) = self.antialias, self.window
+        ids, depth = self.ids.reshape(self.height, self.width), self.depth.reshape(self.height, self.width)
+        rgba = self.colour.view(np.uint8).reshape(self.height, self.width, 4)
+        if k == 1:
+            rgb = np.zeros(ids.shape + (3,), np.uint8)
+            if ids.size:  # OpenCV drops the alpha bytes faster than NumPy's strided copy
+                rgb = np.asarray(cv2.cvtColor(rgba, cv2.COLOR_RGBA2RGB), np.uint8)
+            alpha = (ids >= 0).astype(np.float64)
+        else:
+            rgb, depth, ids, alpha = resolve_samples(rgba, depth, ids, k)
+        H, W = self.pixels_high, self.pixels_wide
+        if (i1 - i0, j1 - j0) != (H, W):  # the window in the whole picture
+            whole = (np.zeros((H, W, 3), np.uint8), np.full((H, W), np.inf), np.full((H, W), -1, np.int32),
+                     np.zeros((H, W)))
+            for array, part in zip(whole, (rgb, depth, ids, alpha), strict=True):
+                array[i0:i1, j0:j1] = part
+            rgb, depth, ids, alpha = whole
+        layer = Layer(colour=rgb, depth=depth, coverage=ids >= 0, ids=ids, alpha=alpha)
+        for array in (layer.colour, layer.depth, layer.coverage, layer.ids, layer.alpha):
             array.setflags(write=False)
         return layer
+
+
+def window_of(camera: PerspectiveCamera, frame: int, *, spheres: NDArray[np.float64] | None = None,
+              capsules: NDArray[np.float64] | None = None, points: NDArray[np.float64] | None = None
+              ) -> tuple[int, int, int, int]:
+    """The pixels ``(i0, i1, j0, j1)`` (rows ``i0:i1``, columns ``j0:j1``) where spheres ``(S, 4)``,
+    capsules ``(C, 7)`` and points ``(n, 3)`` may be seen on ``frame``, with two pixels of margin.
+
+    Points at depth ``MIN_DEPTH`` or less are left out (a triangle with such a corner is not
+    drawn); a sphere or capsule that reaches there may be seen anywhere: the whole picture.
+    """
+    R, centre = camera.rotations[frame], camera.centres[frame]
+    balls = [np.zeros((0, 4))]
+    if spheres is not None:
+        balls.append(spheres)
+    if capsules is not None:
+        balls += [capsules[:, [0, 1, 2, 6]], capsules[:, [3, 4, 5, 6]]]
+    if points is not None:
+        balls.append(np.concatenate([points, np.zeros((len(points), 1))], axis=1))
+    ball = np.concatenate(balls)
+    ball = ball[np.isfinite(ball).all(axis=1)]  # refused by what draws them
+    m, r = to_camera(ball[:, :3], R, centre), ball[:, 3]
+    behind = m[:, 2] - r <= MIN_DEPTH
+    if np.any(behind & (r > 0)):
+        return 0, camera.height, 0, camera.width
+    m, r = m[~behind], r[~behind]
+    if not len(m):
+        return 0, 0, 0, 0
+    # The tangent planes through the camera bound each sphere's picture (see ray_hits._sphere_extent).
+    den = m[:, 2] ** 2 - r ** 2
+    f, W, H = camera.focal, camera.width, camera.height
+    bounds = []
+    for axis, half in ((1, H / 2), (0, W / 2)):
+        rho = np.sqrt(m[:, axis] ** 2 + den)
+        low, high = (m[:, axis] * m[:, 2] - r * rho) / den, (m[:, axis] * m[:, 2] + r * rho) / den
+        lo, hi = f * low.min() + half, f * high.max() + half
+        size = H if axis == 1 else W
+        bounds += [int(min(max(math.floor(lo) - 2, 0), size)), int(min(max(math.ceil(hi) + 3, 0), size))]
+    i0, i1, j0, j1 = bounds
+    return (i0, i1, j0, j1) if i0 < i1 and j0 < j1 else (0, 0, 0, 0)
 
 
 def to_camera(points, R, centre):
@@ -294,6 +399,14 @@ def _colours(value, n):
     return rgb
 
 
+def checked_antialias(value):
+    """``antialias`` checked: a whole number of rays per pixel side, 1 to :data:`MAX_ANTIALIAS`."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 1 <= value <= MAX_ANTIALIAS:
+        raise SceneError(f"antialias must be a whole number of rays per pixel side from 1 (off) to "
+                         f"{MAX_ANTIALIAS}, got {value!r}")
+    return int(value)
+
+
 def checked_light(value):
     """The light's direction, checked: three finite numbers, not all zero."""
     light = frozen_array(value, dtype=np.float64, name="the light", error=SceneError, finite=True)
@@ -312,16 +425,17 @@ def layer_passes(layer: Layer, *, depth_unit: float = 0.001
     Returns
     -------
     beauty : (H, W, 4) uint8
-        The colour, opaque where an element is seen, transparent elsewhere.
+        The colour, its alpha the layer's (the fraction of the pixel covered, 0-255: opaque
+        inside an element, partly transparent on its edges, transparent elsewhere).
     depth : (H, W) uint16
         Depth in ``depth_unit`` metres (millimetres by default), rounded and capped at 65,535;
         0 where nothing is seen.
     occlusion : (H, W) uint8
-        255 where an element is seen, 0 elsewhere.
+        The same coverage as a matte: 255 inside an element, 0 where none is seen.
 
     Examples
     --------
-    >>> from toonmotion.proxy3d.camera import PerspectiveCamera
+    >>> from toonmotion.proxy3d.camera import MIN_DEPTH, PerspectiveCamera
     >>> cam = PerspectiveCamera(100.0, 40, 30, [[0, 0, 0, 0, 0, 5]])
     >>> beauty, depth, seen = layer_passes(render_primitives(cam, 0, spheres=[[0, 0, 0, 1]]))
     >>> int(depth[15, 20]), int(beauty[15, 20, 3]), int(seen[0, 0])
@@ -330,7 +444,8 @@ def layer_passes(layer: Layer, *, depth_unit: float = 0.001
     if not (np.isfinite(depth_unit) and depth_unit > 0):
         raise SceneError(f"the depth unit must be a positive number of metres, got {depth_unit!r}")
     covered = layer.coverage
-    beauty = np.concatenate([layer.colour, np.where(covered, 255, 0).astype(np.uint8)[..., None]], axis=2)
+    matte = np.rint(layer.alpha * 255).astype(np.uint8)
+    beauty = np.concatenate([layer.colour, matte[..., None]], axis=2)
     depth = np.zeros(covered.shape, np.uint16)
     depth[covered] = np.clip(np.rint(layer.depth[covered] / depth_unit), 1, 65535).astype(np.uint16)
-    return beauty, depth, np.where(covered, 255, 0).astype(np.uint8)
+    return beauty, depth, matte
