@@ -167,9 +167,8 @@ def delete_key(skeleton: Skeleton, timeline: Timeline, frame: int) -> Timeline |
     Examples
     --------
     >>> from toonmotion.samples import sample_rig
-    >>> hero = sample_rig()
-    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
-    >>> delete_key(hero.skeleton, keys, 0) is None
+    >>> skeleton = sample_rig().skeleton
+    >>> delete_key(skeleton, set_key(skeleton, None, 3, Pose(skeleton.positions)), 3) is None
     True
 
     Parameters
@@ -206,10 +205,10 @@ def move_key(skeleton: Skeleton, timeline: Timeline, frame: int, to: int) -> Tim
     Examples
     --------
     >>> from toonmotion.samples import sample_rig
-    >>> hero = sample_rig()
-    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
-    >>> [key.frame for key in move_key(hero.skeleton, keys, 0, 5).keys]
-    [5]
+    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> skeleton = sample_rig().skeleton
+    >>> [key.frame for key in move_key(skeleton, sample_keyframes(skeleton), 36, 40).keys]
+    [0, 6, 12, 18, 24, 30, 40]
     """
     frames = [key.frame for key in timeline.keys]
     if frame not in frames:
@@ -242,9 +241,9 @@ def retime(skeleton: Skeleton, timeline: Timeline, *, fps: float | None = None,
     Examples
     --------
     >>> from toonmotion.samples import sample_rig
-    >>> hero = sample_rig()
-    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
-    >>> faster = retime(hero.skeleton, keys, fps=24, ease="linear")
+    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> skeleton = sample_rig().skeleton
+    >>> faster = retime(skeleton, sample_keyframes(skeleton), fps=24, ease="linear")
     >>> faster.fps, faster.ease
     (24.0, 'linear')
     """
@@ -272,12 +271,12 @@ def carry_keys(before: Skeleton, after: Skeleton, timeline: Timeline) -> Timelin
     Examples
     --------
     >>> from toonmotion.samples import sample_rig
-    >>> hero = sample_rig()
-    >>> keys = set_key(hero.skeleton, None, 0, Pose(hero.skeleton.positions))
-    >>> higher = hero.skeleton.positions.copy()
-    >>> higher[hero.skeleton.index("head")] -= (0, 6)  # the head joint placed 6 px higher
-    >>> moved = Skeleton(hero.skeleton.names, hero.skeleton.parents, higher)
-    >>> bool((carry_keys(hero.skeleton, moved, keys).keys[0].pose.positions == higher).all())
+    >>> from toonmotion.sample_animation import sample_keyframes
+    >>> skeleton = sample_rig().skeleton
+    >>> higher = skeleton.positions.copy()
+    >>> higher[skeleton.index("head")] -= (0, 6)  # the head joint placed 6 px higher
+    >>> moved = Skeleton(skeleton.names, skeleton.parents, higher)
+    >>> bool((carry_keys(skeleton, moved, sample_keyframes(skeleton)).keys[0].pose.positions == higher).all())
     True
     """
     carried = [Keyframe(key.frame, carried_pose(before, after, key.pose), key.edits) for key in timeline.keys]

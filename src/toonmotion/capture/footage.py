@@ -204,10 +204,8 @@ def setup_warnings(frames: NDArray[np.uint8], skeleton: Skeleton, sizes: ArrayLi
         The joints, at their places on frame ``start``.
     sizes : (k, 2) float
         Each joint's rectangle (width, height), pixels.
-    start : int
-        The frame the joints are placed on.
-    colour : (int, int, int), optional
-        A flat background colour, as for :func:`suggest_joints`.
+    start, colour
+        As for :func:`suggested_sizes`.
 
     Returns
     -------

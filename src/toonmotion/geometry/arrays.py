@@ -25,7 +25,7 @@ ValueError: V must have shape (n, 2), got (1, 3)
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from typing import Any
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike, NDArray
@@ -99,24 +99,22 @@ def frozen_array(
     return out
 
 
-def frozen_arrays(
-    values: Iterable[ArrayLike],
-    *,
-    dtype: DTypeLike,
-    shape: Sequence[int | None] | None = None,
-    name: str = "array",
-    error: type[Exception] = ValueError,
-    finite: bool = False,
-    coordinates: bool = False,
-) -> tuple[NDArray[Any], ...]:
-    """:func:`frozen_array` of every item, as a tuple; messages name ``name[i]``."""
+class _Checks(TypedDict, total=False):
+    """:func:`frozen_array`'s checks, passed on by :func:`frozen_arrays`."""
+
+    shape: Sequence[int | None] | None
+    finite: bool
+    coordinates: bool
+
+
+def frozen_arrays(values: Iterable[ArrayLike], *, dtype: DTypeLike, name: str = "array",
+                  error: type[Exception] = ValueError, **checks: Unpack[_Checks]) -> tuple[NDArray[Any], ...]:
+    """:func:`frozen_array` of every item (``shape``, ``finite`` and ``coordinates`` as there), as a
+    tuple; messages name ``name[i]``."""
     if isinstance(values, np.ndarray) and values.ndim == 0 or not isinstance(values, Iterable):
         raise error(f"{name} must be a sequence of arrays, got {type(values).__name__}")
-    return tuple(
-        frozen_array(v, dtype=dtype, shape=shape, name=f"{name}[{i}]", error=error, finite=finite,
-                     coordinates=coordinates)
-        for i, v in enumerate(values)
-    )
+    return tuple(frozen_array(v, dtype=dtype, name=f"{name}[{i}]", error=error, **checks)
+                 for i, v in enumerate(values))
 
 
 def finite_float(
