@@ -8,8 +8,8 @@ import numpy as np
 
 from toonmotion.capture.coarse_search import locate, search_round
 from toonmotion.capture.joint_plan import BoneRule, Templates, plan_joint
+from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.template_match import SPIN_TURNS, match
-from toonmotion.capture.track_search import REACQUIRE_CONFIDENCE
 
 SIDE = 21
 
@@ -133,7 +133,7 @@ def test_a_joint_whose_bone_grew_while_it_hid_is_looked_for_where_it_shows():
     assert min(np.hypot(*(xy - (100, 60))) for xy, _, _ in by_length) > SIDE
     # As the tracker does: the places are matched finely in order until one is found again.
     found = next(f for f in (match(image, templates, xy, angle, joint, bone) for xy, _, angle in places)
-                 if f.confidence >= REACQUIRE_CONFIDENCE)
+                 if f.confidence >= SearchTuning().reacquire_confidence)
     assert np.hypot(*(found.xy - (100, 60))) < 0.5 and found.confidence > 0.8
 
 

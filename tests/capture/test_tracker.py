@@ -11,8 +11,8 @@ import pytest
 
 from toonmotion.capture import track_search
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
+from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_scale import WORKING_SIDE
-from toonmotion.capture.track_search import REACQUIRE_CONFIDENCE
 from toonmotion.capture.track_settings import Tracking, TrackSettings, TrackSetup
 from toonmotion.capture.tracker import retrack, track
 from toonmotion.errors import TrackingError
@@ -642,15 +642,16 @@ def _sleeved(seed=41, T=40, heavy=12):
 def test_a_textured_joint_lost_for_a_frame_is_found_again_as_plainly_as_it_showed():
     """Half under a sleeve the square matches at 0.25-0.29, enough to be seen (VISIBLE_CONFIDENCE)
     but less than a hidden joint needs to be found again anywhere its search reaches
-    (REACQUIRE_CONFIDENCE). Covered more for one frame, it is hidden. Within its window of where
-    it is carried it is found again the next frame at the confidence it showed at; held to the
+    (SearchTuning.reacquire_confidence). Covered more for one frame, it is hidden. Within its window
+    of where it is carried it is found again the next frame at the confidence it showed at; held to the
     higher bar it stayed hidden, coasted on when the square turned, and was 59 px off by the last
     frame."""
     frames, truth = _sleeved()
     tracking = track(frames, _setup([("dot", None)], truth[0]))
     confidence = tracking.confidence[:, 0]
     assert confidence[12] < VISIBLE_CONFIDENCE
-    assert (confidence[4:12] >= VISIBLE_CONFIDENCE).all() and (confidence[4:] < REACQUIRE_CONFIDENCE).all()
+    reacquire = SearchTuning().reacquire_confidence
+    assert (confidence[4:12] >= VISIBLE_CONFIDENCE).all() and (confidence[4:] < reacquire).all()
     hidden = confidence < VISIBLE_CONFIDENCE  # at 0.25 it dips below now and then
     assert not (hidden[1:] & hidden[:-1]).any(), np.round(confidence, 3)  # found again the next frame
     errors = _errors(tracking, truth)
@@ -706,7 +707,7 @@ def test_a_hidden_joint_whose_parent_is_hidden_too_is_looked_for_at_turns_all_ro
     tracking = track(frames, setup)
     errors = _errors(tracking, truth)
     assert (tracking.confidence[12:, 1] < 0.5).all()  # the elbow stays hidden
-    found_again = tracking.confidence[27:, 2] >= REACQUIRE_CONFIDENCE
+    found_again = tracking.confidence[27:, 2] >= SearchTuning().reacquire_confidence
     assert found_again.all(), np.round(tracking.confidence[25:, 2], 2)
     assert errors[27:, 2].max() < 1.0, f"hand errors after it re-emerged: {np.round(errors[25:, 2], 1)}"
 

@@ -82,6 +82,7 @@ from toonmotion.capture.footage import (
 )
 from toonmotion.capture.foreground import border_colour
 from toonmotion.capture.retarget import retarget
+from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_settings import TrackSettings
 from toonmotion.deform.deformer import Deformer, DeformSettings
 from toonmotion.io.project import load_project, save_project

@@ -6,9 +6,9 @@ A frame is searched in four passes over the skeleton:
 1. **Down** (parents before children). A joint seen last drawing is matched round its
    prediction (eq. 4.4-4.6). A joint with a parent found this frame is held near its bone's last
    length, a kinematic term beside eq. 4.6 (:class:`~toonmotion.capture.joint_plan.BoneRule`);
-   one with a texture of its own weighs its colour :data:`TEXTURED_COLOUR_WEIGHT` times as much.
+   one with a texture of its own weighs its colour ``tuning.textured_colour_weight`` times as much.
    A *hidden* joint is looked for afresh: round its parent, if that was found, at every place its
-   bone can reach in directions widening from where it was last (:data:`SPAN_STEP` a drawing),
+   bone can reach in directions widening from where it was last (``tuning.span_step`` a drawing),
    its rectangle turned with its bone there (:func:`~toonmotion.capture.coarse_search.search_round`);
    else near where its parent carries it (a parent hidden too is first put where its own parent
    carries it), in a window that widens for every drawing it stays hidden
@@ -17,19 +17,19 @@ A frame is searched in four passes over the skeleton:
    as every window, as many times as wide as the frames it was held. A joint with a texture of its own not
    found round its prediction is looked for at once in the same way. The best places are then matched
    finely, and the joint is taken as found again only by a match at least
-   :data:`REACQUIRE_CONFIDENCE` confident (a joint with a texture of its own, within its window
-   of where it is carried, as plainly as a joint that shows), within :data:`REACH_SLACK` times the
+   ``tuning.reacquire_confidence`` confident (a joint with a texture of its own, within its window
+   of where it is carried, as plainly as a joint that shows), within ``tuning.reach_slack`` times the
    longest its bone has been seen. A joint with a texture of its own
    (:func:`~toonmotion.capture.patches.is_textured`) is looked for where it looks alike:
    its places are picked by look, it is not held to its bone's last length, a weak match is
-   taken wherever it lies, and one at least :data:`WEAK_CONFIDENCE` confident even beside a joint
+   taken wherever it lies, and one at least ``tuning.weak_confidence`` confident even beside a joint
    that shows (not on it); a flat-coloured one, whose look-alikes are all over a cartoon, is held
    to where its bone and its guessed place put it.
 2. **Up** (children before parents). A joint still not found is looked for where the joints
    hanging from it that were found put it (each moved as its child moved), if its coarse match
-   there is at least :data:`UP_COARSE_CONFIDENCE`.
+   there is at least ``tuning.up_coarse_confidence``.
 3. **Settle** (parents first). A joint found on a flat fill, where places along the fill match as
-   well as its match (:data:`AMBIGUOUS_SPREAD`), is put among them where its parent and its
+   well as its match (``tuning.ambiguous_spread``), is put among them where its parent and its
    children found plainly carry it.
 4. **Place the rest** (parents first): at the mean of where its parent carries it and where its
    children found put it (a root: the joints found below it); a root with neither coasts.
@@ -54,6 +54,7 @@ from toonmotion.capture.joint_plan import (
     Templates,
 )
 from toonmotion.capture.patches import is_textured, likeness, sample
+from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.template_context import CONTEXT_CONFIDENCE, Pyramid, place_by_context
 from toonmotion.capture.template_match import SPIN_TURNS, TURN_CONFIDENCE, Match, match
 from toonmotion.capture.template_spin import TurnedDiscs, locate_all_round
@@ -61,95 +62,9 @@ from toonmotion.capture.track_figure import FigureMasks, onto_figure
 from toonmotion.capture.track_hidden import carried_by_parent, lengthen, moves_below, place_hidden
 from toonmotion.capture.track_prediction import bone_turn, hidden_at, turns
 
-# A hidden joint's window widens by WIDEN_STEP of its search radius for every drawing it stays
-# hidden, up to MAX_WIDEN times the radius.
-WIDEN_STEP = 0.5
+# A hidden joint's window widens (SearchTuning.widen_step a drawing) up to this many search radii;
+# the whole-clip pass (track_path) looks as far.
 MAX_WIDEN = 3.0
-# A hidden joint whose parent is found is looked for round it, in directions up to this many
-# radians from where it was last for every drawing it has been hidden (all round at most).
-SPAN_STEP = math.radians(45)
-# Places whose coarse match is less confident than this are not looked at closely; of the others,
-# a rectangle apart, the PLACES best are matched finely, best first, until one is found. The coarse
-# match only ranks places (a quarter-rectangle grid misses a fine texture by up to an eighth of a
-# rectangle): refining the best 2 instead of the best 64 lost joints on 4 of the 14 rendered
-# clips (e.g. the flat walk's mean error 5.7 -> 7.7 px) at no gain in speed.
-COARSE_CONFIDENCE = 0.1
-PLACES = 64
-# The up pass looks closely only where the coarse match, at the joint's angle or a turn, is at
-# least this. At COARSE_CONFIDENCE it made a fifth of all matches and found a joint in about 4% of
-# its tries; on the seed-0 renders 40 of the 43 textured joints it found (all within 0.4 px)
-# matched at least 0.3 coarse, as did 64 of the 75 flat ones found within 3 px (and 51 of the 68
-# found farther off), in a quarter of its tries. The textured zombie walk went from 68 to 84
-# frames/s, the flat walk from 85 to 92 (the benchmark's first 120 frames); the textured renders
-# from 48.5 to 49.1 px summed (whole clips, ones and twos at seeds 0 and 2; the zombie walk on twos
-# 2.6 -> 3.0), the cel renders from 260.0 to 263.3, at seed 5 (used for nothing else) 23.0 -> 23.4
-# and 257.4 -> 204.5; the drawings' footage did not move.
-UP_COARSE_CONFIDENCE = 0.3
-# A hidden joint is found again only by a match at least this confident, no farther from its
-# parent than REACH_SLACK times the longest its bone has been seen. The anchor may have been cut
-# with a neighbour overlapping the joint; 0.6 still tells a joint from a different texture (0.1
-# at most) and from plain background.
-REACQUIRE_CONFIDENCE = 0.35
-REACH_SLACK = 1.2
-# ... but a joint with a texture of its own matched within its window of where it is carried (or,
-# in the up pass, of where the joints below put it) needs only VISIBLE_CONFIDENCE, as when it
-# showed: a texture of its own is not found on another part there. An elbow half behind the body
-# matched at 0.25-0.30 where it was; on twos it matched at 0.245 one drawing, and, needing 0.35
-# to be found again, it was carried 18 px off for 20 frames (the walk on twos). On the
-# textured renders (whole clips, ones and twos at seeds 0 and 2) 45.75 -> 43.18 px summed, 10 clips
-# better by more than 3% and none worse; at seed 5, used for nothing else, 21.81 -> 20.39; the
-# cel renders and the drawings' footage did not move. Anywhere its search reached (not only
-# within its window), the zombie walk at seed 2 went from 2.6 to 7.4 px, an elbow taken 50 px off.
-# A joint matched less confidently than WEAK_CONFIDENCE (but at least VISIBLE_CONFIDENCE, or
-# REACQUIRE_CONFIDENCE when hidden) is taken as found only within WEAK_REACH of its rectangle's
-# larger side from where it was expected (predicted; carried, when hidden), times the pace (as
-# the windows widen after a held drawing): a weak match may refine where a joint is (its looks
-# partly covered, or changed as its limb bends), but not carry it off along a flat limb that
-# looks alike all the way. A hidden joint whose template is textured (patches.is_textured)
-# is the exception: it is found again by a weak match wherever its search reaches, since where it
-# is carried is only a guess, the longer it hides the worse, and a texture of its own is not found
-# on another limb. (Held to its guess, a hand lost on twos as its arm swung down stayed 116 px off
-# for the last 50 frames of the wave clip, in plain view, found there at 0.47 every drawing.)
-WEAK_CONFIDENCE = 0.5
-WEAK_REACH = 0.25
-# A joint with a texture of its own matched less confidently than TURN_CONFIDENCE, whose parent was
-# found this frame, is matched once more where it was found, its rectangle turned as its bone from
-# the parent to there has turned, if that differs from the angle it was matched at by more than
-# REFIT_TURN. The predicted angle comes from predicted places, which miss where a limb swings and
-# stops within a drawing: on the jumping jacks on twos a hand was found in the right place at
-# 0.08, turned 68 degrees wrong, and called hidden. (Done for flat-coloured joints too, the cel
-# renders went from 409.7 to 386.2 px summed over ones and twos at seeds 0 and 2, but from 253.7
-# to 287.6 at seed 5 and from 134.3 to 137.2 on footage of the shared drawings.)
-REFIT_TURN = math.radians(5)
-# A joint found is ambiguous when the places joined to its match that match as well as it
-# (joint_plan.ALIKE_LEVEL) reach farther than this fraction of its rectangle's larger side from
-# it: a flat fill, where the texture cannot say where along it the joint is. Its predicted motion
-# does not know either, and a knee of the demo's flat-blue trousers slid 80 px up the leg going by
-# it; the joint is put among those places where its neighbours carry it (FrameSearch._settle).
-AMBIGUOUS_SPREAD = 0.125
-# A joint with a texture of its own (patches.is_textured) weighs its colour this many times
-# as much as eq. 4.6's w_alpha: its colour cost has one sharp minimum, which the distances from the
-# prediction and from its bone's last length should not outweigh. At w_alpha = 1 / 255^2 a wave's
-# hand swinging 21 px a drawing on twos was taken 11 px short of it, where it matched at 0.09, over
-# where it matched at 0.67: there the prior cost 0.27 more (13 px farther from the prediction, 6 px
-# more of bone shortened), the colour 0.17 less. 16 times and more all gave the same (colour decides
-# but for near-ties); a flat-coloured joint's colour cost is flat along its fills, and the prior
-# decides there.
-TEXTURED_COLOUR_WEIGHT = 16.0
-# A joint with a texture of its own re-cuts its latest template where the two agree and the place
-# looks like its anchor, which never learns, with a likeness of at least this, whatever the light
-# (patches.likeness); a flat-coloured one where it is found plainly (UPDATE_CONFIDENCE, the
-# higher of the two templates' confidences). At 0.8 of either confidence, a textured square passing
-# behind an occluder at 0.5-0.75 px a frame was lost to it, each frame's latest (a little more
-# occluder) matching the next at 0.8 or better; at 0.6 of likeness still. Asked for 0.5 of the
-# anchor's confidence instead, a picture darkening by 0.7 grey levels a frame lost its joint. A textured
-# joint whose looks change as its limb bends keeps a latest that follows them (textured renders,
-# ones and twos at seeds 0 and 2: 75.78 -> 72.15 px summed, 9 clips better, 8 worse). A flat
-# joint's anchor is alike anywhere along its fill.
-ANCHOR_LIKENESS = 0.8
-# The kinematic term's weight per squared pixel of bone-length change, relative to w_beta (of the
-# window widened after a held drawing: over a double step a bone changes twice as much).
-BONE_WEIGHT = 1.0
 
 # The confidence a joint taken to be hidden is saved with, at most: just under VISIBLE_CONFIDENCE.
 _HIDDEN = float(np.nextafter(VISIBLE_CONFIDENCE, 0))
@@ -174,13 +89,17 @@ class FrameSearch:
         and put back on it when not found (:mod:`~toonmotion.capture.track_figure`).
     on_figure : (k,) bool, optional
         The joints held to the figure (those on it where tracking started); default all.
+    tuning : SearchTuning, optional
+        The search's tuning (:class:`~toonmotion.capture.search_tuning.SearchTuning`); default
+        its defaults.
     """
 
     def __init__(self, plans: Plans, templates: list[Templates], P: NDArray[np.float64],
                  C: NDArray[np.float64], angles: NDArray[np.float64], lost: NDArray[np.int_],
                  longest: NDArray[np.float64], figure: FigureMasks | None = None,
-                 on_figure: NDArray[np.bool_] | None = None) -> None:
+                 on_figure: NDArray[np.bool_] | None = None, tuning: SearchTuning | None = None) -> None:
         self.plans, self.templates = plans, templates
+        self.tuning = SearchTuning() if tuning is None else tuning
         self.P, self.C, self.angles = P, C, angles
         self.lost: NDArray[np.int_] = np.array(lost, dtype=int)
         self.longest: NDArray[np.float64] = np.array(longest, dtype=float)
@@ -204,7 +123,7 @@ class FrameSearch:
         round where the joints below put a joint (widened too, the rendered clips on twos summed 4 px
         worse).
         Writes ``P[t]``, ``C[t]``, ``angles[t]``."""
-        P, plans = self.P, self.plans
+        P, plans, tune = self.P, self.plans, self.tuning
         k = len(plans)
         self._near = None if self.figure is None else self.figure.near(t)
         self._pyramid = Pyramid(image)
@@ -226,8 +145,8 @@ class FrameSearch:
                 hidden = max(int(self.lost[m]), 1)
                 for centre, turned in self._places_to_look(self._small(), t, m, carried, angle[m], seen,
                                                            hidden):
-                    if self._try(image, t, m, self._plan(m, pace), centre, turned, REACQUIRE_CONFIDENCE, seen,
-                                 agree, bounded=True, turn=False, expected=carried):
+                    if self._try(image, t, m, self._plan(m, pace), centre, turned, tune.reacquire_confidence,
+                                 seen, agree, bounded=True, turn=False, expected=carried):
                         break
             if not seen[m]:
                 # Where its parent carries it for now (placed for good below): a hidden joint
@@ -238,12 +157,12 @@ class FrameSearch:
             if not seen[m] and np.isfinite(moves[m]).all():
                 centre = P[t - 1, m] + moves[m]
                 ranks = self._coarse_ranks(self._small(), t, m, centre, angle[m], seen)
-                if max(ranks) >= UP_COARSE_CONFIDENCE:
-                    self._try(image, t, m, self._plan(m), centre, angle[m], REACQUIRE_CONFIDENCE, seen, agree,
-                              bounded=True, turn_ranks=ranks[1:])
+                if max(ranks) >= tune.up_coarse_confidence:
+                    self._try(image, t, m, self._plan(m), centre, angle[m], tune.reacquire_confidence, seen,
+                              agree, bounded=True, turn_ranks=ranks[1:])
         self._settle(t, coast, seen)
         # A joint not found goes no farther in one frame than its search could have reached.
-        reach = np.array([plans(m, pace).radius * min(1.0 + WIDEN_STEP * self.lost[m], MAX_WIDEN)
+        reach = np.array([plans(m, pace).radius * min(1.0 + tune.widen_step * self.lost[m], MAX_WIDEN)
                           for m in range(k)])
         place_hidden(P, t, coast, seen, plans.hangs_from, reach)
         # A joint leaving the picture stays at its edge.
@@ -259,7 +178,7 @@ class FrameSearch:
 
     def _settle(self, t, coast, seen):
         """Put each ambiguous joint found at ``t`` (its alike places reach farther than
-        :data:`AMBIGUOUS_SPREAD` of its rectangle from its match), parents first, among those places
+        ``tuning.ambiguous_spread`` of its rectangle from its match), parents first, among those places
         where its parent and its children found unambiguously carry it, as a hidden joint is placed
         (:func:`place_hidden`): at that place itself if it lies within a pixel of one, else at the
         nearest. Where its wider view (:mod:`~toonmotion.capture.template_context`) matches plainly
@@ -269,7 +188,7 @@ class FrameSearch:
         ambiguous = np.zeros(len(seen), bool)
         for m in np.flatnonzero(seen):
             spread = np.hypot(*(self._alike[m] - P[t, m]).T).max()
-            ambiguous[m] = spread > AMBIGUOUS_SPREAD * max(self.plans(m).size)
+            ambiguous[m] = spread > self.tuning.ambiguous_spread * max(self.plans(m).size)
         firm_moves = moves_below(P, t, seen & ~ambiguous, hangs_from, direct=True)
         for m in np.flatnonzero(ambiguous):
             guess = self._placed_by_context(t, m)
@@ -285,7 +204,7 @@ class FrameSearch:
         """Where ambiguous joint ``m``'s context places it at ``t``, looked for within twice its
         window of its match (the match may lie anywhere along the fill in its window, the joint as
         far beyond), if it matches at least :data:`CONTEXT_CONFIDENCE` within
-        :data:`AMBIGUOUS_SPREAD` of the rectangle from a place alike to the match; else None (also
+        ``tuning.ambiguous_spread`` of the rectangle from a place alike to the match; else None (also
         with no context)."""
         context = self.templates[m].context
         if context is None:
@@ -295,7 +214,8 @@ class FrameSearch:
         xy, sure = place_by_context(self._pyramid, context, self.P[t, m], angle, radius)
         # It chooses among the places alike to the joint's match: where it points elsewhere
         # (an elbow's context, the arm raised, found on the head), the two disagree.
-        near = float(np.hypot(*(self._alike[m] - xy).T).min()) <= AMBIGUOUS_SPREAD * max(self.plans(m).size)
+        spread = self.tuning.ambiguous_spread * max(self.plans(m).size)
+        near = float(np.hypot(*(self._alike[m] - xy).T).min()) <= spread
         return xy if sure >= CONTEXT_CONFIDENCE and near else None
 
     def _places_to_look(self, small, t, m, carried, angle, seen, hidden):
@@ -309,12 +229,12 @@ class FrameSearch:
         if bone is not None and math.isfinite(bone.longest):
             g = plans.hangs_from[m]
             start = math.atan2(*(P[t - 1, m] - P[t - 1, g])[::-1])
-            span = min(math.pi, SPAN_STEP * hidden)
+            span = min(math.pi, self.tuning.span_step * hidden)
             turned = float(self.angles[t - 1, m])
-            found = search_round(small, self.templates[m], joint, bone, start, span, turned, count=PLACES,
-                                 figure=self._figure(m), by_look=self._textured[m])
-            return [(xy, turned) for xy, coarse, turned in found if coarse >= COARSE_CONFIDENCE]
-        radius = joint.radius * min(1.0 + WIDEN_STEP * hidden, MAX_WIDEN)
+            found = search_round(small, self.templates[m], joint, bone, start, span, turned,
+                                 count=self.tuning.places, figure=self._figure(m), by_look=self._textured[m])
+            return [(xy, turned) for xy, coarse, turned in found if coarse >= self.tuning.coarse_confidence]
+        radius = joint.radius * min(1.0 + self.tuning.widen_step * hidden, MAX_WIDEN)
         if bone is None and plans.parents[m] >= 0:
             # Its parent not found, its bone gives no angle to go by: it is looked for at turns all round.
             xy, coarse, turned = locate_all_round(small, self._discs(m), carried, joint, radius,
@@ -322,7 +242,7 @@ class FrameSearch:
         else:
             xy, coarse, turned = locate(small, self.templates[m], carried, angle, joint, radius, bone,
                                         self._figure(m))
-        return [(xy, turned)] if coarse >= COARSE_CONFIDENCE else []
+        return [(xy, turned)] if coarse >= self.tuning.coarse_confidence else []
 
     def _discs(self, m):
         """Joint ``m``'s anchor's coarse disc turned all round (made when first asked for)."""
@@ -348,7 +268,7 @@ class FrameSearch:
         confidence so far (below VISIBLE_CONFIDENCE)."""
         # A hidden joint with a texture of its own is looked for again where it looks alike: not
         # held to its bone's last length (the bone may have come out of foreshortening meanwhile),
-        # and a weak match taken wherever its search reached (WEAK_REACH).
+        # and a weak match taken wherever its search reached (tuning.weak_reach).
         by_look = expected is not None and self._textured[m]
         bone = self._bone_rule(t, m, seen, bounded=bounded, hold_length=not by_look)
         figure = self._figure(m)
@@ -363,22 +283,22 @@ class FrameSearch:
             # A bone seen end-on gives no angle: the rectangle is looked for at turns all round.
             place, coarse, turned = locate(self._small(), self.templates[m], centre, angle, joint,
                                            joint.radius, bone, figure, turns=SPIN_TURNS)
-            if coarse >= COARSE_CONFIDENCE:
+            if coarse >= self.tuning.coarse_confidence:
                 other = match(image, self.templates[m], place, turned, joint, bone, turn=False, figure=figure)
                 if other.confidence > found.confidence:
                     found = other
         xy, confidence = found.xy, found.confidence
         far = math.hypot(*(xy - (centre if expected is None else expected)))
-        weak_and_far = (confidence < WEAK_CONFIDENCE and not by_look
-                        and far > WEAK_REACH * self._pace * max(joint.size))
+        weak_and_far = (confidence < self.tuning.weak_confidence and not by_look
+                        and far > self.tuning.weak_reach * self._pace * max(joint.size))
         # Found plainly by a texture of its own, it may lie beside a joint that shows (a hand
         # before the face, a foot passing the other), though not on it: a textured patch moved a
         # few pixels no longer matches itself, so a plain match there is the joint that shows,
         # which may look the same (twin gloves).
-        apart = WEAK_REACH if by_look and confidence >= WEAK_CONFIDENCE else 0.5
+        apart = self.tuning.weak_reach if by_look and confidence >= self.tuning.weak_confidence else 0.5
         if self._textured[m] and bounded and far <= joint.radius:
             # Within its window of where it is carried, a joint with a texture of its own is found
-            # again as plainly as it showed (see REACQUIRE_CONFIDENCE).
+            # again as plainly as it showed (see SearchTuning.reacquire_confidence).
             needed = min(needed, VISIBLE_CONFIDENCE)
         if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen, apart)):
             self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
@@ -391,19 +311,19 @@ class FrameSearch:
     def _learn(self, image, t, m):
         """Re-cut joint ``m``'s latest template where it was found at ``t``, its two templates
         agreeing: with a texture of its own, if the patch there looks like its anchor at least
-        :data:`ANCHOR_LIKENESS` (:func:`~toonmotion.capture.patches.likeness`); else if it
+        ``tuning.anchor_likeness`` (:func:`~toonmotion.capture.patches.likeness`); else if it
         was found plainly (``UPDATE_CONFIDENCE``)."""
         textured = self._textured[m]
         if not textured and self.C[t, m] < UPDATE_CONFIDENCE:
             return
         patch = sample(image, self.P[t, m], self.angles[t, m], self.plans(m).size)
-        if not textured or likeness(self.templates[m].anchor, patch) >= ANCHOR_LIKENESS:
+        if not textured or likeness(self.templates[m].anchor, patch) >= self.tuning.anchor_likeness:
             self.templates[m].latest = patch
 
     def _refit_turn(self, t, m, found, seen):
         """For a textured joint ``m`` whose parent was found at ``t`` (``seen``): its rectangle's
         angle turned as its bone, from the parent to the place ``found``, turned since ``t - 1``,
-        if that differs from the angle it was matched at by more than :data:`REFIT_TURN`; else
+        if that differs from the angle it was matched at by more than ``tuning.refit_turn``; else
         None."""
         g = self.plans.parents[m]
         if not self._textured[m] or g < 0 or not seen[g]:
@@ -412,7 +332,8 @@ class FrameSearch:
         if turn is None:
             return None
         angle = float(self.angles[t - 1, m]) + turn
-        return angle if abs(math.remainder(angle - found.angle, 2 * math.pi)) > REFIT_TURN else None
+        turned_enough = abs(math.remainder(angle - found.angle, 2 * math.pi)) > self.tuning.refit_turn
+        return angle if turned_enough else None
 
     def _taken(self, t, m, xy, seen, apart=0.5):
         """Whether another joint showing at ``xy`` (found at ``t``, or not yet looked for at ``t`` and
@@ -438,8 +359,8 @@ class FrameSearch:
 
     def _plan(self, m, pace=1.0):
         """Joint ``m``'s plan to match it by at this frame's ``pace``: with a texture of its own, its
-        colour weighs :data:`TEXTURED_COLOUR_WEIGHT` times as much."""
-        return self.plans(m, pace, TEXTURED_COLOUR_WEIGHT if self._textured[m] else 1.0)
+        colour weighs ``tuning.textured_colour_weight`` times as much."""
+        return self.plans(m, pace, self.tuning.textured_colour_weight if self._textured[m] else 1.0)
 
     def _figure(self, m):
         """This frame's figure (``near`` mask) if joint ``m`` is held to it, else None."""
@@ -447,16 +368,16 @@ class FrameSearch:
 
     def _bone_rule(self, t, m, seen, *, bounded, hold_length=True):
         """The kinematic term for joint ``m`` at ``t`` if its parent was found there, else None:
-        its bone's length at ``t - 1``, weight ``BONE_WEIGHT * w_beta`` (of the window at this
-        frame's pace; 0 without ``hold_length``), and with ``bounded`` a reach of REACH_SLACK
+        its bone's length at ``t - 1``, weight ``tuning.bone_weight * w_beta`` (of the window at this
+        frame's pace; 0 without ``hold_length``), and with ``bounded`` a reach of ``tuning.reach_slack``
         times the longest the bone has been seen."""
         g = self.plans.hangs_from[m]
         if g < 0 or not seen[g]:
             return None
         P = self.P
         length = float(np.hypot(*(P[t - 1, m] - P[t - 1, g])))
-        reach = REACH_SLACK * self.longest[m] if bounded and self.longest[m] > 0 else math.inf
-        weight = BONE_WEIGHT * self.plans(m, self._pace).w_beta if hold_length else 0.0
+        reach = self.tuning.reach_slack * self.longest[m] if bounded and self.longest[m] > 0 else math.inf
+        weight = self.tuning.bone_weight * self.plans(m, self._pace).w_beta if hold_length else 0.0
         return BoneRule(P[t, g], length, weight, reach)
 
 

@@ -5,11 +5,12 @@ track (:class:`TrackSetup`), how to track them (:class:`TrackSettings`), the fig
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_checks import (
     check_number,
 )
@@ -109,6 +110,10 @@ class TrackSettings:
         ``search`` with them: about four times fewer pixels to match per halving
         (:mod:`~toonmotion.capture.track_scale`). Positions, rectangles and corrections are
         given and returned in the frames' own pixels all the same. None: at full resolution.
+    tuning : SearchTuning
+        How each frame is searched: windows, confidences, weights
+        (:class:`~toonmotion.capture.search_tuning.SearchTuning`, each value with the
+        measurement that chose it).
     """
 
     search: float | None = None
@@ -121,6 +126,7 @@ class TrackSettings:
     figure: bool = True
     relight: bool = True
     working_side: float | None = WORKING_SIDE
+    tuning: SearchTuning = field(default_factory=SearchTuning)
 
     def __post_init__(self) -> None:
         if self.search is not None:
@@ -136,6 +142,8 @@ class TrackSettings:
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
+        if not isinstance(self.tuning, SearchTuning):
+            raise TrackingError(f"tuning must be a SearchTuning, got {type(self.tuning).__name__}")
         if self.both_ways and not self.best_path:
             raise TrackingError(
                 "both_ways needs best_path: the whole-sequence pass chooses between the two ways"

@@ -141,9 +141,9 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     if progress:
         progress("tracking", start, stop)
     _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress,
-         figure, on_figure, settings.best_path, own)
+         figure, on_figure, settings.best_path, own, tuning=settings.tuning)
     if settings.both_ways:
-        _run_back(frames, masks, first.shape, plan, templates, out, start, stop, on_figure)
+        _run_back(frames, masks, first.shape, plan, templates, out, start, stop, on_figure, settings.tuning)
     return _in_frame_pixels(_filled(out, plan, settings, figure, on_figure).freeze(), n)
 
 
@@ -233,9 +233,9 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     if progress:
         progress("tracking", frame, stop)
     _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure,
-         settings.best_path, own)
+         settings.best_path, own, tuning=settings.tuning)
     if settings.both_ways:
-        _run_back(frames, masks, current.shape, plan, templates, out, frame, stop, on_figure)
+        _run_back(frames, masks, current.shape, plan, templates, out, frame, stop, on_figure, settings.tuning)
     return _in_frame_pixels(_filled(out, plan, settings, figure, on_figure, since=frame).freeze(), n)
 
 
@@ -296,14 +296,15 @@ class _Arrays:
 
 
 def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, history, begin, stop,
-         progress, figure=None, on_figure=None, options=True, own=None):
+         progress, figure=None, on_figure=None, options=True, own=None, tuning=None):
     """Track frames ``begin`` to ``stop - 1``; frame ``begin - 1`` is tracked; write into ``out``
     (with ``options``, the other places each joint's search found too). A held drawing is told on
-    ``own``, the footage's own frames where ``frames`` are halved (:func:`_held_on`)."""
+    ``own``, the footage's own frames where ``frames`` are halved (:func:`_held_on`); ``tuning``
+    is the search's (:class:`~toonmotion.capture.search_tuning.SearchTuning`)."""
     P, C = out.positions, out.confidence
     drawings = _drawings(out, begin)
     search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
-                         longest_bones(P, C, drawings, plans.hangs_from), figure, on_figure)
+                         longest_bones(P, C, drawings, plans.hangs_from), figure, on_figure, tuning)
     told = frames if own is None else own
     drawn = read_frame(told, begin - 1, None)
     work = np.empty_like(drawn)
@@ -377,7 +378,7 @@ def _no_options(count, k):
     return np.full((count, k, OTHERS + 1, 3), np.nan)
 
 
-def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figure):
+def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figure, tuning):
     """Track frames ``stop - 2`` down to ``start + 1`` backwards, from where ``out`` puts the joints
     on frame ``stop - 1`` (as sure of them as it is) with the ``templates``' anchors (never re-cut:
     only the latest are); write where each joint went, with its confidence, as the last of its
@@ -391,7 +392,7 @@ def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figur
     figure = None if masks is None else FigureMasks(_Backwards(masks, start, stop), count, shape)
     anchors = [replace(t, latest=t.anchor) for t in templates]
     _run(_Backwards(frames, start, stop), shape, plans, anchors, back, np.zeros(k, int), 1, count - 1, None,
-         figure, on_figure, options=False)
+         figure, on_figure, options=False, tuning=tuning)
     for i in range(1, count - 1):
         out.options[stop - 1 - i, :, OTHERS] = np.column_stack([back.positions[i], back.confidence[i]])
 

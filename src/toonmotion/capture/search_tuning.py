@@ -1,0 +1,130 @@
+"""The tuning of the tracker's search in a frame (:mod:`toonmotion.capture.track_search`): where a
+hidden joint is looked for, how confident a match must be to count, and how colour is weighed
+against the skeleton. :class:`SearchTuning`, given as ``TrackSettings(tuning=...)``."""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass, fields
+
+from toonmotion.capture.track_checks import check_number
+from toonmotion.errors import TrackingError
+
+# The fields that are a confidence (0 to 1); every other one is a positive number but `places`,
+# a whole number of places.
+_CONFIDENCES = ("coarse_confidence", "up_coarse_confidence", "reacquire_confidence", "weak_confidence",
+                "anchor_likeness")
+
+
+@dataclass(frozen=True)
+class SearchTuning:
+    """How the tracker searches each frame for its joints (eq. 4.4-4.6 and re-acquisition).
+
+    Each value was chosen by a measurement on the tracker's benchmark clips (the 14 rendered
+    clips of ``benchmarks/track.py``, textured and cel, on ones and twos, at seeds 0 and 2, with
+    seed 5 held out) and the shared drawings' footage; the measurement is given with each. The
+    defaults are the tracker's; change one to see what it does, not to tune for one clip.
+
+    Attributes
+    ----------
+    widen_step : float
+        Search radii a hidden joint's window widens by for every drawing it stays hidden (up to
+        ``track_search.MAX_WIDEN`` radii, which the whole-clip pass shares), >= 0. 0: a hidden
+        joint is looked for only where it is carried, within one radius.
+    span_step : float
+        Radians: a hidden joint whose parent is found is looked for round the parent, in
+        directions up to this far either way from where it was last for every drawing it has
+        been hidden (all round at most), > 0.
+    coarse_confidence : float
+        0 to 1: places whose coarse match (a quarter-rectangle grid) is below this are not
+        matched finely.
+    places : int
+        How many of the best coarse places, a rectangle apart, are matched finely, best first,
+        until one is found, >= 1. The coarse match only ranks places (it misses a fine texture
+        by up to an eighth of a rectangle): refining the best 2 instead of 64 lost joints on 4
+        of the 14 rendered clips (the flat walk's mean error 5.7 -> 7.7 px) at no gain in speed.
+    up_coarse_confidence : float
+        0 to 1: the up pass (a joint placed by the joints hanging from it) matches finely only
+        where the coarse match is at least this. At ``coarse_confidence`` it made a fifth of all
+        matches and found a joint in 4 % of its tries; at 0.3 the textured zombie walk went from
+        68 to 84 frames/s, the errors within 0.5 px summed over the textured renders.
+    reacquire_confidence : float
+        0 to 1: a hidden joint is found again only by a match at least this confident (0.6
+        still tells a joint from a different texture, 0.1 at most, and from plain background;
+        the anchor may have been cut with a neighbour overlapping the joint).
+    reach_slack : float
+        A hidden joint is found again no farther from its parent than this many times the
+        longest its bone has been seen, > 0.
+    weak_confidence : float
+        0 to 1: a joint matched less confidently than this is taken as found only within
+        ``weak_reach`` of where it was expected (a weak match may refine where a joint is, not
+        carry it along a flat limb that looks alike all the way); a hidden textured joint is
+        the exception (a hand lost on twos stayed 116 px off in plain view without it).
+    weak_reach : float
+        Of the rectangle's larger side, times the pace after a held drawing: how far from where
+        it was expected a weak match may put a joint, > 0.
+    refit_turn : float
+        Radians: a textured joint matched below ``template_match.TURN_CONFIDENCE`` whose parent
+        was found is matched again turned as its bone has turned, when that differs by more
+        than this, > 0. On the jumping jacks on twos a hand was found in the right place at
+        0.08, turned 68 degrees wrong, and called hidden.
+    ambiguous_spread : float
+        Of the rectangle's larger side: a joint whose equally good places reach farther than
+        this is on a flat fill, and is put among them where its neighbours carry it (a knee of
+        the demo's flat-blue trousers slid 80 px up the leg without it), > 0.
+    textured_colour_weight : float
+        How many times eq. 4.6's ``w_alpha`` a joint with a texture of its own weighs its colour,
+        > 0. At 1 a wave's hand swinging 21 px a drawing on twos was taken 11 px short of it;
+        16 and more all gave the same.
+    anchor_likeness : float
+        0 to 1: a textured joint re-cuts its latest template only where the place looks like
+        its first (anchor) template at least this much. Lower, a textured square passing
+        behind an occluder was lost to it; the textured renders went 75.78 -> 72.15 px summed.
+    bone_weight : float
+        The kinematic term's weight per squared pixel of bone-length change, relative to
+        ``w_beta``, >= 0. 0: bones may stretch freely.
+
+    Raises
+    ------
+    TrackingError
+        A value out of its range, in one line naming it.
+
+    Examples
+    --------
+    >>> SearchTuning().places, SearchTuning(places=8).places
+    (64, 8)
+    """
+
+    widen_step: float = 0.5
+    span_step: float = math.radians(45)
+    coarse_confidence: float = 0.1
+    places: int = 64
+    up_coarse_confidence: float = 0.3
+    reacquire_confidence: float = 0.35
+    reach_slack: float = 1.2
+    weak_confidence: float = 0.5
+    weak_reach: float = 0.25
+    refit_turn: float = math.radians(5)
+    ambiguous_spread: float = 0.125
+    textured_colour_weight: float = 16.0
+    anchor_likeness: float = 0.8
+    bone_weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        for field in fields(self):
+            name, value = field.name, getattr(self, field.name)
+            if name == "places":
+                if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+                    raise TrackingError(f"places must be a whole number >= 1, got {value!r}")
+                object.__setattr__(self, name, int(value))
+                continue
+            if name in _CONFIDENCES:
+                number = check_number(value, name, 0.0, "from 0 to 1")
+                if number > 1:
+                    raise TrackingError(f"{name} must be a finite number from 0 to 1, got {number!r}")
+            elif name in ("widen_step", "bone_weight"):
+                number = check_number(value, name, 0.0, ">= 0")
+            else:
+                number = check_number(value, name, 0.0, "> 0", strict=True)
+            object.__setattr__(self, name, number)
