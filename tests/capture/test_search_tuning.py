@@ -7,11 +7,13 @@ given changes what the tracker does as its documentation says, on the scenes of
 
 import math
 
+import numpy as np
 import pytest
 
 from tests.capture.test_tracker import _arm_under_covers, _errors, _setup
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.capture.search_tuning import SearchTuning
+from toonmotion.capture.track_path import best_paths
 from toonmotion.capture.track_settings import TrackSettings
 from toonmotion.capture.tracker import track
 from toonmotion.errors import TrackingError
@@ -65,6 +67,10 @@ def test_without_widening_a_hidden_hand_is_not_looked_for_where_it_re_emerged(ar
     ({"textured_colour_weight": float("nan")}, "textured_colour_weight must be a finite number > 0"),
     ({"widen_step": -1}, "widen_step must be a finite number >= 0"),
     ({"bone_weight": "1"}, "bone_weight must be a number >= 0, got '1'"),
+    ({"max_hold": 0}, "max_hold must be a whole number >= 1, got 0"),
+    ({"max_widen": 0.5}, "max_widen must be a finite number >= 1, got 0.5"),
+    ({"min_search": 0}, "min_search must be a finite number >= 1"),
+    ({"search_fraction": -1}, "search_fraction must be a finite number > 0"),
 ])
 def test_bad_values_are_refused_in_one_line(given, message):
     with pytest.raises(TrackingError) as caught:
@@ -81,6 +87,42 @@ def test_every_value_is_documented_with_its_unit_or_range():
     doc = SearchTuning.__doc__
     for name in SearchTuning.__dataclass_fields__:
         entry = doc.split(f"    {name} : ", 1)[1].split("\n    ", 2)[1]
-        assert any(word in entry for word in ("0 to 1", "Radians", "radii", "times", "How many", "Of the",
-                                              "weight")), (name, entry)
+        assert any(word in entry for word in ("0 to 1", "Radians", "radii", "times", "How many", "Of ",
+                                              "Pixels", "weight")), (name, entry)
 
+
+
+def test_the_whole_clip_pass_steps_no_farther_than_max_widen_radii():
+    """A joint matched poorly all along, with a perfect look-alike 30 px away on every frame after
+    the first: beyond the widest window at 3 radii (24 px), it is left alone; at 4 (32 px) the pass
+    takes it."""
+    T = 8
+    P, C = np.zeros((T, 1, 2)), np.full((T, 1), 0.3)
+    options = np.full((T, 1, 1, 3), np.nan)
+    options[1:, 0, 0] = (30.0, 0.0, 1.0)
+
+    def taken(widest):
+        found, _ = best_paths(P, C, options, np.array([-1]), np.arange(T), np.array([8.0]),
+                              tuning=SearchTuning(max_widen=widest))
+        return {tuple(x) for x in found[1:, 0]}
+
+    assert taken(3.0) == {(0.0, 0.0)}
+    assert taken(4.0) == {(30.0, 0.0)}
+
+
+def test_the_default_search_radius_follows_search_fraction_and_min_search():
+    """Through the tracker's plans: the radius is max(min_search, search_fraction x the larger
+    side) unless TrackSettings.search is given."""
+    from toonmotion.capture.tracker import _plans
+
+    frames, truth = _arm_under_covers(T=3)
+    setup = _setup(ARM, truth[0])  # rectangles 20 px a side
+    radius = {}
+    for key, tuning in {"default": SearchTuning(), "wide": SearchTuning(search_fraction=1.5),
+                        "floor": SearchTuning(search_fraction=0.1, min_search=6.0)}.items():
+        plans = _plans(setup, TrackSettings(tuning=tuning), frames[0], truth[0])
+        radius[key] = plans(0).radius
+    assert radius == {"default": 10.0, "wide": 30.0, "floor": 6.0}
+    settings = TrackSettings(search=12.0, tuning=SearchTuning(search_fraction=1.5))
+    given = _plans(setup, settings, frames[0], truth[0])
+    assert given(0).radius == 12.0

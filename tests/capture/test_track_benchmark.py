@@ -180,16 +180,16 @@ def test_tracking_both_ways_keeps_more_of_a_run():
     widest search reaches: the pass takes no longer step than the tracking itself. (The textured
     run gained 6.99 -> 6.09 until hidden joints were looked for where they look alike rather than
     where their bones last were; now one way keeps it as well, 5.78 against 5.80.)"""
-    from toonmotion.capture.track_search import MAX_WIDEN
+    from toonmotion.capture.search_tuning import SearchTuning
     from toonmotion.capture.track_settings import TrackSettings
-    from toonmotion.capture.tracker import SEARCH_FRACTION
 
     run = render_bvh_clip(_require(SHARED_DATA / "mocap") / "cmu_02_03_run.bvh", style="flat")
     one_way = tracking_scores(track_from_truth(run)[0], run.truth)["mean_px"]
     found, _ = track_from_truth(run, settings=TrackSettings(both_ways=True))
     assert tracking_scores(found, run.truth)["mean_px"] <= one_way - 0.5
     step = np.hypot(*np.diff(found, axis=0).transpose(2, 0, 1))
-    assert step.max() <= MAX_WIDEN * SEARCH_FRACTION * run.side + 1e-9
+    tuning = SearchTuning()
+    assert step.max() <= tuning.max_widen * tuning.search_fraction * run.side + 1e-9
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,8 @@
-"""The tuning of the tracker's search in a frame (:mod:`toonmotion.capture.track_search`): where a
-hidden joint is looked for, how confident a match must be to count, and how colour is weighed
-against the skeleton. :class:`SearchTuning`, given as ``TrackSettings(tuning=...)``."""
+"""The tuning of the tracker's search for its joints, in each frame
+(:mod:`toonmotion.capture.track_search`) and over the whole clip
+(:mod:`toonmotion.capture.track_path`): how wide the windows are, where a hidden joint is looked
+for, how confident a match must be to count, and how colour is weighed against the skeleton.
+:class:`SearchTuning`, given as ``TrackSettings(tuning=...)``."""
 
 from __future__ import annotations
 
@@ -11,15 +13,16 @@ from dataclasses import dataclass, fields
 from toonmotion.capture.track_checks import check_number
 from toonmotion.errors import TrackingError
 
-# The fields that are a confidence (0 to 1); every other one is a positive number but `places`,
-# a whole number of places.
+# The fields that are a confidence (0 to 1); every other one is a positive number but `places` and
+# `max_hold`, whole numbers.
 _CONFIDENCES = ("coarse_confidence", "up_coarse_confidence", "reacquire_confidence", "weak_confidence",
                 "anchor_likeness")
 
 
 @dataclass(frozen=True)
 class SearchTuning:
-    """How the tracker searches each frame for its joints (eq. 4.4-4.6 and re-acquisition).
+    """How the tracker searches for its joints: each frame (eq. 4.4-4.6 and re-acquisition) and
+    the whole clip's paths.
 
     Each value was chosen by a measurement on the tracker's benchmark clips (the 14 rendered
     clips of ``benchmarks/track.py``, textured and cel, on ones and twos, at seeds 0 and 2, with
@@ -28,10 +31,26 @@ class SearchTuning:
 
     Attributes
     ----------
+    search_fraction : float
+        Of a joint's rectangle's larger side: its search radius ``r`` when
+        ``TrackSettings.search`` is not given, > 0.
+    min_search : float
+        Pixels, >= 1: the least default search radius.
+    max_hold : int
+        How many times as wide every window is, at most, after a drawing held that many frames
+        (on twos, twice), >= 1: a held drawing moves that many frames' worth by the next.
+    max_widen : float
+        Search radii a hidden joint's window widens to at most, and the longest step a joint's
+        path may take in a frame in the whole-clip pass, >= 1.
+    smoothness : float
+        Search radii: the scale of a step's cost in the whole-clip pass, the change of a
+        joint's velocity relative to its parent (and of its bone's length) from one drawing to
+        the next, > 0. On 10 footage clips of the shared drawings 0.5 and 0.2 made them worse
+        (111.7 -> 112.2 px summed), 1.5 better (110.9), 3 and 8 lost one clip (4.7 -> 9.4 px).
     widen_step : float
         Search radii a hidden joint's window widens by for every drawing it stays hidden (up to
-        ``track_search.MAX_WIDEN`` radii, which the whole-clip pass shares), >= 0. 0: a hidden
-        joint is looked for only where it is carried, within one radius.
+        ``max_widen``), >= 0. 0: a hidden joint is looked for only where it is carried, within
+        one radius.
     span_step : float
         Radians: a hidden joint whose parent is found is looked for round the parent, in
         directions up to this far either way from where it was last for every drawing it has
@@ -96,6 +115,11 @@ class SearchTuning:
     (64, 8)
     """
 
+    search_fraction: float = 0.5
+    min_search: float = 8.0
+    max_hold: int = 3
+    max_widen: float = 3.0
+    smoothness: float = 1.5
     widen_step: float = 0.5
     span_step: float = math.radians(45)
     coarse_confidence: float = 0.1
@@ -114,9 +138,9 @@ class SearchTuning:
     def __post_init__(self) -> None:
         for field in fields(self):
             name, value = field.name, getattr(self, field.name)
-            if name == "places":
+            if name in ("places", "max_hold"):
                 if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-                    raise TrackingError(f"places must be a whole number >= 1, got {value!r}")
+                    raise TrackingError(f"{name} must be a whole number >= 1, got {value!r}")
                 object.__setattr__(self, name, int(value))
                 continue
             if name in _CONFIDENCES:
@@ -125,6 +149,8 @@ class SearchTuning:
                     raise TrackingError(f"{name} must be a finite number from 0 to 1, got {number!r}")
             elif name in ("widen_step", "bone_weight"):
                 number = check_number(value, name, 0.0, ">= 0")
+            elif name in ("min_search", "max_widen"):
+                number = check_number(value, name, 1.0, ">= 1")
             else:
                 number = check_number(value, name, 0.0, "> 0", strict=True)
             object.__setattr__(self, name, number)

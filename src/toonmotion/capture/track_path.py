@@ -14,16 +14,15 @@ before):
   place the tracking backwards gave it);
 - each step costs ``|e|^2 / (2 s^2)``, ``e`` the change from one drawing to the next of the
   joint's velocity relative to its parent (its own, for a root), in pixels a frame, and
-  ``s = SMOOTHNESS`` times the joint's search radius;
+  ``s`` the tuning's ``smoothness`` times the joint's search radius;
 - a joint with a parent also pays ``d^2 / (2 (s n)^2)`` for ``d``, its bone's change of length over
   the ``n`` frames from the last drawing.
 
 These are eq. 4.6's two terms, the colour and the distance from a prediction (here of constant
-velocity), on one scale, over the whole clip: a place that fits the frames after it as well as
-those before is preferred. No step is longer than the joint's widest search reaches
-(:data:`~toonmotion.capture.track_search.MAX_WIDEN` times its radius a frame), as in the
-tracking itself. Joints keep their places where the path goes through them, so the pass can only
-swap a place for another the searches found.
+velocity), on one scale, over the whole clip: a place that fits the frames after it as well as those
+before is preferred. No step is longer than the joint's widest search reaches (the tuning's
+``max_widen`` times its radius a frame), as in the tracking itself. Joints keep their places where
+the path goes through them, so the pass can only swap a place for another the searches found.
 
 Tracked both ways (``TrackSettings.both_ways``), each joint also has, on every frame, the place
 the tracking backwards from the clip's last frame gave it. A joint the tracking forwards lost for
@@ -39,22 +38,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.track_search import MAX_WIDEN
-
-# A step's cost scale: this many times the joint's search radius (for the bone's change of length,
-# per frame the step spans). Chosen
-# on 10 footage clips of the shared drawings (swinging_keys seeds 10 and 11): 0.5 and 0.2 made them
-# worse (111.7 -> 112.2 px summed), 1.5 better (110.9), 3 and 8 moved more and lost one clip
-# (4.7 -> 9.4 px).
-SMOOTHNESS = 1.5
+from toonmotion.capture.search_tuning import SearchTuning
 
 # Places less confident than this cost as much as this (log of zero).
 _FLOOR = 1e-3
 
 
 def best_paths(P: NDArray[np.float64], C: NDArray[np.float64], options: NDArray[np.float64],
-               parents: NDArray[np.int_], drawings: NDArray[np.int_], radius: NDArray[np.float64]
-               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+               parents: NDArray[np.int_], drawings: NDArray[np.int_], radius: NDArray[np.float64], *,
+               tuning: SearchTuning | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Every joint's best path through its places over ``drawings`` (module docstring).
 
     Parameters
@@ -71,6 +63,8 @@ def best_paths(P: NDArray[np.float64], C: NDArray[np.float64], options: NDArray[
         run starts from).
     radius : (k,) float
         Each joint's search radius, pixels.
+    tuning : SearchTuning, optional
+        Its ``smoothness`` and ``max_widen``; default its defaults.
 
     Returns
     -------
@@ -90,6 +84,7 @@ def best_paths(P: NDArray[np.float64], C: NDArray[np.float64], options: NDArray[
     [0.0, 0.0, 0.0, 0.0]
     """
     P, C = np.array(P, dtype=float), np.array(C, dtype=float)
+    tuning = SearchTuning() if tuning is None else tuning
     drawings = np.asarray(drawings, dtype=int)
     if len(drawings) < 3:
         return P, C
@@ -101,8 +96,8 @@ def best_paths(P: NDArray[np.float64], C: NDArray[np.float64], options: NDArray[
         g = parents[m]
         # Places relative to the parent's (already chosen) path: a bone turning steadily is smooth.
         relative = [x - (P[t, g] if g >= 0 else 0.0) for x, t in zip(places, drawings, strict=True)]
-        chosen = _viterbi(relative, places, costs, gaps, SMOOTHNESS * float(radius[m]),
-                          MAX_WIDEN * float(radius[m]), bone=g >= 0)
+        chosen = _viterbi(relative, places, costs, gaps, tuning.smoothness * float(radius[m]),
+                          tuning.max_widen * float(radius[m]), bone=g >= 0)
         for t, x, cost, i in zip(drawings, places, costs, chosen, strict=True):
             if i:  # 0 is the tracker's own choice
                 P[t, m], C[t, m] = x[i], np.exp(-cost[i])

@@ -62,10 +62,6 @@ from toonmotion.capture.track_figure import FigureMasks, onto_figure
 from toonmotion.capture.track_hidden import carried_by_parent, lengthen, moves_below, place_hidden
 from toonmotion.capture.track_prediction import bone_turn, hidden_at, turns
 
-# A hidden joint's window widens (SearchTuning.widen_step a drawing) up to this many search radii;
-# the whole-clip pass (track_path) looks as far.
-MAX_WIDEN = 3.0
-
 # The confidence a joint taken to be hidden is saved with, at most: just under VISIBLE_CONFIDENCE.
 _HIDDEN = float(np.nextafter(VISIBLE_CONFIDENCE, 0))
 
@@ -162,7 +158,7 @@ class FrameSearch:
                               agree, bounded=True, turn_ranks=ranks[1:])
         self._settle(t, coast, seen)
         # A joint not found goes no farther in one frame than its search could have reached.
-        reach = np.array([plans(m, pace).radius * min(1.0 + tune.widen_step * self.lost[m], MAX_WIDEN)
+        reach = np.array([plans(m, pace).radius * min(1.0 + tune.widen_step * self.lost[m], tune.max_widen)
                           for m in range(k)])
         place_hidden(P, t, coast, seen, plans.hangs_from, reach)
         # A joint leaving the picture stays at its edge.
@@ -234,7 +230,7 @@ class FrameSearch:
             found = search_round(small, self.templates[m], joint, bone, start, span, turned,
                                  count=self.tuning.places, figure=self._figure(m), by_look=self._textured[m])
             return [(xy, turned) for xy, coarse, turned in found if coarse >= self.tuning.coarse_confidence]
-        radius = joint.radius * min(1.0 + self.tuning.widen_step * hidden, MAX_WIDEN)
+        radius = joint.radius * min(1.0 + self.tuning.widen_step * hidden, self.tuning.max_widen)
         if bone is None and plans.parents[m] >= 0:
             # Its parent not found, its bone gives no angle to go by: it is looked for at turns all round.
             xy, coarse, turned = locate_all_round(small, self._discs(m), carried, joint, radius,

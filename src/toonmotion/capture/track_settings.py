@@ -73,8 +73,8 @@ class TrackSettings:
     Attributes
     ----------
     search : float or None
-        Search radius ``r``, pixels, >= 1. None: per joint, ``max(MIN_SEARCH, SEARCH_FRACTION *
-        larger rectangle side)``.
+        Search radius ``r``, pixels, >= 1. None: per joint, ``max(tuning.min_search,
+        tuning.search_fraction * larger rectangle side)``.
     w_alpha : float
         Weight of the mean colour difference, > 0 (thesis: ``1 / 255^2``).
     w_beta : float or None

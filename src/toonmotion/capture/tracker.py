@@ -54,17 +54,10 @@ from toonmotion.capture.track_scale import (
     halvings,
     working_weight,
 )
-from toonmotion.capture.track_search import MAX_WIDEN, FrameSearch
+from toonmotion.capture.track_search import FrameSearch
 from toonmotion.capture.track_settings import Masks, Tracking, TrackSettings, TrackSetup
 from toonmotion.errors import TrackingError
 from toonmotion.progress import Progress
-
-# Default search radius: this fraction of a rectangle's larger side, at least MIN_SEARCH px.
-SEARCH_FRACTION = 0.5
-MIN_SEARCH = 8.0
-
-# After a drawing held n frames (twos, threes), search windows are n times as wide, up to this.
-MAX_HOLD = 3
 
 # progress(stage, index, count), as everywhere in the library; the stage is "tracking".
 
@@ -317,7 +310,8 @@ def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, 
         else:
             predicted, coast = predict(P, C, np.array(drawings), history)
             # A drawing held n frames moves n frames' worth by the next: the search widens with it.
-            search.frame(image, t, predicted, coast, pace=float(min(t - drawings[-1], MAX_HOLD)))
+            pace = float(min(t - drawings[-1], search.tuning.max_hold))
+            search.frame(image, t, predicted, coast, pace=pace)
             if options:
                 for m, found in enumerate(search.taken):
                     if found is not None:
@@ -339,8 +333,9 @@ def _plans(setup, settings, image, centres):
     """The joints' :class:`~toonmotion.capture.joint_plan.Plans` for ``setup`` and ``settings``:
     templates cut from ``image`` at ``centres`` (grown where the rectangle is not distinct,
     :func:`~toonmotion.capture.patches.distinct_size`), windows as the rectangles ask."""
-    r = [settings.search if settings.search is not None else max(MIN_SEARCH, SEARCH_FRACTION * max(w, h))
-         for w, h in setup.sizes]
+    tune = settings.tuning
+    r = [settings.search if settings.search is not None
+         else max(tune.min_search, tune.search_fraction * max(w, h)) for w, h in setup.sizes]
     whole = [(max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5)))) for w, h in setup.sizes]
     sizes = [distinct_size(image, centre, size) for centre, size in zip(centres, whole, strict=True)]
     return Plans(sizes, setup.skeleton.parents, r, w_alpha=settings.w_alpha, w_beta=settings.w_beta,
@@ -355,7 +350,7 @@ def _filled(out, plans, settings, figure, on_figure, since=0):
         drawings = np.flatnonzero(out.tracked & ~out.held)
         radius = np.array([plans(m).radius for m in range(len(plans))], dtype=float)
         P, C = best_paths(out.positions, out.confidence, out.options, plans.hangs_from,
-                          drawings[drawings >= since], radius)
+                          drawings[drawings >= since], radius, tuning=settings.tuning)
         for t in np.flatnonzero(out.tracked[since + 1:]) + since + 1:  # held frames repeat the one before
             if out.held[t]:
                 P[t], C[t] = P[t - 1], C[t - 1]
@@ -365,7 +360,7 @@ def _filled(out, plans, settings, figure, on_figure, since=0):
         out.positions = fill_hidden_spans(out.positions, out.confidence, plans.hangs_from, out.tracked,
                                           out.held, since)
         if figure is not None:
-            limit = np.array([plans(m).radius * MAX_WIDEN for m in range(len(plans))])
+            limit = np.array([plans(m).radius * settings.tuning.max_widen for m in range(len(plans))])
             hidden = (out.confidence < VISIBLE_CONFIDENCE) & on_figure & (out.tracked & ~out.held)[:, None]
             hidden[:since] = False
             put_on_figure(out.positions, hidden, figure, limit)
