@@ -100,8 +100,8 @@ def render_elements(proxy: Proxy, motion: SceneMotion, frame: int, *, shading: s
         ``"flat"``.
     antialias : int
         Rays per pixel side, 1 (one ray a pixel: hard edges) to 4: ``k x k`` rays a pixel, their
-        fraction that hit is the layer's ``alpha`` and edges are blended. The default, 2, costs
-        about three times the time of one ray a pixel.
+        fraction that hit is the layer's ``alpha`` and edges are blended. The default, 2, takes
+        about twice the time of one ray a pixel (the demo: 3.0 -> 7.4 ms a 640 x 480 frame).
 
     Returns
     -------
