@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from tests.conftest import SHARED_DATA, _require
+from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.capture.foreground import FlatBackgroundMasks, flat_figure_masks, flat_threshold
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
-from toonmotion.capture.track_figure import FIGURE_SLACK, FigureMasks, figure_cells, on_figure, onto_figure
+from toonmotion.capture.track_figure import FigureMasks, figure_cells, on_figure, onto_figure
 from toonmotion.capture.track_settings import TrackSettings, TrackSetup
 from toonmotion.capture.tracker import track
 from toonmotion.errors import TrackingError
@@ -45,7 +46,7 @@ def test_a_point_off_the_figure_goes_to_its_nearest_pixel_within_reach_and_towar
     moved = onto_figure(near, outside, 10.0)
     assert on_figure(near, moved[None])[0] and np.hypot(*(moved - outside)) == pytest.approx(8.0, abs=1.0)
     # About 8 px off: a reach of 5 takes it 5 px toward the figure, straight up; one of 1.5 (the
-    # figure beyond PULL_REACH reaches) leaves it where it was.
+    # figure beyond ClipTuning.pull_reach reaches) leaves it where it was.
     np.testing.assert_allclose(onto_figure(near, outside, 5.0), [50.0, 45.0])
     assert (onto_figure(near, outside, 1.5) == outside).all()
 
@@ -54,7 +55,7 @@ def test_masks_hold_points_within_the_slack_of_the_figure():
     mask = np.zeros((1, 60, 80), bool)
     mask[0, 20:40, 20:40] = True
     figure = FigureMasks(mask, 1, (60, 80, 3))
-    edge = 40 - 1 + FIGURE_SLACK  # the last figure column is 39
+    edge = 40 - 1 + ClipTuning().figure_slack  # the last figure column is 39
     assert figure.holds(0, np.array([[edge, 30.0], [edge + 1.5, 30.0]])).tolist() == [True, False]
     with pytest.raises(TrackingError, match="one a frame"):
         FigureMasks(mask, 2, (60, 80, 3))

@@ -72,6 +72,7 @@ from toonmotion.api.scene3d import (
     scene_passes,
     simulate_scene,
 )
+from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.capture.footage import (
     Capture,
     PoorlyMatched,

@@ -10,7 +10,7 @@ round it as well as from a look-alike patch. The tracker uses it twice:
   the nearest point of the figure when that place is off it (a hand carried by its elbow while
   the arm bends out of sight does not float in the air beside it).
 
-A mask counts a point as on the figure when it lies within :data:`FIGURE_SLACK` pixels of a
+A mask counts a point as on the figure when it lies within ``ClipTuning.figure_slack`` pixels of a
 foreground pixel (anti-aliased outlines and thresholds shift a mask's edge by a pixel or so).
 Joints that lie off their frame's mask where tracking starts (a mask that misses part of the
 figure) are not held to it at all.
@@ -25,10 +25,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.errors import TrackingError
-
-# A point within this many pixels of a foreground pixel is on the figure.
-FIGURE_SLACK = 2.0
 
 
 class FigureMasks:
@@ -41,19 +39,22 @@ class FigureMasks:
         gives it; the frames' size.
     shape : tuple
         ``(h, w, ...)`` of the frames.
+    tuning : ClipTuning, optional
+        Its ``figure_slack`` and ``pull_reach``; default its defaults.
     """
 
     def __init__(self, masks: NDArray[np.bool_] | Sequence[NDArray[np.bool_]], count: int,
-                 shape: tuple[int, ...]) -> None:
+                 shape: tuple[int, ...], *, tuning: ClipTuning | None = None) -> None:
         if len(masks) != count:
             raise TrackingError(f"there are {len(masks)} figure masks for {count} frames; give one a frame")
         self._masks, self._shape = masks, tuple(shape[:2])
+        self.tuning = ClipTuning() if tuning is None else tuning
         self._cache: tuple[int, NDArray[np.uint8]] | None = None
-        radius = int(np.ceil(FIGURE_SLACK))
+        radius = int(np.ceil(self.tuning.figure_slack))
         self._kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
 
     def near(self, t: int) -> NDArray[np.uint8]:
-        """``(h, w)`` uint8, non-zero where frame ``t``'s figure is within :data:`FIGURE_SLACK` px."""
+        """``(h, w)`` uint8, non-zero where frame ``t``'s figure is within ``tuning.figure_slack`` px."""
         if self._cache is None or self._cache[0] != t:
             mask = check_mask(np.asarray(self._masks[t]), t, self._shape)
             # A bool mask is dilated as the 0s and 1s it holds, uncopied.
@@ -94,20 +95,11 @@ def on_figure(near: NDArray[np.uint8], points: NDArray[np.float64]) -> NDArray[n
     return out
 
 
-# A hidden joint off the figure by more than it may move is moved that far toward the figure if
-# the figure is within this many such moves (farther, it is left where it is carried). When it was
-# moved only onto a figure within its move, a hand that went behind the body in one drawing stayed
-# on the paper beside it, 30 px off the figure, for the 10 frames it was hidden. The flat
-# renders restarted every 30 frames went from 179.6 to 176.9 px summed on twos (2 clips better by
-# 5%, none worse) and did not move on ones; whole clips 532.6 -> 537.2 (7 better, 4 worse, within
-# the whole clips' spread); the drawings' footage 105.5 -> 105.2.
-PULL_REACH = 4.0
-
-
-def onto_figure(near: NDArray[np.uint8], point: NDArray[np.float64], limit: float) -> NDArray[np.float64]:
+def onto_figure(near: NDArray[np.uint8], point: NDArray[np.float64], limit: float, *,
+                pull: float | None = None) -> NDArray[np.float64]:
     """``point`` (x, y) if it lies on the figure (``near`` non-zero), else the nearest pixel of the
     figure if it is no farther than ``limit`` pixels, else ``limit`` pixels toward that pixel if
-    it is within :data:`PULL_REACH` limits, else ``point`` itself.
+    it is within ``pull`` limits (default ``ClipTuning.pull_reach``), else ``point`` itself.
 
     >>> near = np.zeros((10, 10), np.uint8); near[:, 6:] = 255
     >>> point = np.array([2.0, 4.0])
@@ -118,7 +110,7 @@ def onto_figure(near: NDArray[np.uint8], point: NDArray[np.float64], limit: floa
     x, y = (int(round(v)) for v in point)
     if 0 <= x < w and 0 <= y < h and near[y, x]:
         return point
-    r = int(np.ceil(PULL_REACH * limit))
+    r = int(np.ceil((ClipTuning().pull_reach if pull is None else pull) * limit))
     x0, y0 = max(0, x - r), max(0, y - r)
     rows, cols = np.nonzero(near[y0:min(h, y + r + 1), x0:min(w, x + r + 1)])
     if not rows.size:
@@ -141,7 +133,7 @@ def put_on_figure(P: NDArray[np.float64], hidden: NDArray[np.bool_], figure: Fig
     for t in np.flatnonzero(hidden.any(axis=1)):
         near = figure.near(int(t))
         for m in np.flatnonzero(hidden[t]):
-            P[t, m] = onto_figure(near, P[t, m], float(limit[m]))
+            P[t, m] = onto_figure(near, P[t, m], float(limit[m]), pull=figure.tuning.pull_reach)
 
 
 def figure_cells(near: NDArray[np.uint8], centre: NDArray[np.float64], angle: float, R: int,

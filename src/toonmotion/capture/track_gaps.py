@@ -8,7 +8,7 @@ known start, and the guesses inside it can be bent to meet both. For a joint wit
 guessed bones (offsets from the parent) are turned and scaled by a blend, linear in time, of the
 turn and scale that take the guesses, carried on one frame each way as they went, to the bones
 found before and after the span, when they meet both within a tenth of the bone
-(:data:`TRUSTED`): guesses that were right (a hand carried by an elbow that turned) stay as they
+(``ClipTuning.trusted``): guesses that were right (a hand carried by an elbow that turned) stay as they
 were. Guesses that miss are dropped: the bone found before the span turns and stretches steadily
 into the bone found after it (exact for a limb turning steadily about a still joint). A root
 with children found at every drawing of its span is put where they hold it: each one's bone to
@@ -27,17 +27,14 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.geometry.coordinates import as_complex, as_points
 
-# A joint's guesses are kept, and bent, where carried on they meet both ends of their span within
-# this fraction of the bone; else they are dropped for the found bones' steady turn.
-TRUSTED = 0.1
-
 
 def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: NDArray[np.int_],
-                      tracked: NDArray[np.bool_], held: NDArray[np.bool_], since: int = 0
-                      ) -> NDArray[np.float64]:
+                      tracked: NDArray[np.bool_], held: NDArray[np.bool_], since: int = 0, *,
+                      tuning: ClipTuning | None = None) -> NDArray[np.float64]:
     """``P`` with every hidden span that has a found frame on both sides re-placed (module
     docstring); joints are taken parents first, so a child's bone is read off its parent's
     re-placed positions.
@@ -55,6 +52,8 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
     since : int
         Frames before this one are kept as they are in ``P`` (those before a correction): a span
         that ends after it is re-placed from it on only.
+    tuning : ClipTuning, optional
+        Its ``trusted``; default its defaults.
 
     Returns
     -------
@@ -67,6 +66,7 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
     [[0.0, 0.0], [7.0, 6.0], [5.0, 3.0], [3.0, 0.0]]
     """
     out = np.array(P, dtype=float)
+    trusted = (ClipTuning() if tuning is None else tuning).trusted
     drawings = np.flatnonzero(tracked & ~held)
     for m in range(out.shape[1]):
         found = C[drawings, m] >= VISIBLE_CONFIDENCE
@@ -103,7 +103,7 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
                     step_out = guess[-1] / guess[-2] if len(guess) > 1 else 1.0
                     first = start / (guess[0] * step_in)
                     last = end / (guess[-1] * step_out)
-                if abs(first - 1) > TRUSTED or abs(last - 1) > TRUSTED:
+                if abs(first - 1) > trusted or abs(last - 1) > trusted:
                     # Guesses that missed an end by more than that: the bone found before the span
                     # turns and stretches steadily into the bone found after it.
                     guess = np.full(len(inside), start)

@@ -15,23 +15,15 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH
-
-# A root that hides coasts at its mean velocity over this many visible steps (at most).
-COAST_STEPS = 4
-
-# A frame repeats the one before when fewer than HELD_FRACTION of its pixel values (any channel)
-# differ from it by more than HELD_LEVEL grey levels: noise and compression stay under that level,
-# and a figure that moves even half a pixel changes hundreds of values along its outline.
-HELD_LEVEL = 16
-HELD_FRACTION = 1e-4
 
 Points = NDArray[np.float64]
 
 
-def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history: NDArray[np.int_]
-            ) -> tuple[Points, Points]:
+def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history: NDArray[np.int_], *,
+            tuning: ClipTuning | None = None) -> tuple[Points, Points]:
     """Eq. 4.4 from each joint's last (up to) three positions, and where a hidden root coasts to.
 
     Parameters
@@ -41,7 +33,7 @@ def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history
     C : (T, k) float
         Confidence of each joint-frame.
     frames : (n,) int
-        The last (up to) ``COAST_STEPS + 1`` tracked frames that showed a new drawing, oldest
+        The last (up to) ``tuning.coast_steps + 1`` tracked frames that showed a new drawing, oldest
         first; held frames (animation on twos) are left out, so a step is one drawing to the next.
     history : (k,) int
         The frame each joint's history starts at (where tracking started or it was corrected):
@@ -55,10 +47,11 @@ def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history
         to a re-found joint is not a velocity: the guesses' velocity carries on.
     coast : (k, 2) float
         Where each joint goes if it hides at ``t``: on at its mean velocity over its last (up
-        to) :data:`COAST_STEPS` visible steps, less swayed than one step by a rectangle already
+        to) ``tuning.coast_steps`` visible steps, less swayed than one step by a rectangle already
         partly covered, and without acceleration.
     """
-    frames = np.asarray(frames)[-(COAST_STEPS + 1):]
+    steps = (ClipTuning() if tuning is None else tuning).coast_steps
+    frames = np.asarray(frames)[-(steps + 1):]
     k, n = len(history), len(frames)
     mine = frames[:, None] >= history  # (n, k): frames in each joint's history
     seen = mine.sum(axis=0)[:, None]
@@ -147,10 +140,11 @@ def bone_turn(before: Points, after: Points) -> float | None:
 
 
 def is_held(image: NDArray[np.uint8], previous: NDArray[np.uint8], *,
-            work: NDArray[np.uint8] | None = None) -> bool:
+            work: NDArray[np.uint8] | None = None, tuning: ClipTuning | None = None) -> bool:
     """Whether ``image`` repeats ``previous`` (both ``(h, w, 3)`` uint8) up to noise: the same
-    drawing held another frame, as animation on twos or threes does. ``work``, an array of their
-    shape and type, is worked in if given (a tracker asks every frame: a frame-sized array made
+    drawing held another frame, as animation on twos or threes does (fewer than
+    ``tuning.held_fraction`` of the values differ by more than ``tuning.held_level``). ``work``, an
+    array of their shape and type, is worked in if given (a tracker asks every frame: a frame-sized array made
     afresh is mapped in from the system page by page, nine tenths of the time here).
 
     >>> still = np.full((40, 40, 3), 128, np.uint8)
@@ -160,5 +154,6 @@ def is_held(image: NDArray[np.uint8], previous: NDArray[np.uint8], *,
     """
     h, w = image.shape[:2]
     diff = cv2.absdiff(image, previous, dst=work).reshape(h, -1)
-    changed = cv2.countNonZero(cv2.threshold(diff, HELD_LEVEL, 255, cv2.THRESH_BINARY, dst=diff)[1])
-    return changed <= HELD_FRACTION * diff.size
+    tuning = ClipTuning() if tuning is None else tuning
+    changed = cv2.countNonZero(cv2.threshold(diff, tuning.held_level, 255, cv2.THRESH_BINARY, dst=diff)[1])
+    return changed <= tuning.held_fraction * diff.size

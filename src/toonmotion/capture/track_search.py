@@ -163,9 +163,10 @@ class FrameSearch:
         place_hidden(P, t, coast, seen, plans.hangs_from, reach)
         # A joint leaving the picture stays at its edge.
         np.clip(P[t], 0.0, [image.shape[1] - 1, image.shape[0] - 1], out=P[t])
-        if self._near is not None:  # a hidden joint is behind the figure, so on it
+        if self._near is not None and self.figure is not None:  # a hidden joint is behind the figure: on it
+            pull = self.figure.tuning.pull_reach
             for j in np.flatnonzero(~seen & self.held_to_figure):
-                P[t, j] = onto_figure(self._near, P[t, j], reach[j])
+                P[t, j] = onto_figure(self._near, P[t, j], reach[j], pull=pull)
         self.lost = np.where(seen, 0, self.lost + 1)
         self.angles[t] = self.angles[t - 1] + turns(P[t - 1], P[t], plans.parents, True)
         for j in np.flatnonzero(seen & agree):

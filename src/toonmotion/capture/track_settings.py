@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_checks import (
     check_number,
@@ -114,6 +115,9 @@ class TrackSettings:
         How each frame is searched: windows, confidences, weights
         (:class:`~toonmotion.capture.search_tuning.SearchTuning`, each value with the
         measurement that chose it).
+    clip : ClipTuning
+        How the clip is read round the search: held drawings, coasting, hidden spans, the
+        figure's edge, the light (:class:`~toonmotion.capture.clip_tuning.ClipTuning`).
     """
 
     search: float | None = None
@@ -127,6 +131,7 @@ class TrackSettings:
     relight: bool = True
     working_side: float | None = WORKING_SIDE
     tuning: SearchTuning = field(default_factory=SearchTuning)
+    clip: ClipTuning = field(default_factory=ClipTuning)
 
     def __post_init__(self) -> None:
         if self.search is not None:
@@ -144,6 +149,8 @@ class TrackSettings:
             object.__setattr__(self, name, bool(getattr(self, name)))
         if not isinstance(self.tuning, SearchTuning):
             raise TrackingError(f"tuning must be a SearchTuning, got {type(self.tuning).__name__}")
+        if not isinstance(self.clip, ClipTuning):
+            raise TrackingError(f"clip must be a ClipTuning, got {type(self.clip).__name__}")
         if self.both_ways and not self.best_path:
             raise TrackingError(
                 "both_ways needs best_path: the whole-sequence pass chooses between the two ways"

@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
+from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.capture.joint_plan import UPDATE_CONFIDENCE, VISIBLE_CONFIDENCE, Plans, Templates
 from toonmotion.capture.patches import distinct_size
 from toonmotion.capture.template_context import Pyramid, at_level, cut_templates
@@ -46,7 +47,7 @@ from toonmotion.capture.track_gaps import fill_hidden_spans
 from toonmotion.capture.track_hidden import hidden_for, longest_bones
 from toonmotion.capture.track_light import Relit
 from toonmotion.capture.track_path import best_paths
-from toonmotion.capture.track_prediction import COAST_STEPS, is_held, predict, turns
+from toonmotion.capture.track_prediction import is_held, predict, turns
 from toonmotion.capture.track_scale import (
     ReducedFrames,
     ReducedMasks,
@@ -120,7 +121,7 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
         frames, masks, setup, settings = _at_working(frames, masks, setup, settings, first.shape, n)
         first, initial = read_frame(frames, start, None), at_level(initial, n)
     if settings.relight:
-        frames = Relit(frames, first)
+        frames = Relit(frames, first, settings.clip)
     out = _Arrays.empty(count, k)
     out.positions[start] = initial
     out.angles[start] = 0.0
@@ -129,14 +130,15 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
     plan = _plans(setup, settings, first, initial)
     pyramid = Pyramid(first)
     templates = [cut_templates(pyramid, initial[m], 0.0, plan(m).size) for m in range(k)]
-    figure = None if masks is None else FigureMasks(masks, count, first.shape)
+    figure = None if masks is None else FigureMasks(masks, count, first.shape, tuning=settings.clip)
     on_figure = None if figure is None else figure.holds(start, initial)
     if progress:
         progress("tracking", start, stop)
     _run(frames, first.shape, plan, templates, out, np.full(k, start), start + 1, stop, progress,
-         figure, on_figure, settings.best_path, own, tuning=settings.tuning)
+         figure, on_figure, settings.best_path, own, tuning=settings.tuning, clip=settings.clip)
     if settings.both_ways:
-        _run_back(frames, masks, first.shape, plan, templates, out, start, stop, on_figure, settings.tuning)
+        _run_back(frames, masks, first.shape, plan, templates, out, start, stop, on_figure, settings.tuning,
+                  settings.clip)
     return _in_frame_pixels(_filled(out, plan, settings, figure, on_figure).freeze(), n)
 
 
@@ -209,7 +211,7 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
         frames, masks, setup, settings = _at_working(frames, masks, setup, settings, current.shape, n)
         out.positions = at_level(out.positions, n)
     if settings.relight:  # in the light of the frame the run started from, as track saw them
-        frames = Relit(frames, read_frame(frames, begin, None))
+        frames = Relit(frames, read_frame(frames, begin, None), settings.clip)
     current = read_frame(frames, frame, None)
     plan = _plans(setup, settings, current, out.positions[frame])
     templates = []
@@ -221,14 +223,15 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
         centre, angle = out.positions[cut, m], out.angles[cut, m]
         templates.append(cut_templates(pyramids[cut], centre, angle, plan(m).size))
     history = np.where(np.isin(np.arange(k), list(fixed)), frame, begin)
-    figure = None if masks is None else FigureMasks(masks, count, current.shape)
+    figure = None if masks is None else FigureMasks(masks, count, current.shape, tuning=settings.clip)
     on_figure = None if figure is None else figure.holds(frame, out.positions[frame])
     if progress:
         progress("tracking", frame, stop)
     _run(frames, current.shape, plan, templates, out, history, frame + 1, stop, progress, figure, on_figure,
-         settings.best_path, own, tuning=settings.tuning)
+         settings.best_path, own, tuning=settings.tuning, clip=settings.clip)
     if settings.both_ways:
-        _run_back(frames, masks, current.shape, plan, templates, out, frame, stop, on_figure, settings.tuning)
+        _run_back(frames, masks, current.shape, plan, templates, out, frame, stop, on_figure, settings.tuning,
+                  settings.clip)
     return _in_frame_pixels(_filled(out, plan, settings, figure, on_figure, since=frame).freeze(), n)
 
 
@@ -289,13 +292,15 @@ class _Arrays:
 
 
 def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, history, begin, stop,
-         progress, figure=None, on_figure=None, options=True, own=None, tuning=None):
+         progress, figure=None, on_figure=None, options=True, own=None, tuning=None, clip=None):
     """Track frames ``begin`` to ``stop - 1``; frame ``begin - 1`` is tracked; write into ``out``
     (with ``options``, the other places each joint's search found too). A held drawing is told on
     ``own``, the footage's own frames where ``frames`` are halved (:func:`_held_on`); ``tuning``
-    is the search's (:class:`~toonmotion.capture.search_tuning.SearchTuning`)."""
+    is the search's (:class:`~toonmotion.capture.search_tuning.SearchTuning`), ``clip`` the
+    reading of the clip's (:class:`~toonmotion.capture.clip_tuning.ClipTuning`)."""
+    clip = ClipTuning() if clip is None else clip
     P, C = out.positions, out.confidence
-    drawings = _drawings(out, begin)
+    drawings = _drawings(out, begin, clip.coast_steps)
     search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
                          longest_bones(P, C, drawings, plans.hangs_from), figure, on_figure, tuning)
     told = frames if own is None else own
@@ -305,10 +310,10 @@ def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, 
         image = read_frame(frames, t, shape)
         seen = image if own is None else read_frame(own, t, drawn.shape)
         out.tracked[t] = True
-        if is_held(seen, drawn, work=work):
+        if is_held(seen, drawn, work=work, tuning=clip):
             P[t], C[t], out.angles[t], out.held[t] = P[t - 1], C[t - 1], out.angles[t - 1], True
         else:
-            predicted, coast = predict(P, C, np.array(drawings), history)
+            predicted, coast = predict(P, C, np.array(drawings), history, tuning=clip)
             # A drawing held n frames moves n frames' worth by the next: the search widens with it.
             pace = float(min(t - drawings[-1], search.tuning.max_hold))
             search.frame(image, t, predicted, coast, pace=pace)
@@ -316,7 +321,7 @@ def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, 
                 for m, found in enumerate(search.taken):
                     if found is not None:
                         out.options[t, m, :len(found.others)] = found.others
-            drawings = drawings[-COAST_STEPS:] + [t]
+            drawings = drawings[-clip.coast_steps:] + [t]
             drawn = seen
         if progress:
             progress("tracking", t, stop)
@@ -326,7 +331,7 @@ def _held_on(frames, first, settings):
     """The frames a held drawing is told on where the tracker halves them: their own, in the light
     of ``first`` if the settings relight them. Halving blurs a slow move away: a 1080p clip halved
     had 10 frames taken for held where 2 were, and its joints stood still on the other 8."""
-    return Relit(frames, first) if settings.relight else frames
+    return Relit(frames, first, settings.clip) if settings.relight else frames
 
 
 def _plans(setup, settings, image, centres):
@@ -358,7 +363,7 @@ def _filled(out, plans, settings, figure, on_figure, since=0):
         out.positions, out.confidence = P, C
     if settings.fill_gaps:
         out.positions = fill_hidden_spans(out.positions, out.confidence, plans.hangs_from, out.tracked,
-                                          out.held, since)
+                                          out.held, since, tuning=settings.clip)
         if figure is not None:
             limit = np.array([plans(m).radius * settings.tuning.max_widen for m in range(len(plans))])
             hidden = (out.confidence < VISIBLE_CONFIDENCE) & on_figure & (out.tracked & ~out.held)[:, None]
@@ -373,7 +378,7 @@ def _no_options(count, k):
     return np.full((count, k, OTHERS + 1, 3), np.nan)
 
 
-def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figure, tuning):
+def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figure, tuning, clip):
     """Track frames ``stop - 2`` down to ``start + 1`` backwards, from where ``out`` puts the joints
     on frame ``stop - 1`` (as sure of them as it is) with the ``templates``' anchors (never re-cut:
     only the latest are); write where each joint went, with its confidence, as the last of its
@@ -384,10 +389,10 @@ def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figur
     back = _Arrays.empty(count, k)
     back.positions[0], back.angles[0] = out.positions[stop - 1], out.angles[stop - 1]
     back.confidence[0], back.tracked[0] = out.confidence[stop - 1], True
-    figure = None if masks is None else FigureMasks(_Backwards(masks, start, stop), count, shape)
+    figure = None if masks is None else FigureMasks(_Backwards(masks, start, stop), count, shape, tuning=clip)
     anchors = [replace(t, latest=t.anchor) for t in templates]
     _run(_Backwards(frames, start, stop), shape, plans, anchors, back, np.zeros(k, int), 1, count - 1, None,
-         figure, on_figure, options=False, tuning=tuning)
+         figure, on_figure, options=False, tuning=tuning, clip=clip)
     for i in range(1, count - 1):
         out.options[stop - 1 - i, :, OTHERS] = np.column_stack([back.positions[i], back.confidence[i]])
 
@@ -407,9 +412,9 @@ class _Backwards(Sequence):
         return self._items[self._stop - 1 - i]
 
 
-def _drawings(out, begin):
-    """The last (up to) ``COAST_STEPS + 1`` tracked frames before ``begin`` that are not held."""
-    frames = [s for s in range(begin - 1, -1, -1) if out.tracked[s] and not out.held[s]][:COAST_STEPS + 1]
+def _drawings(out, begin, steps):
+    """The last (up to) ``steps + 1`` tracked frames before ``begin`` that are not held."""
+    frames = [s for s in range(begin - 1, -1, -1) if out.tracked[s] and not out.held[s]][:steps + 1]
     return frames[::-1] or [begin - 1]
 
 

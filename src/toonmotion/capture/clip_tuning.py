@@ -1,0 +1,99 @@
+"""The tuning of how the tracker reads a clip around its search for joints: which frames repeat a
+drawing, how a hidden root coasts, how hidden spans are filled, how near the figure a joint must
+be, and when a frame's light is matched. :class:`ClipTuning`, given as
+``TrackSettings(clip=...)``."""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass, fields
+
+from toonmotion.capture.track_checks import check_number
+from toonmotion.errors import TrackingError
+
+_WHOLE = ("coast_steps", "light_samples")
+_FRACTIONS = ("held_fraction", "light_border")
+
+
+@dataclass(frozen=True)
+class ClipTuning:
+    """How the tracker reads the clip: held drawings, coasting, hidden spans, the figure, the light.
+
+    Each value was chosen by a measurement, given with it. The defaults are the tracker's.
+
+    Attributes
+    ----------
+    coast_steps : int
+        A hidden root coasts at its mean velocity over its last (up to) this many visible steps,
+        >= 1 (:mod:`~toonmotion.capture.track_prediction`).
+    held_level : float
+        Grey levels, >= 0: a frame repeats the one before (a drawing held on twos) when fewer than
+        ``held_fraction`` of its values differ from it by more than this. Noise and compression
+        stay under it, and a figure moving half a pixel changes hundreds of values.
+    held_fraction : float
+        Of the frame's values (every channel), 0 to 1: see ``held_level``.
+    trusted : float
+        Of a bone, >= 0: where the guesses over a hidden span miss the bone found at either end
+        by more than this, they are dropped for the found bones' steady turn
+        (:mod:`~toonmotion.capture.track_gaps`).
+    figure_slack : float
+        Pixels, >= 0: a point within this of the figure's mask is on the figure
+        (:mod:`~toonmotion.capture.track_figure`).
+    pull_reach : float
+        Times a joint's limit (the farthest it may move), >= 1: a hidden joint off the figure by
+        more than its limit is moved that far towards the figure when the figure is within this
+        many limits (farther, it is left where it is carried). Moved only onto a figure within
+        its limit, a hand that went behind the body stayed on the paper 30 px off for 10 frames;
+        the flat renders restarted every 30 frames went 179.6 -> 176.9 px summed on twos.
+    light_tolerance : float
+        Grey levels, >= 0: a frame is relit only where matching its light moves a colour between
+        its quartiles by more than this (:mod:`~toonmotion.capture.track_light`).
+    min_spread : float
+        Grey levels, >= 0: a channel whose quartiles lie closer than this has no contrast to
+        match, and is scaled to the reference's median.
+    light_border : float
+        Of the shorter side, 0 to 1: the light is read off a band this wide round the border.
+        Read off the whole frame it moved with a drawing swung across it, and two clips of the
+        drawings' footage went from 2.0 and 1.3 px to 42 and 35.
+    light_samples : int
+        About this many pixels of the band are read, >= 1.
+
+    Raises
+    ------
+    TrackingError
+        A value out of its range, in one line naming it.
+
+    Examples
+    --------
+    >>> ClipTuning().coast_steps, ClipTuning(held_level=24).held_level
+    (4, 24.0)
+    """
+
+    coast_steps: int = 4
+    held_level: float = 16.0
+    held_fraction: float = 1e-4
+    trusted: float = 0.1
+    figure_slack: float = 2.0
+    pull_reach: float = 4.0
+    light_tolerance: float = 6.0
+    min_spread: float = 8.0
+    light_border: float = 0.15
+    light_samples: int = 8000
+
+    def __post_init__(self) -> None:
+        for field in fields(self):
+            name, value = field.name, getattr(self, field.name)
+            if name in _WHOLE:
+                if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+                    raise TrackingError(f"{name} must be a whole number >= 1, got {value!r}")
+                object.__setattr__(self, name, int(value))
+                continue
+            if name in _FRACTIONS:
+                number = check_number(value, name, 0.0, "from 0 to 1")
+                if number > 1:
+                    raise TrackingError(f"{name} must be a finite number from 0 to 1, got {number!r}")
+            elif name == "pull_reach":
+                number = check_number(value, name, 1.0, ">= 1")
+            else:
+                number = check_number(value, name, 0.0, ">= 0")
+            object.__setattr__(self, name, number)
