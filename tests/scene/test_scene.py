@@ -5,7 +5,7 @@ depth order pixel-exact, and a scene with nothing in it leaves the drawing as it
 import numpy as np
 import pytest
 
-from toonmotion.api import composite_scene, render_elements, simulate_scene
+from toonmotion.api import composite_scene, render_elements, scene_warnings, simulate_scene
 from toonmotion.errors import SceneError
 from toonmotion.proxy3d.camera import PerspectiveCamera
 from toonmotion.proxy3d.proxy import Proxy
@@ -271,3 +271,13 @@ def test_a_string_thinner_than_a_pixel_is_drawn_as_an_unbroken_line():
         assert pieces == 1, t
         rows = np.flatnonzero(string.any(axis=1))
         assert np.ptp(rows) + 1 >= 0.8 * abs(held[t, 1] - top[t, 1]), t
+
+
+def test_balls_a_limb_sweeps_through_too_fast_are_warned_of_in_one_line():
+    """At 2 m/s the kick pushes the ball (2 mm into it); a leg sweeping at 60 m/s takes the 45 mm
+    ball 50 mm into its volume before contact pushes it out: a second look is asked for."""
+    assert scene_warnings(simulate_scene(kicking(speed=2.0), [Balls("m2", count=1)])) == []
+    warnings = scene_warnings(simulate_scene(kicking(speed=60.0), [Balls("m2", count=1)]))
+    assert len(warnings) == 1 and "\n" not in warnings[0]
+    assert warnings[0].startswith("balls sank up to 50 mm into the proxy's volumes, more than 50% of their "
+                                  "radius (45 mm)")

@@ -116,3 +116,16 @@ def test_antialias_sets_the_rays_a_pixel_and_one_ray_gives_hard_edges(files, tmp
     hard, soft = load_frames(tmp_path / "k1")[0], load_frames(tmp_path / "k3")[0]
     assert (hard != soft).any()  # the edges differ; the insides of the balls do not
     assert np.mean(np.any(hard != soft, axis=-1)) < 0.05
+
+
+def test_a_scene_whose_balls_sink_deep_says_so_after_writing(tmp_path, capsys):
+    proxy = kicking(T=8, speed=60.0)
+    save_proxy(tmp_path / "proxy.json", proxy)
+    (tmp_path / "frames").mkdir()
+    for t in range(proxy.frame_count):
+        save_png(tmp_path / "frames" / f"f_{t:03d}.png", figure_drawing(proxy, t))
+    out = tmp_path / "out.gif"
+    assert run_cli("scene", tmp_path / "proxy.json", "--frames", tmp_path / "frames", "--balls", "m2",
+                   "--ball-count", "1", "-o", out) == 0
+    err = capsys.readouterr().err
+    assert out.exists() and "balls sank up to" in err and len(err.strip().splitlines()) == 1

@@ -70,6 +70,7 @@ from toonmotion.api.scene3d import (
     composite_scene,
     render_elements,
     scene_passes,
+    scene_warnings,
     simulate_scene,
 )
 from toonmotion.capture.clip_tuning import ClipTuning

@@ -121,6 +121,8 @@ def scene_command(
     listed = " and ".join([", ".join(parts[:-1]), parts[-1]] if len(parts) > 1 else parts) or "nothing"
     typer.echo(f"simulated {listed} over {written} frames ({motion.substeps} steps each{deepest}) -> "
                f"{output}")
+    for warning in api.scene_warnings(motion):
+        options.warn(warning)
 
 
 def _opaque(frames):
