@@ -5,14 +5,9 @@ be, and when a frame's light is matched. :class:`ClipTuning`, given as
 
 from __future__ import annotations
 
-import numbers
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
-from toonmotion.capture.track_checks import check_number
-from toonmotion.errors import TrackingError
-
-_WHOLE = ("coast_steps", "light_samples")
-_FRACTIONS = ("held_fraction", "light_border")
+from toonmotion.capture.track_checks import at_least, check_ranges, share, whole
 
 
 @dataclass(frozen=True)
@@ -69,31 +64,16 @@ class ClipTuning:
     (4, 24.0)
     """
 
-    coast_steps: int = 4
-    held_level: float = 16.0
-    held_fraction: float = 1e-4
-    trusted: float = 0.1
-    figure_slack: float = 2.0
-    pull_reach: float = 4.0
-    light_tolerance: float = 6.0
-    min_spread: float = 8.0
-    light_border: float = 0.15
-    light_samples: int = 8000
+    coast_steps: int = whole(4)
+    held_level: float = at_least(0.0, 16.0)
+    held_fraction: float = share(1e-4)
+    trusted: float = at_least(0.0, 0.1)
+    figure_slack: float = at_least(0.0, 2.0)
+    pull_reach: float = at_least(1.0, 4.0)
+    light_tolerance: float = at_least(0.0, 6.0)
+    min_spread: float = at_least(0.0, 8.0)
+    light_border: float = share(0.15)
+    light_samples: int = whole(8000)
 
     def __post_init__(self) -> None:
-        for field in fields(self):
-            name, value = field.name, getattr(self, field.name)
-            if name in _WHOLE:
-                if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-                    raise TrackingError(f"{name} must be a whole number >= 1, got {value!r}")
-                object.__setattr__(self, name, int(value))
-                continue
-            if name in _FRACTIONS:
-                number = check_number(value, name, 0.0, "from 0 to 1")
-                if number > 1:
-                    raise TrackingError(f"{name} must be a finite number from 0 to 1, got {number!r}")
-            elif name == "pull_reach":
-                number = check_number(value, name, 1.0, ">= 1")
-            else:
-                number = check_number(value, name, 0.0, ">= 0")
-            object.__setattr__(self, name, number)
+        check_ranges(self)

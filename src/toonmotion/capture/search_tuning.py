@@ -7,16 +7,9 @@ for, how confident a match must be to count, and how colour is weighed against t
 from __future__ import annotations
 
 import math
-import numbers
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
-from toonmotion.capture.track_checks import check_number
-from toonmotion.errors import TrackingError
-
-# The fields that are a confidence (0 to 1); every other one is a positive number but `places` and
-# `max_hold`, whole numbers.
-_CONFIDENCES = ("coarse_confidence", "up_coarse_confidence", "reacquire_confidence", "weak_confidence",
-                "anchor_likeness")
+from toonmotion.capture.track_checks import above, at_least, check_ranges, share, whole
 
 
 @dataclass(frozen=True)
@@ -115,42 +108,25 @@ class SearchTuning:
     (64, 8)
     """
 
-    search_fraction: float = 0.5
-    min_search: float = 8.0
-    max_hold: int = 3
-    max_widen: float = 3.0
-    smoothness: float = 1.5
-    widen_step: float = 0.5
-    span_step: float = math.radians(45)
-    coarse_confidence: float = 0.1
-    places: int = 64
-    up_coarse_confidence: float = 0.3
-    reacquire_confidence: float = 0.35
-    reach_slack: float = 1.2
-    weak_confidence: float = 0.5
-    weak_reach: float = 0.25
-    refit_turn: float = math.radians(5)
-    ambiguous_spread: float = 0.125
-    textured_colour_weight: float = 16.0
-    anchor_likeness: float = 0.8
-    bone_weight: float = 1.0
+    search_fraction: float = above(0.0, 0.5)
+    min_search: float = at_least(1.0, 8.0)
+    max_hold: int = whole(3)
+    max_widen: float = at_least(1.0, 3.0)
+    smoothness: float = above(0.0, 1.5)
+    widen_step: float = at_least(0.0, 0.5)
+    span_step: float = above(0.0, math.radians(45))
+    coarse_confidence: float = share(0.1)
+    places: int = whole(64)
+    up_coarse_confidence: float = share(0.3)
+    reacquire_confidence: float = share(0.35)
+    reach_slack: float = above(0.0, 1.2)
+    weak_confidence: float = share(0.5)
+    weak_reach: float = above(0.0, 0.25)
+    refit_turn: float = above(0.0, math.radians(5))
+    ambiguous_spread: float = above(0.0, 0.125)
+    textured_colour_weight: float = above(0.0, 16.0)
+    anchor_likeness: float = share(0.8)
+    bone_weight: float = at_least(0.0, 1.0)
 
     def __post_init__(self) -> None:
-        for field in fields(self):
-            name, value = field.name, getattr(self, field.name)
-            if name in ("places", "max_hold"):
-                if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-                    raise TrackingError(f"{name} must be a whole number >= 1, got {value!r}")
-                object.__setattr__(self, name, int(value))
-                continue
-            if name in _CONFIDENCES:
-                number = check_number(value, name, 0.0, "from 0 to 1")
-                if number > 1:
-                    raise TrackingError(f"{name} must be a finite number from 0 to 1, got {number!r}")
-            elif name in ("widen_step", "bone_weight"):
-                number = check_number(value, name, 0.0, ">= 0")
-            elif name in ("min_search", "max_widen"):
-                number = check_number(value, name, 1.0, ">= 1")
-            else:
-                number = check_number(value, name, 0.0, "> 0", strict=True)
-            object.__setattr__(self, name, number)
+        check_ranges(self)

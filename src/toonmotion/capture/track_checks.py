@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Mapping, Sequence
+from dataclasses import field, fields
 from typing import Any
 
 import numpy as np
@@ -138,3 +139,47 @@ def check_number(value: object, what: str, bound: float, rule: str, *, strict: b
     if not math.isfinite(number) or number < bound or (strict and number == bound):
         raise TrackingError(f"{what} must be a finite number {rule}, got {number!r}")
     return number
+
+
+def whole(default: int) -> Any:
+    """A settings field that is a whole number >= 1 (:func:`check_ranges`)."""
+    return field(default=default, metadata={"whole": True})
+
+
+def share(default: float) -> Any:
+    """A settings field from 0 to 1, a confidence or a fraction (:func:`check_ranges`)."""
+    return field(default=default, metadata={"least": 0.0, "most": 1.0})
+
+
+def at_least(bound: float, default: float) -> Any:
+    """A settings field that is a number >= ``bound`` (:func:`check_ranges`)."""
+    return field(default=default, metadata={"least": bound})
+
+
+def above(bound: float, default: float) -> Any:
+    """A settings field that is a number > ``bound`` (:func:`check_ranges`)."""
+    return field(default=default, metadata={"least": bound, "strict": True})
+
+
+def check_ranges(settings: Any) -> None:
+    """Check a frozen settings dataclass's fields against the ranges they were declared with
+    (:func:`whole`, :func:`share`, :func:`at_least`, :func:`above`), storing each as an ``int``
+    or a ``float``; a one-line :class:`TrackingError` names the first out of its range."""
+    for item in fields(settings):
+        name, value = item.name, getattr(settings, item.name)
+        number: int | float
+        if item.metadata.get("whole"):
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+                raise TrackingError(f"{name} must be a whole number >= 1, got {value!r}")
+            number = int(value)
+        elif "least" in item.metadata:
+            least, most = item.metadata["least"], item.metadata.get("most")
+            strict = bool(item.metadata.get("strict"))
+            bound = f"{'>' if strict else '>='} {least:g}"
+            rule = f"from {least:g} to {most:g}" if most is not None else bound
+            number = check_number(value, name, least, rule, strict=strict)
+            if most is not None and number > most:
+                raise TrackingError(f"{name} must be a finite number {rule}, got {number!r}")
+        else:
+            continue
+        object.__setattr__(settings, name, number)

@@ -28,7 +28,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
-from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.capture.joint_plan import UPDATE_CONFIDENCE, VISIBLE_CONFIDENCE, Plans, Templates
 from toonmotion.capture.patches import distinct_size
 from toonmotion.capture.template_context import Pyramid, at_level, cut_templates
@@ -292,13 +291,12 @@ class _Arrays:
 
 
 def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, history, begin, stop,
-         progress, figure=None, on_figure=None, options=True, own=None, tuning=None, clip=None):
+         progress, figure=None, on_figure=None, options=True, own=None, *, tuning, clip):
     """Track frames ``begin`` to ``stop - 1``; frame ``begin - 1`` is tracked; write into ``out``
     (with ``options``, the other places each joint's search found too). A held drawing is told on
     ``own``, the footage's own frames where ``frames`` are halved (:func:`_held_on`); ``tuning``
     is the search's (:class:`~toonmotion.capture.search_tuning.SearchTuning`), ``clip`` the
     reading of the clip's (:class:`~toonmotion.capture.clip_tuning.ClipTuning`)."""
-    clip = ClipTuning() if clip is None else clip
     P, C = out.positions, out.confidence
     drawings = _drawings(out, begin, clip.coast_steps)
     search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
