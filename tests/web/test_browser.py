@@ -21,48 +21,9 @@ from toonmotion import api
 from toonmotion.rig.pipeline import rig_drawing
 from toonmotion.rig.pose import Pose
 from toonmotion.samples import sample_character
-from toonmotion.testing.browser import CHROMIUM_ARGS, chromium_path
 from toonmotion.web.background import serving
 
 GOLDEN = Path(__file__).parent / "golden"
-
-
-def _chromium():
-    found = chromium_path()
-    if found is None:
-        if os.environ.get("CI") == "true":
-            pytest.fail(
-                "Debian's chromium is missing under CI; make test installs it (apt-get install chromium)"
-            )
-        pytest.skip("the editor's browser tests need Debian's chromium (apt-get install chromium)")
-    return found
-
-
-@pytest.fixture(scope="module")
-def editor(tmp_path_factory):
-    """The editor serving the half-size sample character: ``(url, project folder)``."""
-    drawing, skeleton = sample_character(scale=0.5)
-    folder = tmp_path_factory.mktemp("editor") / "hero"
-    api.save_project(folder, rig_drawing(drawing, skeleton=skeleton))
-    with serving(folder) as served:
-        yield served.page, folder
-
-
-@pytest.fixture(scope="module")
-def page(editor):
-    executable = _chromium()
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=executable, args=list(CHROMIUM_ARGS))
-        page = browser.new_page(viewport={"width": 1280, "height": 800})
-        errors: list[str] = []
-        page.on("pageerror", lambda error: errors.append(str(error)))
-        page.goto(editor[0])
-        page.wait_for_function("document.getElementById('status').textContent === 'ready'", timeout=30_000)
-        page.errors = errors
-        yield page
-        browser.close()
 
 
 def _stage(page) -> np.ndarray:
