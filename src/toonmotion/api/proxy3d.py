@@ -166,8 +166,10 @@ def lift_animation(character: Character, animation: Animation, prior: BvhClip, *
 
     Examples
     --------
-    ``tests/api/test_lift_animation.py`` lifts the bundled character's animation with a shared
-    motion-capture clip; the result equals :func:`lift_proxy` given the same motion and frames.
+    See :func:`lift_proxy`, whose example lifts markers with a clip built in place; a rigged
+    character's animation needs a clip with its joints (``tests/proxy3d/test_lift_animation.py``
+    lifts the bundled character with a CMU jump, and checks the result is :func:`lift_proxy`'s on
+    the same motion and frames).
     """
     for given in ("frames", "markers"):
         if given in options:
