@@ -5,7 +5,8 @@ too, ``{"id": ..., "type": "error", "message": "..."}``, and changes nothing. :f
 a message's text into its model, or raises a one-line :class:`~toonmotion.errors.MessageError`
 saying which field is wrong and what it must be; fields the model does not know are ignored, so
 an older page's extra fields do no harm. What each message does, and its reply, is
-:mod:`toonmotion.web.session`'s and :mod:`toonmotion.web.slow_requests`'s.
+:mod:`toonmotion.web.session`'s and :mod:`toonmotion.web.slow_requests`'s. The 3D panel's messages
+(``proxy``, ``lift``, ``scene``, ``proxy_export``) are :mod:`toonmotion.web.proxy_messages`'.
 
 * ``pose``: every joint's ``positions`` in the skeleton's order and optional fine-tuning
   ``edits`` (thesis 3.5) in the key-frames file's form (``{"kind": "curve", "points": [...]}``
@@ -311,6 +312,14 @@ MODELS: dict[str, type[Message]] = {
 }
 
 
+def all_models() -> dict[str, type[Message]]:
+    """Every message by its type: :data:`MODELS` and the panels' own (the 3D panel's,
+    :mod:`toonmotion.web.proxy_messages`, whose models build on this module's)."""
+    from toonmotion.web.proxy_messages import PROXY_MODELS
+
+    return {**MODELS, **PROXY_MODELS}
+
+
 def parse(text: str) -> dict[str, Any]:
     """A message's JSON object, or :class:`MessageError` (too long, not JSON, not an object)."""
     if len(text) > MAX_MESSAGE_BYTES:
@@ -339,9 +348,10 @@ def read(message: dict[str, Any]) -> Message:
         An unknown type, or the first field that is not what the protocol says, in one line.
     """
     kind = message.get("type")
-    model = MODELS.get(kind) if isinstance(kind, str) else None
+    every = all_models()
+    model = every.get(kind) if isinstance(kind, str) else None
     if model is None:
-        sent = ", ".join(map(repr, MODELS))
+        sent = ", ".join(map(repr, every))
         raise MessageError(f"unknown message type {str(kind)[:40]!r}; the editor sends {sent}")
     try:
         return model.model_validate(message)

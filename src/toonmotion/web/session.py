@@ -40,6 +40,7 @@ from toonmotion.web import messages
 from toonmotion.web.editing import SNAPSHOTS, Editing
 from toonmotion.web.history import History
 from toonmotion.web.messages import bug, one_line, skeleton_of
+from toonmotion.web.proxy_requests import PROXY_HANDLERS
 from toonmotion.web.wire import encode_vertices
 
 
@@ -348,6 +349,7 @@ _HANDLERS: dict[str, Handler] = {
     "frame": _frame_of_animation,
     "rig": _rig,
     "retarget": _retarget,
+    **PROXY_HANDLERS,
 }
 
 
