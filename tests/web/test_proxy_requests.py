@@ -123,7 +123,8 @@ def test_the_proxy_and_the_scene_export_and_download(lifted, kind, files):
     folder, client, _, _ = lifted
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         if kind == "mp4":
-            _ask(socket, {"type": "scene", "elements": [{"kind": "balls", "markers": ["left_foot"], "count": 2}]})
+            balls = {"kind": "balls", "markers": ["left_foot"], "count": 2}
+            _ask(socket, {"type": "scene", "elements": [balls]})
         reply, _ = _ask(socket, {"type": "proxy_export", "format": kind, "name": "wave"})
     assert reply["files"] == [f"exports/{name}" for name in files], reply
     for name in files:
@@ -170,9 +171,11 @@ def test_a_scene_is_refused_in_one_line_when_its_elements_or_the_keys_do_not_fit
 def test_a_clip_sent_to_the_project_becomes_a_prior_and_a_bad_one_is_not_kept(editable, library):
     folder, client = editable
     headers = {"X-Toonmotion-Token": TOKEN}
-    sent = client.put("/api/priors?name=my walk!.bvh", content=(library / PRIOR).read_bytes(), headers=headers)
+    clip = (library / PRIOR).read_bytes()
+    sent = client.put("/api/priors?name=my walk!.bvh", content=clip, headers=headers)
     assert sent.status_code == 200 and sent.json()["sent"] == "project/my_walk.bvh"
     assert sent.json()["priors"][0] == "project/my_walk.bvh"
     bad = client.put("/api/priors?name=notes.bvh", content=b"HIERARCHY\nnonsense", headers=headers)
-    assert bad.status_code == 400 and bad.json()["error"].startswith("notes.bvh") and "\n" not in bad.json()["error"]
+    said = bad.json()["error"]
+    assert bad.status_code == 400 and said.startswith("notes.bvh") and "\n" not in said
     assert sorted(p.name for p in (folder / "proxy3d" / "priors").iterdir()) == ["my_walk.bvh"]

@@ -76,13 +76,14 @@ from pydantic import (
     StrictStr,
     ValidationError,
 )
-from pydantic_core import ErrorDetails
 
 from toonmotion import limits
 from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.errors import MessageError
 from toonmotion.io.schema import Float, Point, describe, explained, problem
 from toonmotion.rig.skeleton import Skeleton
+from toonmotion.web.message_base import Message, must, required
+from toonmotion.web.proxy_messages import PROXY_MODELS
 
 # A WebSocket message longer than this is refused unread (a pose of 10,000 joints fits easily).
 MAX_MESSAGE_BYTES = 1_000_000
@@ -90,22 +91,6 @@ MAX_MESSAGE_BYTES = 1_000_000
 # atlas are both JSON, so they carry a second suffix (their .atlas and .png are written beside them).
 EXPORT_FORMATS = {"gif": ".gif", "mp4": ".mp4", "png": "", "apng": ".apng", "webp": ".webp", "webm": ".webm",
                   "glb": ".glb", "spine": ".spine.json", "sheet": ".sheet.json"}
-
-
-def _got(value: Any) -> str:
-    return repr(value)[:40]
-
-
-def must(text: str, *, inner: str | None = None) -> Any:
-    """A field whose every problem reads ``"{text}, got {value}"``; a problem inside one of its
-    items reads ``"{inner}, got {item}"`` when ``inner`` is given."""
-
-    def say(value: Any, errors: list[ErrorDetails]) -> str:
-        if inner is not None and len(errors[0]["loc"]) >= 2:
-            return f"{inner}, got {_got(errors[0]['input'])}"
-        return f"{text}, got {_got(value)}"
-
-    return explained(say)
 
 
 def _always(text: str) -> Any:
@@ -126,12 +111,6 @@ def _one_layer(by: int) -> int:
     return by
 
 
-def required() -> Any:
-    """A field the message must give: missing, it is validated as null, so its own message says so
-    (``'joint' must name the joint dragged, got None``) rather than pydantic's."""
-    return Field(default=None, validate_default=True)
-
-
 Frame = Annotated[StrictInt, Field(ge=0, le=2**31 - 1)]
 Byte = Annotated[StrictInt, Field(ge=0, le=255)]
 Background = Annotated[tuple[Byte, Byte, Byte] | None,
@@ -140,15 +119,6 @@ Positions = Annotated[list[Point] | None,
                       must("'positions' must list [x, y] pairs of numbers, one for each joint")]
 Edits = Annotated[list[Any] | None, must("'edits' must be a list of edits")]
 Flag = StrictBool
-
-
-class Message(BaseModel):
-    """What every message has: its ``type`` and an ``id`` to echo back."""
-
-    model_config = ConfigDict(extra="ignore", frozen=True, allow_inf_nan=False)
-
-    type: str
-    id: int | str | None = None
 
 
 class Exaggerated(Message):
@@ -308,16 +278,8 @@ MODELS: dict[str, type[Message]] = {
     "pose": Pose, "drag": Drag, "sketch": Sketch, "overlaps": Overlaps, "depth": Depth, "correct": Correct,
     "undo": Message, "redo": Message, "set_key": SetKey, "delete_key": DeleteKey, "move_key": MoveKey,
     "timing": Timing, "frame": ShowFrame, "rig": Rig, "retarget": Message, "track": Track,
-    "suggest": Suggest, "open_drawing": OpenDrawing, "export": Export, "cancel": Cancel,
+    "suggest": Suggest, "open_drawing": OpenDrawing, "export": Export, "cancel": Cancel, **PROXY_MODELS,
 }
-
-
-def all_models() -> dict[str, type[Message]]:
-    """Every message by its type: :data:`MODELS` and the panels' own (the 3D panel's,
-    :mod:`toonmotion.web.proxy_messages`, whose models build on this module's)."""
-    from toonmotion.web.proxy_messages import PROXY_MODELS
-
-    return {**MODELS, **PROXY_MODELS}
 
 
 def parse(text: str) -> dict[str, Any]:
@@ -348,10 +310,9 @@ def read(message: dict[str, Any]) -> Message:
         An unknown type, or the first field that is not what the protocol says, in one line.
     """
     kind = message.get("type")
-    every = all_models()
-    model = every.get(kind) if isinstance(kind, str) else None
+    model = MODELS.get(kind) if isinstance(kind, str) else None
     if model is None:
-        sent = ", ".join(map(repr, every))
+        sent = ", ".join(map(repr, MODELS))
         raise MessageError(f"unknown message type {str(kind)[:40]!r}; the editor sends {sent}")
     try:
         return model.model_validate(message)

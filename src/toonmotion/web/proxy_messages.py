@@ -26,7 +26,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, StrictBool, StrictInt, StrictStr
 
-from toonmotion.web.messages import Message, must, required
+from toonmotion.web.message_base import Message, must, required
 
 ELEMENT_KINDS = ("balloon", "balls", "scarf", "skirt", "cape", "rain")
 # What the 3D panel exports, and each one's file name after the export's name.
