@@ -3,7 +3,8 @@ other message (:mod:`toonmotion.web.messages`, whose ``MODELS`` holds them too).
 :mod:`toonmotion.web.proxy_requests`'s; the files it keeps are under the project's ``proxy3d/``.
 
 * ``proxy``: what the panel shows again after a reload: the priors to choose from, and the proxy
-  and scene last made. Reply ``{"type": "proxy", "priors", "lift", "proxy", "scene"}``.
+  and scene last made. Reply ``{"type": "proxy", "priors", "lift", "proxy", "scene",
+  "timeline"}`` (``timeline``: the scene the Timeline plays, as ``GET /api/project``'s ``scene``).
 * ``lift``: the key-frames' animation lifted into 3D (:func:`toonmotion.api.lift_animation`)
   with the motion-capture ``prior`` (a name from ``priors``), from the ``view``
   [azimuth, elevation] in degrees (null: searched), with ``up`` (degrees clockwise the world's up

@@ -5,8 +5,9 @@ make.
 
 What the panel makes is kept in the project folder's ``proxy3d/`` (:data:`PROXY_DIR`), so a
 reload or a restart shows it again: ``proxy.json`` (the proxy, what ``toonmotion scene`` reads),
-``lift.json`` (what it was lifted with, what was found, and the warnings), ``scene.json`` and
-``scene/NNNN.png`` (the composited frames), and ``priors/`` (clips sent with ``PUT /api/priors``).
+``lift.json`` (what it was lifted with, what was found, and the warnings), ``frames/NNNN.png``
+(the animation's frames it was lifted from), ``scene.json`` and ``scene/NNNN.png`` (the
+composited frames), and ``priors/`` (clips sent with ``PUT /api/priors``).
 The other priors are the ``.bvh`` files of the library folder the editor was started with
 (``toonmotion edit --mocap DIR``, or ``TOONMOTION_MOCAP``), listed by the server and named by
 the page only from that list.
@@ -17,7 +18,7 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +29,7 @@ from toonmotion.errors import ProxyError, SceneError
 from toonmotion.io.atomic import write_text
 from toonmotion.io.bvh import load_bvh, save_bvh
 from toonmotion.io.exchange.proxy_gltf import save_proxy_glb
+from toonmotion.io.frames import lay_on
 from toonmotion.io.image import load_image, save_png
 from toonmotion.io.proxy_json import load_proxy, save_proxy
 from toonmotion.io.video import save_animation
@@ -45,6 +47,7 @@ PROXY_FILE = "proxy.json"
 LIFT_FILE = "lift.json"
 SCENE_FILE = "scene.json"
 SCENE_FRAMES = "scene"
+DRAWN_FRAMES = "frames"
 # A prior's name in the list: where it is from, then its file's name.
 LIBRARY, UPLOADED = "library", "project"
 
@@ -83,7 +86,18 @@ def state(editing: Editing) -> dict[str, Any]:
         proxy = proxy_view(load_proxy(file))
         lifted["stale"] = lifted.get("keys") != _keys_digest(editing)
         scene = _read_json(editing, SCENE_FILE)
-    return {"type": "proxy", "priors": priors(editing), "lift": lifted, "proxy": proxy, "scene": scene}
+    return {"type": "proxy", "priors": priors(editing), "lift": lifted, "proxy": proxy, "scene": scene,
+            "timeline": scene_summary(editing)}
+
+
+def scene_summary(editing: Editing) -> dict[str, Any] | None:
+    """The scene the Timeline can play over the key-frames: ``{"frames", "fps", "made"}`` (when it
+    was made, for the page's cache), or None without one or once the key-frames have changed."""
+    said, lifted = _read_json(editing, SCENE_FILE), _read_json(editing, LIFT_FILE)
+    if said is None or lifted is None or lifted.get("keys") != _keys_digest(editing):
+        return None
+    made = editing.path(PROXY_DIR, SCENE_FILE).stat().st_mtime_ns
+    return {"frames": said["frames"], "fps": said["fps"], "made": made}
 
 
 def proxy_view(proxy: Proxy) -> dict[str, Any]:
@@ -108,13 +122,15 @@ def lift(editing: Editing, message: Lift, progress: Progress) -> dict[str, Any]:
     proxy, report = api.lift_animation(
         character, animation, clip, view=message.view, up=message.up, hold_elevation=message.hold_elevation,
         ground=message.ground, progress=lambda stage, index, count: progress(index, count))
-    warnings = api.lift_warnings(proxy, report)
+    warnings = [_in_panel_words(said) for said in api.lift_warnings(proxy, report)]
     if report.left_out:
         warnings.append(f"left out {', '.join(report.left_out)}: no joint of the prior matches them")
     folder = editing.path(PROXY_DIR)
     folder.mkdir(exist_ok=True)
     save_proxy(folder / PROXY_FILE, proxy)
     _clear_scene(editing)  # its frames were another proxy's
+    drawn = lay_on(api.animation_frames(character, animation, proxy)[0])
+    _save_frames(editing, DRAWN_FRAMES, drawn)
     write_text(folder / LIFT_FILE, json.dumps({
         "prior": message.prior, "view": message.view, "up": message.up,
         "hold_elevation": message.hold_elevation, "ground": message.ground,
@@ -138,15 +154,8 @@ def scene(editing: Editing, message: Scene, progress: Progress) -> dict[str, Any
     made = api.composite_scene(proxy, pictures, motion, shading=message.shading, background=(255, 255, 255),
                                limbs=limbs, antialias=message.antialias,
                                progress=lambda stage, index, count: progress(index, count))
-    folder = editing.path(PROXY_DIR, SCENE_FRAMES + ".new")
-    shutil.rmtree(folder, ignore_errors=True)
-    folder.mkdir(parents=True)
-    count = 0
-    for t, frame in enumerate(made):
-        save_png(folder / f"{t:04d}.png", frame)
-        count += 1
     _clear_scene(editing)
-    folder.rename(editing.path(PROXY_DIR, SCENE_FRAMES))
+    count = _save_frames(editing, SCENE_FRAMES, made)
     said = {"elements": [e.model_dump(exclude={"type", "id"}) for e in message.elements], "frames": count,
             "fps": proxy.fps, "warnings": api.scene_warnings(motion), "shading": message.shading,
             "antialias": message.antialias}
@@ -236,6 +245,21 @@ def _scene_frames(editing: Editing) -> list[np.ndarray]:
     return [load_image(folder / f"{t:04d}.png")[..., :3] for t in range(_said_scene(editing)["frames"])]
 
 
+def _save_frames(editing: Editing, name: str, frames: Iterable[np.ndarray]) -> int:
+    """Save ``frames`` as ``proxy3d/{name}/NNNN.png``, in place of any there only once all are
+    written; how many."""
+    folder = editing.path(PROXY_DIR, name + ".new")
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True)
+    count = 0
+    for t, frame in enumerate(frames):
+        save_png(folder / f"{t:04d}.png", frame)
+        count += 1
+    shutil.rmtree(editing.path(PROXY_DIR, name), ignore_errors=True)
+    folder.rename(editing.path(PROXY_DIR, name))
+    return count
+
+
 def _clear_scene(editing: Editing) -> None:
     editing.path(PROXY_DIR, SCENE_FILE).unlink(missing_ok=True)
     shutil.rmtree(editing.path(PROXY_DIR, SCENE_FRAMES), ignore_errors=True)
@@ -255,6 +279,20 @@ def _keys_digest(editing: Editing) -> str | None:
     """What the key-frames were when the proxy was lifted: a lift is the animation of those."""
     text = editing.keys_text()
     return None if text is None else hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+# What the lift's warnings ask of the command line, as the 3D panel asks it.
+_PANEL_WORDS = (
+    ("give --hold-elevation (with --view AZ,EL)", "tick 'Keep the view's elevation' (view set on the gizmo)"),
+    ("give --view AZ,EL", "set the view on the gizmo"),
+    ("give --up 0", "turn the gizmo's up dial to 0"),
+)
+
+
+def _in_panel_words(said: str) -> str:
+    for flags, words in _PANEL_WORDS:
+        said = said.replace(flags, words)
+    return said
 
 
 def _rounded(values: Any) -> Any:

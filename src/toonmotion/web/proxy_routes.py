@@ -1,5 +1,6 @@
 """The 3D panel's HTTP requests: a motion-capture clip sent as a prior (``PUT /api/priors``), kept
-in the project's ``proxy3d/priors/``, and the scene's composited frames (``GET
+in the project's ``proxy3d/priors/``; the animation's frames a proxy was lifted from (``GET
+/api/proxy/frames/{index}.png``) and the scene's composited frames (``GET
 /api/scene/{index}.png``). Files are named by the server: a prior's name is cut to a safe stem."""
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from starlette.exceptions import HTTPException
 from toonmotion.errors import ToonmotionError
 from toonmotion.io.bvh import load_bvh
 from toonmotion.web.editing import Editing
-from toonmotion.web.proxy_requests import PRIORS, PROXY_DIR, SCENE_FRAMES, UPLOADED, priors
+from toonmotion.web.proxy_requests import DRAWN_FRAMES, PRIORS, PROXY_DIR, SCENE_FRAMES, UPLOADED, priors
 from toonmotion.web.uploads import as_sent, receive_body
 
 # What a sent prior's file is called in the project: its own name's letters, digits, '-' and '_'.
@@ -47,8 +48,17 @@ def add_proxy_routes(app: FastAPI, editing: Editing) -> None:
 
     @app.get("/api/scene/{index}.png")
     def scene_frame(index: int) -> FileResponse:
-        editing.check_links()
-        file = editing.path(PROXY_DIR, SCENE_FRAMES, f"{index:04d}.png")
-        if index < 0 or not file.is_file():
-            raise HTTPException(404, f"no scene frame {index}")
-        return FileResponse(file, media_type="image/png")
+        return _frame(editing, SCENE_FRAMES, index, "scene frame")
+
+    @app.get("/api/proxy/frames/{index}.png")
+    def drawn_frame(index: int) -> FileResponse:
+        """The animation's frame ``index`` the proxy was lifted from (its camera's pixels)."""
+        return _frame(editing, DRAWN_FRAMES, index, "lifted frame")
+
+
+def _frame(editing: Editing, folder: str, index: int, what: str) -> FileResponse:
+    editing.check_links()
+    file = editing.path(PROXY_DIR, folder, f"{index:04d}.png")
+    if index < 0 or not file.is_file():
+        raise HTTPException(404, f"no {what} {index}")
+    return FileResponse(file, media_type="image/png")

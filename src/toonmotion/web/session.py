@@ -40,7 +40,7 @@ from toonmotion.web import messages
 from toonmotion.web.editing import SNAPSHOTS, Editing
 from toonmotion.web.history import History
 from toonmotion.web.messages import bug, one_line, skeleton_of
-from toonmotion.web.proxy_requests import PROXY_HANDLERS
+from toonmotion.web.proxy_requests import PROXY_HANDLERS, scene_summary
 from toonmotion.web.wire import encode_vertices
 
 
@@ -66,6 +66,7 @@ def describe(editing: Editing) -> dict[str, Any]:
         "keys": keys(editing.timeline),
         "history": editing.history.counts(),
         "capture": editing.capture_page,
+        "scene": scene_summary(editing),
     }
 
 

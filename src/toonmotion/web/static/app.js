@@ -10,8 +10,9 @@ import * as timelinePanel from "./timeline_panel.js";
 import * as exaggeratePanel from "./exaggerate_panel.js";
 import * as exportPanel from "./export_panel.js";
 import * as capturePanel from "./capture_panel.js";
+import * as proxyPanel from "./proxy_panel.js";
 
-const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, capturePanel, exportPanel];
+const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, capturePanel, proxyPanel, exportPanel];
 
 const token = new URLSearchParams(location.search).get("token") || "";
 
