@@ -8,7 +8,8 @@ other message (:mod:`toonmotion.web.messages`, whose ``MODELS`` holds them too).
 * ``lift``: the key-frames' animation lifted into 3D (:func:`toonmotion.api.lift_animation`)
   with the motion-capture ``prior`` (a name from ``priors``), from the ``view``
   [azimuth, elevation] in degrees (null: searched), with ``up`` (degrees clockwise the world's up
-  leans in the picture), ``hold_elevation`` and ``ground`` ("prior" or "feet"); off the event
+  leans in the picture), ``hold_elevation``, ``ground`` ("prior" or "feet") and ``segment``
+  ([start, stop]: the prior's frames to use, stop null for its end); off the event
   loop with progress. Saved as ``proxy3d/proxy.json`` (what ``toonmotion scene`` reads). Reply as
   ``proxy``'s.
 * ``scene``: the ``elements`` (each ``{"kind": "balloon" | "balls" | "scarf" | "skirt" | "cape" |
@@ -34,6 +35,7 @@ ELEMENT_KINDS = ("balloon", "balls", "scarf", "skirt", "cape", "rain")
 PROXY_EXPORTS = {"glb": ".glb", "bvh": ".bvh", "mp4": ".mp4", "gif": ".gif", "png": "", "passes": ""}
 
 Angle = Annotated[float, Field(ge=-360.0, le=360.0)]
+Count = Annotated[StrictInt, Field(ge=0, le=10_000_000)]
 
 
 class Lift(Message):
@@ -45,6 +47,9 @@ class Lift(Message):
     up: Annotated[Angle, must("'up' must be degrees, -360 to 360")] = 0.0
     hold_elevation: Annotated[StrictBool, must("'hold_elevation' must be true or false")] = False
     ground: Annotated[Literal["prior", "feet"], must("'ground' must be 'prior' or 'feet'")] = "prior"
+    segment: Annotated[tuple[Count, Count | None],
+                       must("'segment' must be [start, stop], the prior's frames to use (stop null: its end)")
+                       ] = (0, None)
 
 
 class SceneElement(Message):

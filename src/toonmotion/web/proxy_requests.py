@@ -121,7 +121,8 @@ def lift(editing: Editing, message: Lift, progress: Progress) -> dict[str, Any]:
         character, animation = editing.character, editing.animation
     proxy, report = api.lift_animation(
         character, animation, clip, view=message.view, up=message.up, hold_elevation=message.hold_elevation,
-        ground=message.ground, progress=lambda stage, index, count: progress(index, count))
+        ground=message.ground, segment=message.segment,
+        progress=lambda stage, index, count: progress(index, count))
     warnings = [_in_panel_words(said) for said in api.lift_warnings(proxy, report)]
     if report.left_out:
         warnings.append(f"left out {', '.join(report.left_out)}: no joint of the prior matches them")
@@ -133,7 +134,7 @@ def lift(editing: Editing, message: Lift, progress: Progress) -> dict[str, Any]:
     _save_frames(editing, DRAWN_FRAMES, drawn)
     write_text(folder / LIFT_FILE, json.dumps({
         "prior": message.prior, "view": message.view, "up": message.up,
-        "hold_elevation": message.hold_elevation, "ground": message.ground,
+        "hold_elevation": message.hold_elevation, "ground": message.ground, "segment": message.segment,
         "found": [round(report.azimuth, 2), round(report.elevation, 2)],
         "searched": report.view_found, "camera_px": round(report.camera_px, 3), "warnings": warnings,
         "keys": _keys_digest(editing)}, indent=1))

@@ -28,7 +28,10 @@ export function mount(ctx) {
 
   side.innerHTML = `<h2>3D</h2>
     <p><label>Prior <select id="proxy-prior" style="max-width: 100%"></select></label><br>
-      <label>or send a clip <input id="proxy-prior-file" type="file" accept=".bvh"></label></p>
+      <label>or send a clip <input id="proxy-prior-file" type="file" accept=".bvh"></label><br>
+      <span title="The part of the clip that moves like the drawing (blank: from its start, to its end)">Its frames
+        <input id="proxy-from" type="number" min="0" placeholder="start" style="width: 4.5em" aria-label="the prior's first frame">
+        to <input id="proxy-to" type="number" min="0" placeholder="end" style="width: 4.5em" aria-label="the prior's frame to stop before"></span></p>
     <p><canvas id="proxy-gizmo" style="width: 220px; height: 190px; touch-action: none; cursor: grab"
        aria-label="view gizmo: drag the camera round the figure; drag the dial for the world's up"></canvas><br>
       <label><input id="proxy-search" type="checkbox"> Search the view</label><br>
@@ -134,6 +137,9 @@ export function mount(ctx) {
       element("proxy-search", HTMLInputElement).checked = lift.view === null;
       element("proxy-ground", HTMLSelectElement).value = lift.ground;
       element("proxy-hold", HTMLInputElement).checked = lift.hold_elevation;
+      const [from, to] = lift.segment || [0, null];
+      element("proxy-from", HTMLInputElement).value = from ? String(from) : "";
+      element("proxy-to", HTMLInputElement).value = to === null ? "" : String(to);
       view = { azimuth: Math.round(lift.found[0]), elevation: Math.round(lift.found[1]), up: lift.up };
       gizmo.set(view);
       element("proxy-found", HTMLParagraphElement).textContent = `view ${lift.found[0]}°, ${lift.found[1]}° (${lift.searched ? "searched" : "given"}), camera fit ${lift.camera_px} px`
@@ -213,9 +219,11 @@ export function mount(ctx) {
     const prior = element("proxy-prior", HTMLSelectElement).value;
     if (!prior) return showError("choose a prior: send a .bvh clip, or start the editor with --mocap DIR");
     const searched = element("proxy-search", HTMLInputElement).checked;
+    const from = element("proxy-from", HTMLInputElement).value, to = element("proxy-to", HTMLInputElement).value;
     const reply = await slow({ type: "lift", prior, view: searched ? null : [view.azimuth, view.elevation], up: view.up,
                                ground: element("proxy-ground", HTMLSelectElement).value,
-                               hold_elevation: element("proxy-hold", HTMLInputElement).checked }, "lifting");
+                               hold_elevation: element("proxy-hold", HTMLInputElement).checked,
+                               segment: [from ? Number(from) : 0, to ? Number(to) : null] }, "lifting");
     if (reply) { shown(reply); status(`lifted ${reply.proxy.names.length} markers over ${reply.proxy.points.length} frames`); }
   };
   element("proxy-simulate", HTMLButtonElement).onclick = async () => {
