@@ -198,6 +198,7 @@ export function mount(ctx) {
     const bar = element("proxy-progress", HTMLProgressElement), cancel = element("proxy-cancel", HTMLButtonElement);
     bar.hidden = cancel.hidden = false;
     bar.value = 0;
+    showError(""); // the last failure's message goes as the next try starts
     status(`${doing}…`);
     try {
       running = live.request(message, (p) => { bar.max = Math.max(1, p.count); bar.value = p.index; });
