@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.clip_tuning import ClipTuning
+from toonmotion.capture.figure_tuning import FigureTuning
 from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_checks import (
@@ -123,6 +124,11 @@ class TrackSettings:
         How a joint's templates are matched and the match read: confidence and its bars, the
         turns tried, templates' size and texture, the wider view
         (:class:`~toonmotion.capture.match_tuning.MatchTuning`).
+    cutout : FigureTuning
+        How the figure the joints are held to is found on a flat colour (``figure``): its
+        threshold's range (:class:`~toonmotion.capture.figure_tuning.FigureTuning`, which the
+        functions that suggest joints take too). Read by
+        :func:`~toonmotion.capture.footage.capture_motion`.
     """
 
     search: float | None = None
@@ -138,6 +144,7 @@ class TrackSettings:
     tuning: SearchTuning = field(default_factory=SearchTuning)
     clip: ClipTuning = field(default_factory=ClipTuning)
     match: MatchTuning = field(default_factory=MatchTuning)
+    cutout: FigureTuning = field(default_factory=FigureTuning)
 
     def __post_init__(self) -> None:
         if self.search is not None:
@@ -153,7 +160,7 @@ class TrackSettings:
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
-        tunings = {"tuning": SearchTuning, "clip": ClipTuning, "match": MatchTuning}
+        tunings = {"tuning": SearchTuning, "clip": ClipTuning, "match": MatchTuning, "cutout": FigureTuning}
         for name, kind in tunings.items():
             given = getattr(self, name)
             if not isinstance(given, kind):
