@@ -964,6 +964,4 @@ def test_joints_inside_one_flat_fill_are_placed_by_their_wider_view():
     setup = _setup([("hip", None), ("chest", "hip")], truth[0], size=16)
     errors = _errors(track(frames, setup), truth)
     assert errors[5:].max() < 3.0
-    assert errors.mean() < 1.0
-    never = TrackSettings(match=MatchTuning(context_confidence=1.0))  # no context, noisy, is ever that sure
-    assert _errors(track(frames, setup, settings=never), truth).mean() > 10.0
+    assert errors.mean() < 1.0  # without their wider view they wander: test_match_tuning.py
