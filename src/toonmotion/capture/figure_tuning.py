@@ -30,7 +30,8 @@ class FigureTuning(Tuning):
         summed channel difference from the colour (0 to 765) and the threshold is the border's own
         spread (its 99th percentile) within the range; on a background image, the RGB distance
         (0 to 441) and Otsu's threshold within the range. 20 stays above video compression noise;
-        digital art on white gets it, paper photographed under uneven light about 55.
+        digital art on white gets it, paper photographed under uneven light about 55. No
+        measurement of another low end on record.
     threshold_high : float
         Colour distance, >= ``threshold_low``: the threshold's highest; border pixels farther from
         a flat colour than this are not paper (a frame round the picture, the figure cut by the
