@@ -38,10 +38,9 @@ def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history
     history : (k,) int
         The frame each joint's history starts at (where tracking started or it was corrected):
         its velocity there is 0.
-    tuning : ClipTuning, optional
-        Its ``coast_steps``; default its defaults.
-    match : MatchTuning, optional
-        Its ``visible_confidence``: a joint less confident was hidden; default its defaults.
+    tuning, match : ClipTuning, MatchTuning, optional
+        The clip's ``coast_steps``, and the matching's ``visible_confidence``, below which a
+        position is a guess made while the joint was hidden; default their defaults.
 
     Returns
     -------
