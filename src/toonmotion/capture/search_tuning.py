@@ -79,7 +79,7 @@ class SearchTuning(Tuning):
         Of the rectangle's larger side, times the pace after a held drawing: how far from where
         it was expected a weak match may put a joint, > 0.
     refit_turn : float
-        Radians: a textured joint matched below ``template_match.TURN_CONFIDENCE`` whose parent
+        Radians: a textured joint matched below ``MatchTuning.turn_confidence`` whose parent
         was found is matched again turned as its bone has turned, when that differs by more
         than this, > 0. On the jumping jacks on twos a hand was found in the right place at
         0.08, turned 68 degrees wrong, and called hidden.
