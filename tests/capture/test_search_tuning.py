@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from tests.capture.test_tracker import _arm_under_covers, _errors, _setup
-from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_path import best_paths
 from toonmotion.capture.track_settings import TrackSettings
@@ -44,7 +44,7 @@ def test_a_hand_is_found_again_only_by_a_match_as_confident_as_reacquire_confide
     # Asking for more than its matches give (they are below 1), it is never found again.
     strict = track(frames, _setup(ARM, truth[0]),
                    settings=TrackSettings(tuning=SearchTuning(reacquire_confidence=1.0)))
-    assert (strict.confidence[12:, 2] < VISIBLE_CONFIDENCE).all()
+    assert (strict.confidence[12:, 2] < MatchTuning().visible_confidence).all()
     assert _errors(strict, truth)[27:, 2].max() > 5 * _errors(default, truth)[27:, 2].max()
 
 
@@ -54,7 +54,7 @@ def test_without_widening_a_hidden_hand_is_not_looked_for_where_it_re_emerged(ar
     frames, truth, default = arm
     assert _errors(default, truth)[27:, 2].max() < 1.0
     narrow = track(frames, _setup(ARM, truth[0]), settings=TrackSettings(tuning=SearchTuning(widen_step=0.0)))
-    assert (narrow.confidence[25:, 2] < VISIBLE_CONFIDENCE).mean() > 0.5
+    assert (narrow.confidence[25:, 2] < MatchTuning().visible_confidence).mean() > 0.5
 
 
 @pytest.mark.parametrize("given, message", [

@@ -4,9 +4,12 @@ import cv2
 import numpy as np
 import pytest
 
-from toonmotion.capture.setup import FRAME_SIDE, SIZE_RANGE, check_setup, rectangle_sizes, suggest_setup
+from toonmotion.capture.figure_tuning import FigureTuning
+from toonmotion.capture.setup import check_setup, rectangle_sizes, suggest_setup
 from toonmotion.errors import TrackingError
 from toonmotion.rig.skeleton import Skeleton
+
+LOW, HIGH = FigureTuning().size_low, FigureTuning().size_high
 
 SHOULDER, HIP = (60, 50), (60, 95)
 HANDS, FEET = [(25, 75), (95, 75)], [(35, 145), (85, 145)]
@@ -49,7 +52,7 @@ def test_suggested_joints_sit_at_both_ends_of_every_limb():
 
 def test_rectangles_follow_the_figure_thickness_within_the_range():
     skeleton, sizes = suggest_setup(_stick_figure())
-    assert np.all(sizes >= SIZE_RANGE[0]) and np.all(sizes <= SIZE_RANGE[1])
+    assert np.all(sizes >= LOW) and np.all(sizes <= HIGH)
     np.testing.assert_array_equal(sizes[:, 0], sizes[:, 1])
     # Limbs are 7 px thick: their joints get small squares; the head is 24 px across.
     hand = np.argmin(np.linalg.norm(skeleton.positions - HANDS[0], axis=1))
@@ -63,7 +66,7 @@ def test_rectangles_at_the_frame_edge_are_shrunk_inside():
     skeleton, sizes = suggest_setup(mask, max_bone=20)
     assert _inside(skeleton, sizes, 120, 160)
     assert np.all(sizes > 0)
-    assert sizes.min() < SIZE_RANGE[0]  # the feet's rectangles had to shrink
+    assert sizes.min() < LOW  # the feet's rectangles had to shrink
     check_setup(skeleton, sizes, (120, 160))
 
 
@@ -99,15 +102,15 @@ def test_check_setup_rejects_sizes_of_the_wrong_shape():
 
 
 def test_rectangles_on_a_frame_twice_as_large_are_within_a_range_twice_as_large():
-    # A thick body on a frame up to FRAME_SIDE gets the range's largest square, and a thin arm its
-    # smallest; the same figure on a frame twice the size (twice as thick) gets squares twice as
+    # A thick body on a frame up to FigureTuning.frame_side gets the range's largest square, and a
+    # thin arm its smallest; the same figure on a frame twice the size (twice as thick) gets squares twice as
     # large: the tracker halves that frame, and sees the rectangles of the range again.
     small = np.zeros((500, 800), bool)
     small[100:400, 200:600] = True
     small[249:251, 600:780] = True
     large = np.repeat(np.repeat(small, 2, axis=0), 2, axis=1)
     at = np.array([[400.0, 250.0], [700.0, 249.5]])
-    assert max(small.shape) <= FRAME_SIDE < max(large.shape)
-    np.testing.assert_array_equal(rectangle_sizes(small, at), [[SIZE_RANGE[1]] * 2, [SIZE_RANGE[0]] * 2])
+    assert max(small.shape) <= FigureTuning().frame_side < max(large.shape)
+    np.testing.assert_array_equal(rectangle_sizes(small, at), [[HIGH] * 2, [LOW] * 2])
     np.testing.assert_array_equal(rectangle_sizes(large, 2 * at + 0.5),
-                                  [[2 * SIZE_RANGE[1]] * 2, [2 * SIZE_RANGE[0]] * 2])
+                                  [[2 * HIGH] * 2, [2 * LOW] * 2])

@@ -8,8 +8,9 @@ import numpy as np
 
 from toonmotion.capture.coarse_search import locate, search_round
 from toonmotion.capture.joint_plan import BoneRule, Templates, plan_joint
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.search_tuning import SearchTuning
-from toonmotion.capture.template_match import SPIN_TURNS, match
+from toonmotion.capture.template_match import match
 
 SIDE = 21
 
@@ -156,7 +157,7 @@ def test_a_search_round_a_long_bone_with_many_places_is_made_in_batches():
 
 
 def test_the_coarse_search_all_round_finds_a_patch_turned_half_round():
-    """A bone seen end-on gives its rectangle no angle: the search at SPIN_TURNS finds the patch
+    """A bone seen end-on gives its rectangle no angle: the search at MatchTuning.spin_turns finds the patch
     turned 160 deg, and its angle, where the usual few turns do not."""
     patch = _patch(np.random.default_rng(5))
     image = np.full((100, 140, 3), 128, np.uint8)
@@ -166,7 +167,8 @@ def test_the_coarse_search_all_round_finds_a_patch_turned_half_round():
                             borderValue=(128, 128, 128))
     small, start = cv2.pyrDown(turned), np.array([62.0, 49.0])
     _, few, _ = locate(small, templates, start, 0.0, _plan(), 18.0)
-    xy, confidence, angle = locate(small, templates, start, 0.0, _plan(), 18.0, turns=SPIN_TURNS)
+    all_round = MatchTuning().spin_turns
+    xy, confidence, angle = locate(small, templates, start, 0.0, _plan(), 18.0, turns=all_round)
     assert few < 0.5 < confidence and np.hypot(*(xy - (60, 50))) <= 2.0
     assert math.degrees(angle) % 360 == 160.0
 

@@ -9,7 +9,7 @@ import pytest
 
 from tests.conftest import SHARED_DATA, _require
 from toonmotion.capture.foreground import flat_figure_masks
-from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.track_settings import TrackSetup
 from toonmotion.capture.tracker import track
 from toonmotion.testing.mocap_tracking import (
@@ -150,7 +150,7 @@ def test_joints_in_a_cartoon_stay_in_the_picture_and_within_their_windows(name, 
     cartoon, tracking = request.getfixturevalue(name)
     found, h, w = tracking.positions, *cartoon.images.shape[1:3]
     assert (found >= 0).all() and (found[..., 0] <= w - 1).all() and (found[..., 1] <= h - 1).all()
-    seen = tracking.confidence >= VISIBLE_CONFIDENCE
+    seen = tracking.confidence >= MatchTuning().visible_confidence
     step = np.hypot(*np.diff(found, axis=0).transpose(2, 0, 1))[seen[1:] & seen[:-1]]
     fastest = np.hypot(*np.diff(cartoon.truth, axis=0).transpose(2, 0, 1)).max()
     assert step.max() <= fastest + cartoon.side, f"{step.max():.1f} px in one frame"

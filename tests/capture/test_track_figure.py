@@ -10,7 +10,7 @@ import pytest
 from tests.conftest import SHARED_DATA, _require
 from toonmotion.capture.clip_tuning import ClipTuning
 from toonmotion.capture.foreground import FlatBackgroundMasks, flat_figure_masks, flat_threshold
-from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.track_figure import FigureMasks, figure_cells, on_figure, onto_figure
 from toonmotion.capture.track_settings import TrackSettings, TrackSetup
 from toonmotion.capture.tracker import track
@@ -128,7 +128,7 @@ def test_a_joint_off_its_mask_where_tracking_starts_is_left_free():
     skeleton = Skeleton.from_joints([("a", None, (19.5, 29.5)), ("b", None, (69.5, 29.5))])
     tracking = track(frames, TrackSetup(skeleton, np.full((2, 2), 12.0)), masks=masks)
     assert np.abs(tracking.positions - [[19.5, 29.5], [69.5, 29.5]]).max() < 0.2
-    assert (tracking.confidence >= VISIBLE_CONFIDENCE).all()
+    assert (tracking.confidence >= MatchTuning().visible_confidence).all()
 
 
 def test_capture_holds_joints_to_a_flat_figure_unless_told_not_to(flat_walk):

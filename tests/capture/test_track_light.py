@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from tests.capture.test_tracker import _errors, _setup, _wander
-from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.track_light import Relit, light_levels, relight
 from toonmotion.capture.track_settings import TrackSettings
 from toonmotion.capture.tracker import track
@@ -29,7 +29,7 @@ def test_a_joint_is_seen_in_every_frame_though_the_light_jumps():
     errors = _errors(relit, truth)
     assert errors.max() <= 0.2, f"worst error {errors.max():.3f} px at frame {errors.argmax()}"
     # Without, the joint is taken to be hidden in every dark frame (and coasts through them).
-    assert (raw.confidence[:, 0] < VISIBLE_CONFIDENCE).sum() == 75
+    assert (raw.confidence[:, 0] < MatchTuning().visible_confidence).sum() == 75
 
 
 def test_frames_in_the_light_of_the_first_are_left_exactly_as_they_are():

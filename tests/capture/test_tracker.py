@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from toonmotion.capture import track_search
-from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_scale import WORKING_SIDE
 from toonmotion.capture.track_settings import Tracking, TrackSettings, TrackSetup
@@ -640,7 +640,7 @@ def _sleeved(seed=41, T=40, heavy=12):
 
 
 def test_a_textured_joint_lost_for_a_frame_is_found_again_as_plainly_as_it_showed():
-    """Half under a sleeve the square matches at 0.25-0.29, enough to be seen (VISIBLE_CONFIDENCE)
+    """Half under a sleeve the square matches at 0.25-0.29, enough to be seen (MatchTuning.visible_confidence)
     but less than a hidden joint needs to be found again anywhere its search reaches
     (SearchTuning.reacquire_confidence). Covered more for one frame, it is hidden. Within its window
     of where it is carried it is found again the next frame at the confidence it showed at; held to the
@@ -649,10 +649,10 @@ def test_a_textured_joint_lost_for_a_frame_is_found_again_as_plainly_as_it_showe
     frames, truth = _sleeved()
     tracking = track(frames, _setup([("dot", None)], truth[0]))
     confidence = tracking.confidence[:, 0]
-    assert confidence[12] < VISIBLE_CONFIDENCE
+    assert confidence[12] < MatchTuning().visible_confidence
     reacquire = SearchTuning().reacquire_confidence
-    assert (confidence[4:12] >= VISIBLE_CONFIDENCE).all() and (confidence[4:] < reacquire).all()
-    hidden = confidence < VISIBLE_CONFIDENCE  # at 0.25 it dips below now and then
+    assert (confidence[4:12] >= MatchTuning().visible_confidence).all() and (confidence[4:] < reacquire).all()
+    hidden = confidence < MatchTuning().visible_confidence  # at 0.25 it dips below now and then
     assert not (hidden[1:] & hidden[:-1]).any(), np.round(confidence, 3)  # found again the next frame
     errors = _errors(tracking, truth)
     assert errors.max() <= 1.5, f"errors: {np.round(errors[:, 0], 1)}"
@@ -862,7 +862,7 @@ def test_an_elbow_is_followed_while_its_forearm_bends_round_it():
     frames (29 px off by the end)."""
     frames, elbow, setup = _bending_arm()
     tracking = track(frames, setup, settings=TrackSettings(fill_gaps=False))
-    assert (tracking.confidence[:, 1] >= VISIBLE_CONFIDENCE).all()
+    assert (tracking.confidence[:, 1] >= MatchTuning().visible_confidence).all()
     assert np.hypot(*(tracking.positions[:, 1] - elbow).T).max() < setup.sizes[1, 0] / 4
 
 
@@ -953,19 +953,15 @@ def _leaning_flat_body(seed=21, T=60):
     return _film(rng, canvases, noise=1.0), truth
 
 
-def test_joints_inside_one_flat_fill_are_placed_by_their_wider_view(monkeypatch):
+def test_joints_inside_one_flat_fill_are_placed_by_their_wider_view():
     """Both joints' rectangles see only the fill, so each matches anywhere in it, and neither
     neighbour can place the other: going by their predicted motion they wandered 25-31 px off on
     average (up to 76). The wider view of each, cut with its anchor, takes in the body's outline
     and places it: after the first few frames (the prediction knows no velocity yet), both stay
     within 3 px (a sixteenth of their rectangles, grown to 48 px on the fill), and within 1 px on
     average."""
-    from toonmotion.capture import track_search
-
     frames, truth = _leaning_flat_body()
     setup = _setup([("hip", None), ("chest", "hip")], truth[0], size=16)
     errors = _errors(track(frames, setup), truth)
     assert errors[5:].max() < 3.0
-    assert errors.mean() < 1.0
-    monkeypatch.setattr(track_search, "CONTEXT_CONFIDENCE", 1.01)  # no context is ever sure enough
-    assert _errors(track(frames, setup), truth).mean() > 10.0
+    assert errors.mean() < 1.0  # without their wider view they wander: test_match_tuning.py

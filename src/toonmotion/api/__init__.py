@@ -74,6 +74,7 @@ from toonmotion.api.scene3d import (
     simulate_scene,
 )
 from toonmotion.capture.clip_tuning import ClipTuning
+from toonmotion.capture.figure_tuning import FigureTuning
 from toonmotion.capture.footage import (
     Capture,
     PoorlyMatched,
@@ -83,6 +84,7 @@ from toonmotion.capture.footage import (
     suggested_sizes,
 )
 from toonmotion.capture.foreground import border_colour
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.retarget import retarget
 from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_settings import TrackSettings

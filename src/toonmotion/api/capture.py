@@ -45,6 +45,7 @@ def track_footage(
         A flat background colour, to find the figure by: joints are suggested on it and held to
         it (``settings.figure``). Default: the first frame's border colour, when that is flat.
     settings : TrackSettings, optional
+        How to track; its ``cutout`` is also how the figure is found to suggest joints on.
     earlier : Motion, optional
         A tracking to correct: give the ``corrections`` (joint name to true ``(x, y)``) at frame
         ``at``; tracking resumes there and the frames before it are kept.
@@ -76,7 +77,8 @@ def track_footage(
     >>> np.round(capture.motion.positions[-1, 0] - capture.motion.positions[0, 0]).tolist()
     [6.0, 0.0]
     """
-    skeleton, sizes = joints if joints is not None else suggest_joints(frames, colour=background)
+    cutout = None if settings is None else settings.cutout
+    skeleton, sizes = suggest_joints(frames, colour=background, tuning=cutout) if joints is None else joints
     if earlier is None:
         return capture_motion(frames, skeleton, sizes, fps=fps, start=start, settings=settings,
                               background=background, progress=progress)

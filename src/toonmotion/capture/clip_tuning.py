@@ -7,14 +7,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from toonmotion.capture.track_checks import at_least, check_ranges, share, whole
+from toonmotion.capture.track_checks import Tuning, at_least, share, whole
 
 
 @dataclass(frozen=True)
-class ClipTuning:
+class ClipTuning(Tuning):
     """How the tracker reads the clip: held drawings, coasting, hidden spans, the figure, the light.
 
-    Each value was chosen by a measurement, given with it. The defaults are the tracker's.
+    Each value was chosen by a measurement, given with it. The defaults are the tracker's. Each
+    value's range is checked when the tuning is made (:class:`~toonmotion.capture.track_checks.Tuning`).
 
     Attributes
     ----------
@@ -53,11 +54,6 @@ class ClipTuning:
     light_samples : int
         About this many pixels of the band are read, >= 1.
 
-    Raises
-    ------
-    TrackingError
-        A value out of its range, in one line naming it.
-
     Examples
     --------
     >>> ClipTuning().coast_steps, ClipTuning(held_level=24).held_level
@@ -74,6 +70,3 @@ class ClipTuning:
     min_spread: float = at_least(0.0, 8.0)
     light_border: float = share(0.15)
     light_samples: int = whole(8000)
-
-    def __post_init__(self) -> None:
-        check_ranges(self)

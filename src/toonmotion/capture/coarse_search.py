@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.joint_plan import UPDATE_CONFIDENCE, BoneRule, JointPlan, Templates, bone_cost
+from toonmotion.capture.joint_plan import BoneRule, JointPlan, Templates, bone_cost
 from toonmotion.capture.patches import (
     confidence,
     patches,
@@ -21,19 +21,17 @@ from toonmotion.capture.patches import (
 )
 from toonmotion.capture.track_figure import figure_cells, on_figure
 
-# The coarse search for a hidden joint (:func:`locate`) also tries these turns (radians).
-COARSE_TURNS = (0.0, math.radians(25), math.radians(-25))
-
 
 def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.float64], angle: float,
            joint: JointPlan, radius: float, bone: BoneRule | None = None,
-           figure: NDArray[np.uint8] | None = None, turns: tuple[float, ...] = COARSE_TURNS
+           figure: NDArray[np.uint8] | None = None, turns: tuple[float, ...] | None = None
            ) -> tuple[NDArray[np.float64], float, float]:
     """Look for a hidden joint at half resolution, up to ``radius`` pixels (full resolution) from
     ``centre``: the anchor's coarse template is matched in ``small`` (the frame after
-    ``cv2.pyrDown``) at the rectangle's angle turned by each of ``turns``, by eq. 4.6's mixed
-    cost with ``joint``'s colour weight, ``w_beta = 1 / radius^2`` and the kinematic term
-    (``bone``), among the plain cells if there are any (as
+    ``cv2.pyrDown``) at the rectangle's angle turned by each of ``turns`` (radians; default the
+    ``coarse_turns`` of the plan's :class:`~toonmotion.capture.match_tuning.MatchTuning`), by eq.
+    4.6's mixed cost with ``joint``'s colour weight, ``w_beta = 1 / radius^2`` and the kinematic
+    term (``bone``), among the plain cells if there are any (as
     :func:`~toonmotion.capture.template_match.match`). Only where to look again: the place is to be
     refined by :func:`~toonmotion.capture.template_match.match`.
 
@@ -46,6 +44,7 @@ def locate(small: NDArray[np.uint8], templates: Templates, centre: NDArray[np.fl
     angle : float
         The rectangle's angle there, radians.
     """
+    turns = joint.tuning.coarse_turns if turns is None else turns
     places, confidences, angles = _coarse_turns(small, templates, centre, angle, joint, radius, bone, figure,
                                                 turns)
     best = int(np.argmax(confidences))
@@ -65,7 +64,7 @@ def _coarse_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArra
     th, tw = template.shape[:2]
     R = max(1, int(math.ceil(radius / 2)))
     w_alpha = joint.w_alpha * joint.size[0] * joint.size[1] / (tw * th)
-    plain_ssd = ssd_at(UPDATE_CONFIDENCE, (tw, th))
+    plain_ssd = ssd_at(joint.tuning.update_confidence, (tw, th), joint.tuning)
     centre = np.asarray(centre, dtype=float)
     # Pixel centres: full-resolution x is half-resolution 2 x + 0.5.
     middle = (centre - 0.5) / 2
@@ -91,7 +90,7 @@ def _coarse_turns(small: NDArray[np.uint8], templates: Templates, centre: NDArra
         c, s = math.cos(a), math.sin(a)
         dx, dy = 2.0 * (j - R), 2.0 * (i - R)
         places.append(centre + [c * dx - s * dy, s * dx + c * dy])
-        confidences.append(confidence(float(turn_ssd[i, j]), (tw, th)))
+        confidences.append(confidence(float(turn_ssd[i, j]), (tw, th), joint.tuning))
     return places, confidences, angles
 
 
@@ -179,4 +178,4 @@ def search_round(small: NDArray[np.uint8], templates: Templates, joint: JointPla
         picked.append(best)
         unpicked[np.hypot(*(xy - xy[best]).T) < side] = np.inf
     picked.sort(key=lambda i: cost[i])
-    return [(xy[i], confidence(float(ssd[i]), (tw, th)), float(angles[i])) for i in picked]
+    return [(xy[i], confidence(float(ssd[i]), (tw, th), joint.tuning), float(angles[i])) for i in picked]

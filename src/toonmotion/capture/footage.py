@@ -10,6 +10,10 @@ read (``(T, H, W, 3)`` uint8 RGB, see :func:`toonmotion.io.frames.load_frames`):
    frames tracked;
 3. :func:`correct_motion` puts some joints right at one frame and tracks again from there, keeping
    the frames before it (an earlier motion read back from its file).
+
+How the figure is found and the rectangles suggested is a
+:class:`~toonmotion.capture.figure_tuning.FigureTuning`, given as ``tuning`` to the functions that
+find it (default its defaults), and as ``TrackSettings.cutout`` to those that track.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.animate.motion import Motion, motion_for
+from toonmotion.capture.figure_tuning import FigureTuning
 from toonmotion.capture.foreground import (
     cleaned_mask,
     estimate_background,
@@ -114,7 +119,8 @@ class Capture:
 
 
 def suggest_joints(
-    frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None
+    frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None,
+    tuning: FigureTuning | None = None,
 ) -> tuple[Skeleton, NDArray[np.float64]]:
     """Joints and rectangle sizes suggested from the first frame's figure.
 
@@ -124,6 +130,8 @@ def suggest_joints(
     colour : (int, int, int), optional
         A flat background colour. Without it the first frame's border colour is used when that is
         flat, else a background estimated from the whole sequence; the figure is what differs.
+    tuning : FigureTuning, optional
+        How the figure is found and the rectangles sized; default its defaults.
 
     Returns
     -------
@@ -147,11 +155,12 @@ def suggest_joints(
     """
     check_count(frames)
     read_frame(frames, 0, None)
-    return suggest_setup(first_figure(frames, colour=colour))
+    return suggest_setup(first_figure(frames, colour=colour, tuning=tuning), tuning=tuning)
 
 
 def suggested_sizes(frames: NDArray[np.uint8], positions: ArrayLike, *, start: int = 0,
-                    colour: tuple[int, int, int] | None = None) -> NDArray[np.float64]:
+                    colour: tuple[int, int, int] | None = None,
+                    tuning: FigureTuning | None = None) -> NDArray[np.float64]:
     """The rectangles :func:`suggest_joints` would give joints at ``positions`` ``(k, 2)`` on
     frame ``start``'s figure (found as :func:`first_figure` finds frame 0's): twice the figure's
     thickness there. To tell a user whose own rectangles are much smaller.
@@ -165,6 +174,8 @@ def suggested_sizes(frames: NDArray[np.uint8], positions: ArrayLike, *, start: i
         The frame the joints are placed on.
     colour : (int, int, int), optional
         A flat background colour, as for :func:`suggest_joints`.
+    tuning : FigureTuning, optional
+        As for :func:`suggest_joints`.
 
     Returns
     -------
@@ -179,8 +190,8 @@ def suggested_sizes(frames: NDArray[np.uint8], positions: ArrayLike, *, start: i
     >>> sizes.shape == (len(skeleton), 2) and bool((sizes >= 8).all())
     True
     """
-    figure = first_figure(frames[start:], colour=colour)
-    return rectangle_sizes(figure, np.asarray(positions, dtype=float))
+    figure = first_figure(frames[start:], colour=colour, tuning=tuning)
+    return rectangle_sizes(figure, np.asarray(positions, dtype=float), tuning)
 
 
 # Rectangles whose median side is under this fraction of the suggested ones' are worth a warning:
@@ -190,7 +201,8 @@ SMALL_RECTANGLES = 0.6
 
 
 def setup_warnings(frames: NDArray[np.uint8], skeleton: Skeleton, sizes: ArrayLike, *, start: int = 0,
-                   colour: tuple[int, int, int] | None = None) -> list[str]:
+                   colour: tuple[int, int, int] | None = None,
+                   tuning: FigureTuning | None = None) -> list[str]:
     """What may go wrong in tracking joints placed as ``skeleton`` at frame ``start`` with
     rectangles ``sizes``, a line each for the user: rectangles much smaller than those
     :func:`suggested_sizes` gives there (:data:`SMALL_RECTANGLES`), and two joints, neither the
@@ -204,7 +216,7 @@ def setup_warnings(frames: NDArray[np.uint8], skeleton: Skeleton, sizes: ArrayLi
         The joints, at their places on frame ``start``.
     sizes : (k, 2) float
         Each joint's rectangle (width, height), pixels.
-    start, colour
+    start, colour, tuning
         As for :func:`suggested_sizes`.
 
     Returns
@@ -225,7 +237,7 @@ def setup_warnings(frames: NDArray[np.uint8], skeleton: Skeleton, sizes: ArrayLi
     warnings = []
     given = float(np.median(sizes.max(axis=1)))
     suggested = float(np.median(suggested_sizes(frames, skeleton.positions, start=start,
-                                                colour=colour).max(axis=1)))
+                                                colour=colour, tuning=tuning).max(axis=1)))
     if given < SMALL_RECTANGLES * suggested:
         warnings.append(f"the rectangles are small for this figure (median {given:.0f} px, where "
                         f"{suggested:.0f} px are suggested from its thickness): a rectangle holding "
@@ -243,8 +255,8 @@ def setup_warnings(frames: NDArray[np.uint8], skeleton: Skeleton, sizes: ArrayLi
     return warnings
 
 
-def first_figure(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None
-                 ) -> NDArray[np.bool_]:
+def first_figure(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None,
+                 tuning: FigureTuning | None = None) -> NDArray[np.bool_]:
     """Frame 0's figure, ``(H, W)`` bool, found as :func:`suggest_joints` finds it.
 
     On a flat colour (``colour``, else the first frame's border colour when that is flat) it is
@@ -253,16 +265,18 @@ def first_figure(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | No
     holes: every pixel off that colour, so fills close to the paper's colour (skin on white)
     count. Otherwise it is what differs from a background estimated from the whole sequence
     (:func:`~toonmotion.capture.foreground.foreground_masks`). Either way a frame drawn round the
-    picture is left out (:func:`~toonmotion.capture.foreground.without_frame`).
+    picture is left out (:func:`~toonmotion.capture.foreground.without_frame`). ``tuning`` as for
+    :func:`suggest_joints`.
     """
-    flat = flat_figure_masks(frames[:1], colour=colour)
+    flat = flat_figure_masks(frames[:1], colour=colour, tuning=tuning)
     if flat is not None:
-        return without_frame(cleaned_mask(flat[0]))
-    return without_frame(foreground_masks(frames[:1], background=estimate_background(frames))[0])
+        return without_frame(cleaned_mask(flat[0], tuning), tuning)
+    figure = foreground_masks(frames[:1], background=estimate_background(frames), tuning=tuning)[0]
+    return without_frame(figure, tuning)
 
 
-def figure_box(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None
-               ) -> tuple[int, int, int, int] | None:
+def figure_box(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None = None,
+               tuning: FigureTuning | None = None) -> tuple[int, int, int, int] | None:
     """The box round frame 0's figure (:func:`first_figure`): ``(left, top, right, bottom)``
     pixels, right and bottom exclusive; None when no figure is found.
 
@@ -272,6 +286,8 @@ def figure_box(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None
         The footage (frame 0 is looked at; the rest estimate a background that is not flat).
     colour : (r, g, b), optional
         The flat background's colour, when known.
+    tuning : FigureTuning, optional
+        As for :func:`suggest_joints`.
 
     Returns
     -------
@@ -284,7 +300,7 @@ def figure_box(frames: NDArray[np.uint8], *, colour: tuple[int, int, int] | None
     >>> figure_box(frames)
     (20, 10, 35, 30)
     """
-    figure = first_figure(frames, colour=colour)
+    figure = first_figure(frames, colour=colour, tuning=tuning)
     if not figure.any():
         return None
     rows, cols = np.flatnonzero(figure.any(axis=1)), np.flatnonzero(figure.any(axis=0))
@@ -369,10 +385,11 @@ def tracking_from_motion(motion: Motion, skeleton: Skeleton, count: int, start: 
 
 def _masks(frames, settings, background):
     """The figure's masks to hold joints to, if the settings ask for it and the figure is drawn on
-    a flat colour (:func:`~toonmotion.capture.foreground.flat_figure_masks`), else None."""
+    a flat colour (:func:`~toonmotion.capture.foreground.flat_figure_masks`, with the settings'
+    ``cutout``), else None."""
     if settings is not None and not settings.figure:
         return None
-    return flat_figure_masks(frames, colour=background)
+    return flat_figure_masks(frames, colour=background, tuning=None if settings is None else settings.cutout)
 
 
 def _setup(

@@ -12,13 +12,16 @@ is automatic, for the two backgrounds that capture clips come on:
 A pixel is foreground when the RGB (Euclidean) distance between its colour and the
 background's exceeds a threshold. By default the threshold is Otsu's on frame 0's distances,
 the split between "background plus noise" and "figure", clamped to [20, 100] (of 441, black
-to white): 20 stays above video compression noise, 100 keeps a figure close in colour to its
-background from being thrown away wholesale when the distances are spread wide.
+to white; ``threshold_low`` and ``threshold_high``): 20 stays above video compression noise,
+100 keeps a figure close in colour to its background from being thrown away wholesale when the
+distances are spread wide.
 
-Each mask is then cleaned: specks (8-connected parts smaller than 1% of the largest part) are
-dropped, and holes (background parts not touching the frame's border) smaller than 1% of the
-foreground's area are filled; bigger holes, such as the gap between an arm on the hip and the
-body, stay.
+Each mask is then cleaned: specks (8-connected parts smaller than 1% of the largest part,
+``clean_fraction``) are dropped, and holes (background parts not touching the frame's border)
+smaller than 1% of the foreground's area are filled; bigger holes, such as the gap between an arm
+on the hip and the body, stay. The values named are those of
+:class:`~toonmotion.capture.figure_tuning.FigureTuning`, which every function here that reads
+one takes as ``tuning`` (default its defaults).
 """
 
 from __future__ import annotations
@@ -32,22 +35,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
 
+from toonmotion.capture.figure_tuning import FigureTuning
 from toonmotion.errors import TrackingError
 from toonmotion.shape.curve_skeleton import CurveSkeleton, curve_skeleton
 from toonmotion.shape.segment import clean_mask
-
-THRESHOLD_RANGE = (20.0, 100.0)
-# Specks smaller than this share of the largest part, and holes smaller than this share of the
-# foreground, are cleaned away.
-CLEAN_FRACTION = 0.01
-# A part of a figure's mask that touches all four sides of the picture while covering less than
-# this share of its bounding box is a frame drawn round the picture (a panel border, a scanned
-# page's edge), not the figure.
-FRAME_FILL = 0.25
-# A frame the figure touches is one part with it: lines along an edge that are at least FRAME_LINE
-# figure, up to FRAME_DEPTH of the picture's smaller side deep, are a frame's, and are cleared.
-FRAME_LINE = 0.9
-FRAME_DEPTH = 0.03
 
 _CROSS = ndi.generate_binary_structure(2, 1)
 
@@ -86,8 +77,8 @@ def estimate_background(frames: NDArray[np.uint8], *, samples: int = 25) -> NDAr
 
 
 def foreground_masks(frames: NDArray[np.uint8], *, background: ArrayLike | None = None,
-                     colour: Sequence[int] | None = None,
-                     threshold: float | None = None) -> NDArray[np.bool_]:
+                     colour: Sequence[int] | None = None, threshold: float | None = None,
+                     tuning: FigureTuning | None = None) -> NDArray[np.bool_]:
     """Where the figure is in each frame: pixels whose colour differs from the background's.
 
     Parameters
@@ -100,13 +91,16 @@ def foreground_masks(frames: NDArray[np.uint8], *, background: ArrayLike | None 
         A flat background colour, 0-255, instead of a background image.
     threshold : float, optional
         RGB distance (0 to 441) above which a pixel is foreground. Default: Otsu's threshold on
-        frame 0's distances, clamped to :data:`THRESHOLD_RANGE`.
+        frame 0's distances, clamped to ``tuning.threshold_low`` to ``tuning.threshold_high``.
+    tuning : FigureTuning, optional
+        The threshold's range and the cleaning's ``clean_fraction``; default its defaults.
 
     Returns
     -------
     (T, h, w) bool
         Cleaned masks: specks dropped, small holes filled (see the module docstring).
     """
+    tuning = FigureTuning() if tuning is None else tuning
     frames = _checked_frames(frames)
     h, w = frames.shape[1:3]
     if background is not None and colour is not None:
@@ -124,12 +118,12 @@ def foreground_masks(frames: NDArray[np.uint8], *, background: ArrayLike | None 
     else:
         reference = estimate_background(frames).astype(np.float32)
     if threshold is None:
-        threshold = _auto_threshold(_distance(frames[0], reference))
+        threshold = _auto_threshold(_distance(frames[0], reference), tuning)
     elif not _is_number(threshold) or not threshold >= 0:
         raise TrackingError(f"the foreground threshold must be a number >= 0, got {threshold!r}")
     masks = np.empty(frames.shape[:3], dtype=bool)
     for t, frame in enumerate(frames):
-        masks[t] = cleaned_mask(_distance(frame, reference) > threshold)
+        masks[t] = cleaned_mask(_distance(frame, reference) > threshold, tuning)
     return masks
 
 
@@ -139,7 +133,8 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
     A pixel is the figure where the sum of its channels' differences from ``colour`` exceeds
     ``threshold`` (no less than the RGB distance :func:`foreground_masks` measures). On a flat
     colour nothing but the figure (and a grey level or two of noise) differs from it, so the
-    threshold is the low end of :data:`THRESHOLD_RANGE` by default: Otsu's split, which
+    threshold is the low end of the range (:class:`~toonmotion.capture.figure_tuning.FigureTuning`'s
+    ``threshold_low``) by default: Otsu's split, which
     :func:`foreground_masks` takes, throws away a figure's fills that lie near the paper's colour
     (skin on cream paper) and keeps only its outlines. Masks are not cleaned (a tracker asks
     for one a frame, and a speck matters little to it). Each mask asked for reads its frame from
@@ -150,8 +145,8 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
     frames : (T, h, w, 3) uint8, or a sequence of T (h, w, 3) uint8 arrays
     colour : (r, g, b)
         The background colour, 0-255.
-    threshold : float
-        Summed channel difference, 0 to 765.
+    threshold : float, optional
+        Summed channel difference, 0 to 765; default ``FigureTuning().threshold_low``.
 
     Examples
     --------
@@ -162,12 +157,13 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
     """
 
     def __init__(self, frames: NDArray[np.uint8] | Sequence[NDArray[np.uint8]], colour: Sequence[int],
-                 threshold: float = THRESHOLD_RANGE[0]) -> None:
+                 threshold: float | None = None) -> None:
         self._frames = frames
         self._colour = np.rint(_checked_colour(colour)).astype(np.uint8)
         self._plate: NDArray[np.uint8] | None = None  # the colour, frame-sized
         self._difference: NDArray[np.uint8] | None = None
         self._channels: tuple[NDArray[np.uint8], ...] = ()
+        threshold = FigureTuning().threshold_low if threshold is None else threshold
         if not _is_number(threshold) or not threshold >= 0:
             raise TrackingError(f"the foreground threshold must be a number >= 0, got {threshold!r}")
         self._threshold = float(threshold)
@@ -201,9 +197,11 @@ class FlatBackgroundMasks(Sequence[NDArray[np.bool_]]):
 
 
 def flat_figure_masks(frames: NDArray[np.uint8] | Sequence[NDArray[np.uint8]], *,
-                      colour: Sequence[int] | None = None) -> FlatBackgroundMasks | None:
+                      colour: Sequence[int] | None = None, tuning: FigureTuning | None = None
+                      ) -> FlatBackgroundMasks | None:
     """The figure's masks when it is drawn on one flat colour, ``colour`` or else the first
-    frame's border colour (:func:`border_colour`); None when that border is not flat.
+    frame's border colour (:func:`border_colour`), at :func:`flat_threshold` (``tuning``'s range);
+    None when that border is not flat.
 
     A background estimated from the footage itself (:func:`estimate_background`) is wrong
     wherever the figure holds still for half the clip (legs standing while an arm waves), and a
@@ -217,16 +215,19 @@ def flat_figure_masks(frames: NDArray[np.uint8] | Sequence[NDArray[np.uint8]], *
     first = np.asarray(frames[0])
     if colour is None:
         colour = border_colour(first)
-    return None if colour is None else FlatBackgroundMasks(frames, colour, flat_threshold(first, colour))
+    if colour is None:
+        return None
+    return FlatBackgroundMasks(frames, colour, flat_threshold(first, colour, tuning))
 
 
-def flat_threshold(frame: ArrayLike, colour: Sequence[int]) -> float:
+def flat_threshold(frame: ArrayLike, colour: Sequence[int], tuning: FigureTuning | None = None) -> float:
     """The summed channel difference from ``colour`` above which a pixel of ``frame`` ``(h, w, 3)``
     is the figure (:class:`FlatBackgroundMasks`): the 99th percentile of the frame's border pixels'
-    differences, within :data:`THRESHOLD_RANGE`. Digital art on white gets the low end; paper
-    photographed under uneven light, whose own colour drifts by tens of levels, gets above its
-    drift. Border pixels farther from the colour than the range's top are not paper (a frame drawn
-    round the picture, the figure cut by the edge) and do not count.
+    differences, within ``tuning.threshold_low`` to ``tuning.threshold_high`` (default its
+    defaults). Digital art on white gets the low end; paper photographed under uneven light, whose
+    own colour drifts by tens of levels, gets above its drift. Border pixels farther from the
+    colour than the range's top are not paper (a frame drawn round the picture, the figure cut by
+    the edge) and do not count.
 
     >>> frame = np.full((10, 10, 3), 250, np.uint8); frame[:, :5] = 235  # light falling off
     >>> flat_threshold(frame, (250, 250, 250)), flat_threshold(np.full((4, 4, 3), 9, np.uint8), (9, 9, 9))
@@ -235,11 +236,13 @@ def flat_threshold(frame: ArrayLike, colour: Sequence[int]) -> float:
     >>> flat_threshold(frame, (250, 250, 250))
     45.0
     """
+    tuning = FigureTuning() if tuning is None else tuning
+    low, high = tuning.threshold_low, tuning.threshold_high
     border = _border_pixels(frame).astype(np.float32)
     difference = np.abs(border - _checked_colour(colour)).sum(axis=1)
-    paper = difference[difference <= THRESHOLD_RANGE[1]]
-    spread = float(np.percentile(paper, 99)) if paper.size else THRESHOLD_RANGE[0]
-    return float(np.clip(spread, *THRESHOLD_RANGE))
+    paper = difference[difference <= high]
+    spread = float(np.percentile(paper, 99)) if paper.size else low
+    return float(np.clip(spread, low, high))
 
 
 def guide_skeleton(mask: NDArray[np.bool_], *, prune: float = 0.5) -> CurveSkeleton:
@@ -301,19 +304,20 @@ def _distance(frame, reference):
     return np.sqrt(np.sum(np.square(frame.astype(np.float32) - reference), axis=2))
 
 
-def _auto_threshold(distance):
+def _auto_threshold(distance, tuning):
     from skimage.filters import threshold_otsu
 
-    low, high = THRESHOLD_RANGE
+    low, high = tuning.threshold_low, tuning.threshold_high
     if float(distance.max()) - float(distance.min()) < 1e-3:
         return low
     return float(np.clip(threshold_otsu(distance), low, high))
 
 
-def cleaned_mask(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+def cleaned_mask(mask: NDArray[np.bool_], tuning: FigureTuning | None = None) -> NDArray[np.bool_]:
     """``mask`` ``(h, w)`` bool cleaned as :func:`foreground_masks` cleans its masks: specks
-    (8-connected parts smaller than :data:`CLEAN_FRACTION` of the largest part) dropped, and holes
-    (background parts off the frame's border) smaller than that share of the foreground filled.
+    (8-connected parts smaller than ``tuning.clean_fraction`` of the largest part) dropped, and
+    holes (background parts off the frame's border) smaller than that share of the foreground
+    filled (``tuning`` default its defaults).
 
     >>> mask = np.zeros((20, 20), bool); mask[2:18, 2:18] = True; mask[9, 9] = False
     >>> bool(cleaned_mask(mask)[9, 9])
@@ -321,25 +325,27 @@ def cleaned_mask(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     """
     if not mask.any():
         return mask
-    mask = clean_mask(mask, min_fraction=CLEAN_FRACTION)
+    fraction = (FigureTuning() if tuning is None else tuning).clean_fraction
+    mask = clean_mask(mask, min_fraction=fraction)
     # Holes: background parts (4-connected, the dual of 8-connected foreground) off the border.
     labels, count = ndi.label(~mask, structure=_CROSS)
     if count == 0:
         return mask
     sizes = np.bincount(labels.ravel())
-    small = sizes < CLEAN_FRACTION * np.count_nonzero(mask)
+    small = sizes < fraction * np.count_nonzero(mask)
     small[0] = False
     border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     small[border] = False
     return mask | small[labels]
 
 
-def without_frame(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+def without_frame(mask: NDArray[np.bool_], tuning: FigureTuning | None = None) -> NDArray[np.bool_]:
     """``mask`` ``(h, w)`` bool without a frame drawn round the picture: lines along an edge that are
-    :data:`FRAME_LINE` figure, up to :data:`FRAME_DEPTH` of the picture's smaller side deep, are
-    cleared (a frame the figure touches), then 8-connected parts that touch all four sides and cover
-    less than :data:`FRAME_FILL` of their bounding box, the picture (a frame that stands apart). A
-    figure cut by the picture's edges fills no whole edge, touches fewer sides, or fills more.
+    ``tuning.frame_line`` figure, up to ``tuning.frame_depth`` of the picture's smaller side deep,
+    are cleared (a frame the figure touches), then 8-connected parts that touch all four sides and
+    cover less than ``tuning.frame_fill`` of their bounding box, the picture (a frame that stands
+    apart). A figure cut by the picture's edges fills no whole edge, touches fewer sides, or fills
+    more. ``tuning`` default its defaults.
 
     >>> mask = np.zeros((100, 100), bool); mask[:2] = mask[-2:] = mask[:, :2] = mask[:, -2:] = True
     >>> mask[40:60, 40:60] = True  # a figure inside a frame two pixels wide
@@ -349,11 +355,12 @@ def without_frame(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     >>> int(without_frame(mask).sum())
     438
     """
+    tuning = FigureTuning() if tuning is None else tuning
     mask = np.array(mask, dtype=bool)
-    depth = max(1, int(FRAME_DEPTH * min(mask.shape)))
+    depth = max(1, int(tuning.frame_depth * min(mask.shape)))
     for side in (mask, mask[::-1], mask.T, mask.T[::-1]):  # views: top, bottom, left, right
         for line in side[:depth]:
-            if line.mean() < FRAME_LINE:
+            if line.mean() < tuning.frame_line:
                 break
             line[:] = False
     labels, count = ndi.label(mask, structure=np.ones((3, 3), bool))
@@ -361,7 +368,8 @@ def without_frame(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
         return mask
     sides = [np.unique(side) for side in (labels[0], labels[-1], labels[:, 0], labels[:, -1])]
     framing = set(sides[0].tolist()).intersection(*(s.tolist() for s in sides[1:])) - {0}
-    framing = {part for part in framing if np.count_nonzero(labels == part) < FRAME_FILL * mask.size}
+    fill = tuning.frame_fill * mask.size
+    framing = {part for part in framing if np.count_nonzero(labels == part) < fill}
     return mask & ~np.isin(labels, list(framing)) if framing else mask
 
 

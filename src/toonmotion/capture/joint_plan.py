@@ -1,7 +1,7 @@
 """What the joint tracker keeps for each joint over a run (thesis 4.4): its plan (template size,
 search radius, eq. 4.6's weights, the turns it tries), its templates, and the kinematic rule of
-its bone (:class:`BoneRule`, :func:`bone_cost`); with the confidences that say a match is plain
-or the joint hidden."""
+its bone (:class:`BoneRule`, :func:`bone_cost`). A plan carries the run's
+:class:`~toonmotion.capture.match_tuning.MatchTuning` to every match made by it."""
 
 from __future__ import annotations
 
@@ -13,29 +13,12 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.patches import (
     Patch,
     sample,
     ssd_at,
 )
-
-# Cells matching at least this confidently are plain; a match this confident, where both templates
-# agree, re-cuts the joint's latest template.
-UPDATE_CONFIDENCE = 0.8
-
-
-# A joint whose best match is less confident than this is hidden: it is carried by its parent
-# (a root coasts on its velocity) and its templates are left alone.
-VISIBLE_CONFIDENCE = 0.25
-
-
-TURNS = tuple(math.radians(sign * step) for step in (5, 10, 15) for sign in (1, -1))
-
-
-# Cells whose sum of squared differences exceeds the match's by less than ALIKE_LEVEL grey levels
-# (RMS per channel) squared match as well as it. Joined to it, they are where the texture cannot
-# tell the joint's place apart: a cell or two on a textured joint, a stretch of a flat fill.
-ALIKE_LEVEL = 3.0
 
 
 @dataclass(frozen=True)
@@ -62,14 +45,16 @@ class JointPlan:
     geometric : (2R+1, 2R+1) float
         ``w_beta`` times the squared offset of each cell from the window centre.
     plain : float
-        The SSD of a match with confidence :data:`UPDATE_CONFIDENCE`.
+        The SSD of a match with confidence ``tuning.update_confidence``.
     tie : float
         SSDs closer than this are equal: half a grey level per pixel and channel.
     alike : float
-        Cells within this SSD of the match's match as well as it: :data:`ALIKE_LEVEL` per pixel
+        Cells within this SSD of the match's match as well as it: ``tuning.alike_level`` per pixel
         and channel.
     visible : float
-        The SSD of a match with confidence :data:`VISIBLE_CONFIDENCE`.
+        The SSD of a match with confidence ``tuning.visible_confidence``.
+    tuning : MatchTuning
+        The run's matching tuning, which the matches made by this plan read.
     """
 
     size: tuple[int, int]
@@ -84,19 +69,23 @@ class JointPlan:
     tie: float
     alike: float
     visible: float
+    tuning: MatchTuning
 
 
 def plan_joint(size: tuple[int, int], r: float, w_alpha: float, w_beta: float, parent: int,
-               hangs_from: int, pace: float = 1.0) -> JointPlan:
+               hangs_from: int, pace: float = 1.0, tuning: MatchTuning | None = None) -> JointPlan:
     """A :class:`JointPlan` for a ``size`` template searched within radius ``r`` (pixels, >= 1),
-    trying :data:`TURNS` times ``pace`` (the frames a step spans: 2 after a drawing held on twos)."""
+    trying ``tuning.turns`` times ``pace`` (the frames a step spans: 2 after a drawing held on
+    twos); ``tuning`` default its defaults."""
+    tuning = MatchTuning() if tuning is None else tuning
     R = int(math.floor(r))
     offsets = np.arange(-R, R + 1, dtype=float) ** 2
     return JointPlan(size=size, radius=R, w_alpha=w_alpha / (size[0] * size[1]), w_beta=w_beta,
-                     parent=parent, hangs_from=hangs_from, turns=tuple(pace * turn for turn in TURNS),
+                     parent=parent, hangs_from=hangs_from, turns=tuple(pace * turn for turn in tuning.turns),
                      geometric=w_beta * (offsets[:, None] + offsets[None, :]),
-                     plain=ssd_at(UPDATE_CONFIDENCE, size), tie=0.25 * 3 * size[0] * size[1],
-                     alike=ALIKE_LEVEL**2 * 3 * size[0] * size[1], visible=ssd_at(VISIBLE_CONFIDENCE, size))
+                     plain=ssd_at(tuning.update_confidence, size, tuning), tie=0.25 * 3 * size[0] * size[1],
+                     alike=tuning.alike_level**2 * 3 * size[0] * size[1],
+                     visible=ssd_at(tuning.visible_confidence, size, tuning), tuning=tuning)
 
 
 @dataclass(frozen=True)
@@ -196,6 +185,8 @@ class Plans:
         Rectangles turn with their bones.
     frame_shape : tuple
         ``(h, w, ...)`` of the frames: no search goes wider than the frame.
+    tuning : MatchTuning, optional
+        The matching's tuning, carried by every plan; default its defaults.
 
     Attributes
     ----------
@@ -203,11 +194,14 @@ class Plans:
         The joint whose bone turns each rectangle, -1 for none.
     hangs_from : (k,) int
         Each joint's parent in the skeleton, -1 for a root.
+    tuning : MatchTuning
     """
 
     def __init__(self, sizes: Sequence[tuple[int, int]], parents: ArrayLike, radius: ArrayLike, *,
-                 w_alpha: float, w_beta: float | None, rotate: bool, frame_shape: tuple[int, ...]) -> None:
+                 w_alpha: float, w_beta: float | None, rotate: bool, frame_shape: tuple[int, ...],
+                 tuning: MatchTuning | None = None) -> None:
         self._w_alpha, self._w_beta = w_alpha, w_beta
+        self.tuning = MatchTuning() if tuning is None else tuning
         self._widest = math.hypot(frame_shape[0], frame_shape[1])
         radii = np.asarray(radius, dtype=float)
         self._joints = [((int(w), int(h)), float(r)) for (w, h), r in zip(sizes, radii, strict=True)]
@@ -225,5 +219,5 @@ class Plans:
             w_beta = (1.0 / r) ** 2 if self._w_beta is None else self._w_beta
             parent, hangs_from = int(self.parents[m]), int(self.hangs_from[m])
             self._cache[m, factor, colour] = plan_joint(size, r, colour * self._w_alpha, w_beta, parent,
-                                                        hangs_from, pace=factor)
+                                                        hangs_from, pace=factor, tuning=self.tuning)
         return self._cache[m, factor, colour]

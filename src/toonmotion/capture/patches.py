@@ -1,7 +1,8 @@
 """Patches of a frame for the joint tracker (thesis 4.4): a rectangle cut turned at a point
 (:func:`sample`, many at once with :func:`patches`), how alike two look (the colour cost's
 :func:`confidence`, the light-blind :func:`likeness`), and whether a patch is distinct or textured
-enough to track a joint by.
+enough to track a joint by; each with the :class:`~toonmotion.capture.match_tuning.MatchTuning` it
+reads (default its defaults).
 
 Patches are ``(h, w, 3)`` float32 in the rectangle's own frame: patch pixel ``(u, v)`` is the
 image at ``centre + rotation(angle) (u - (w-1)/2, v - (h-1)/2)``; (x, y) pixels, y down.
@@ -9,41 +10,14 @@ image at ``centre + rotation(angle) (u - (w-1)/2, v - (h-1)/2)``; (x, y) pixels,
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-# Confidence is exp(-d^2 / (2 CONFIDENCE_SCALE^2)), d the RMS difference per channel (grey levels).
-CONFIDENCE_SCALE = 30.0
-
-
-# A template is distinct when moved DISTINCT_SHIFT px in any direction it changes by at least
-# DISTINCT_RATIO of its change in the direction it changes most, and by a grey level (RMS per
-# channel); one that is not grows, up to MAX_GROWTH times its side (:func:`distinct_size`).
-DISTINCT_SHIFT = 2.0
-
-
-DISTINCT_RATIO = 0.1
-
-
-DISTINCT_LEVEL = 1.0
-
-
-MAX_GROWTH = 3.0
-
-
-# A template is textured when at least TEXTURED_FRACTION of its pixels change by more than
-# TEXTURE_LEVEL grey levels (in some channel) when it is moved DISTINCT_SHIFT px along x or along
-# y: a look of its own, which other places rarely share. One drawn in flat fills and outlines
-# changes along its outlines only: 22-48% of its pixels on the tracking benchmark's cel renders,
-# 93-98% on its textured ones, with camera noise of 5 grey levels or without.
-TEXTURE_LEVEL = 12.0
-
-
-TEXTURED_FRACTION = 0.75
-
+from toonmotion.capture.match_tuning import MatchTuning
 
 _WARP = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
 
@@ -54,17 +28,17 @@ _REMAP_ROWS = 32000
 Patch = NDArray[np.float32]
 
 
-def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: tuple[int, int]
-                  ) -> tuple[int, int]:
+def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: tuple[int, int],
+                  tuning: MatchTuning | None = None) -> tuple[int, int]:
     """The template size to track a joint by: ``size``, grown by half again (at most
-    :data:`MAX_GROWTH` times) while a patch of that size at ``centre`` looks like itself moved
-    :data:`DISTINCT_SHIFT` pixels in some direction: the mean squared difference in the direction
-    it changes least is under :data:`DISTINCT_RATIO` of that in the direction it changes most, or
-    under :data:`DISTINCT_LEVEL` grey levels squared. A rectangle inside one flat colour, or on a
-    straight outline, matches equally anywhere along it; a larger one takes in the outline's turns
-    and ends that pin it down (the "good features to track" criterion, applied to the
-    rectangle's size). A round outline changes few pixels when moved, but as many every way: it
-    is distinct.
+    ``tuning.max_growth`` times) while a patch of that size at ``centre`` looks like itself moved
+    ``tuning.distinct_shift`` pixels in some direction: the mean squared difference in the
+    direction it changes least is under ``tuning.distinct_ratio`` of that in the direction it
+    changes most, or under ``tuning.distinct_level`` grey levels squared. A rectangle inside one
+    flat colour, or on a straight outline, matches equally anywhere along it; a larger one takes in
+    the outline's turns and ends that pin it down (the "good features to track" criterion,
+    applied to the rectangle's size). A round outline changes few pixels when moved, but as many
+    every way: it is distinct.
 
     >>> image = np.full((80, 80, 3), 200, np.uint8); image[:, 40:] = 40  # a straight edge
     >>> image[60:, :] = 120  # a corner 20 px below
@@ -72,17 +46,29 @@ def distinct_size(image: NDArray[np.uint8], centre: NDArray[np.float64], size: t
     >>> distinct_size(image, on_edge, (12, 12)), distinct_size(image, at_corner, (12, 12))
     ((36, 36), (12, 12))
     """
+    tuning = MatchTuning() if tuning is None else tuning
     w0, h0 = size
-    for growth in (1.0, 1.5, 2.25, MAX_GROWTH):
+    for growth in _growths(tuning.max_growth):
         grown = (max(1, int(round(w0 * growth))), max(1, int(round(h0 * growth))))
-        if is_distinct(image, centre, grown):
+        if is_distinct(image, centre, grown, tuning):
             break
     return grown
 
 
-def is_distinct(image: NDArray[np.uint8], centre: NDArray[np.float64], size: tuple[int, int]) -> bool:
+def _growths(most: float) -> tuple[float, ...]:
+    """1, 1.5, 2.25, ... (half again each time) while under ``most``, then ``most`` (>= 1).
+
+    >>> _growths(3.0), _growths(1.0)
+    ((1.0, 1.5, 2.25, 3.0), (1.0,))
+    """
+    growths = itertools.takewhile(lambda growth: growth < most, (1.5**i for i in itertools.count()))
+    return (*growths, most)
+
+
+def is_distinct(image: NDArray[np.uint8], centre: NDArray[np.float64], size: tuple[int, int],
+                tuning: MatchTuning | None = None) -> bool:
     """Whether a ``size`` patch of ``image`` at ``centre`` looks unlike itself moved
-    :data:`DISTINCT_SHIFT` pixels every way (:func:`distinct_size`).
+    ``tuning.distinct_shift`` pixels every way (:func:`distinct_size`).
 
     >>> image = np.full((80, 80, 3), 200, np.uint8); image[:, 40:] = 40  # a straight edge
     >>> image[60:, :] = 120  # a corner 20 px below
@@ -90,27 +76,31 @@ def is_distinct(image: NDArray[np.uint8], centre: NDArray[np.float64], size: tup
     >>> is_distinct(image, on_edge, (12, 12)), is_distinct(image, at_corner, (12, 12))
     (False, True)
     """
+    tuning = MatchTuning() if tuning is None else tuning
+    shift = tuning.distinct_shift
     patch = sample(image, centre, 0.0, size)
-    change = [float(np.mean((sample(image, centre + DISTINCT_SHIFT * np.array([math.cos(a), math.sin(a)]),
+    change = [float(np.mean((sample(image, centre + shift * np.array([math.cos(a), math.sin(a)]),
                                     0.0, size) - patch) ** 2))
               for a in np.arange(8) * math.pi / 4]
-    return min(change) >= max(DISTINCT_RATIO * max(change), DISTINCT_LEVEL**2)
+    return min(change) >= max(tuning.distinct_ratio * max(change), tuning.distinct_level**2)
 
 
-def is_textured(patch: Patch) -> bool:
+def is_textured(patch: Patch, tuning: MatchTuning | None = None) -> bool:
     """Whether a template ``(h, w, 3)`` has a texture of its own: at least
-    :data:`TEXTURED_FRACTION` of its pixels change by more than :data:`TEXTURE_LEVEL` grey levels
-    when it is moved :data:`DISTINCT_SHIFT` pixels (the mean of the fractions along x and y).
+    ``tuning.textured_fraction`` of its pixels change by more than ``tuning.texture_level`` grey
+    levels when it is moved ``tuning.distinct_shift`` pixels (the mean of the fractions along x and
+    y).
 
     >>> flat = np.full((20, 20, 3), 200, np.float32); flat[:, 9:12] = 20  # a fill and an outline
     >>> noise = np.random.default_rng(0).uniform(0, 255, (20, 20, 3)).astype(np.float32)
     >>> is_textured(flat), is_textured(noise)
     (False, True)
     """
-    d = int(DISTINCT_SHIFT)
-    along_x = np.abs(patch[:, d:] - patch[:, :-d]).max(axis=2) > TEXTURE_LEVEL
-    along_y = np.abs(patch[d:] - patch[:-d]).max(axis=2) > TEXTURE_LEVEL
-    return bool((along_x.mean() + along_y.mean()) / 2 >= TEXTURED_FRACTION)
+    tuning = MatchTuning() if tuning is None else tuning
+    d, level = tuning.distinct_shift, tuning.texture_level
+    along_x = np.abs(patch[:, d:] - patch[:, :-d]).max(axis=2) > level
+    along_y = np.abs(patch[d:] - patch[:-d]).max(axis=2) > level
+    return bool((along_x.mean() + along_y.mean()) / 2 >= tuning.textured_fraction)
 
 
 def patches(image, centres, angles, size):
@@ -134,15 +124,17 @@ def patches(image, centres, angles, size):
     return out
 
 
-def confidence(ssd: float, size: tuple[int, int]) -> float:
+def confidence(ssd: float, size: tuple[int, int], tuning: MatchTuning | None = None) -> float:
     """Confidence of a match whose sum of squared RGB differences over a ``size`` rectangle is ``ssd``.
 
-    ``exp(-d^2 / (2 CONFIDENCE_SCALE^2))``, ``d`` the root mean square difference per channel.
+    ``exp(-d^2 / (2 s^2))``, ``d`` the root mean square difference per channel, ``s``
+    ``tuning.confidence_scale``.
 
     >>> round(confidence(20.0**2 * 3 * 4, (2, 2)), 2)  # 20 grey levels off in every channel
     0.8
     """
-    return math.exp(-ssd / (size[0] * size[1] * 3) / (2 * CONFIDENCE_SCALE**2))
+    scale = (MatchTuning() if tuning is None else tuning).confidence_scale
+    return math.exp(-ssd / (size[0] * size[1] * 3) / (2 * scale**2))
 
 
 def likeness(template: Patch, patch: Patch) -> float:
@@ -168,9 +160,10 @@ def likeness(template: Patch, patch: Patch) -> float:
     return (ab - n * sum(a * b for a, b in zip(mean_a, mean_b, strict=True))) / math.sqrt(spread_a * spread_b)
 
 
-def ssd_at(confidence: float, size: tuple[int, int]) -> float:
+def ssd_at(confidence: float, size: tuple[int, int], tuning: MatchTuning | None = None) -> float:
     """The sum of squared differences that has ``confidence``: inverse of :func:`confidence`."""
-    return -math.log(confidence) * 2 * CONFIDENCE_SCALE**2 * size[0] * size[1] * 3
+    scale = (MatchTuning() if tuning is None else tuning).confidence_scale
+    return -math.log(confidence) * 2 * scale**2 * size[0] * size[1] * 3
 
 
 def sample(image: NDArray[np.uint8] | Patch, centre: NDArray[np.float64], angle: float,

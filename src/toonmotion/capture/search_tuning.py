@@ -9,18 +9,20 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from toonmotion.capture.track_checks import above, at_least, check_ranges, share, whole
+from toonmotion.capture.track_checks import Tuning, above, at_least, share, whole
 
 
 @dataclass(frozen=True)
-class SearchTuning:
+class SearchTuning(Tuning):
     """How the tracker searches for its joints: each frame (eq. 4.4-4.6 and re-acquisition) and
     the whole clip's paths.
 
     Each value was chosen by a measurement on the tracker's benchmark clips (the 14 rendered
     clips of ``benchmarks/track.py``, textured and cel, on ones and twos, at seeds 0 and 2, with
     seed 5 held out) and the shared drawings' footage; the measurement is given with each. The
-    defaults are the tracker's; change one to see what it does, not to tune for one clip.
+    defaults are the tracker's; change one to see what it does, not to tune for one clip. Each
+    value's range is checked when the tuning is made
+    (:class:`~toonmotion.capture.track_checks.Tuning`).
 
     Attributes
     ----------
@@ -77,7 +79,7 @@ class SearchTuning:
         Of the rectangle's larger side, times the pace after a held drawing: how far from where
         it was expected a weak match may put a joint, > 0.
     refit_turn : float
-        Radians: a textured joint matched below ``template_match.TURN_CONFIDENCE`` whose parent
+        Radians: a textured joint matched below ``MatchTuning.turn_confidence`` whose parent
         was found is matched again turned as its bone has turned, when that differs by more
         than this, > 0. On the jumping jacks on twos a hand was found in the right place at
         0.08, turned 68 degrees wrong, and called hidden.
@@ -96,11 +98,6 @@ class SearchTuning:
     bone_weight : float
         The kinematic term's weight per squared pixel of bone-length change, relative to
         ``w_beta``, >= 0. 0: bones may stretch freely.
-
-    Raises
-    ------
-    TrackingError
-        A value out of its range, in one line naming it.
 
     Examples
     --------
@@ -127,6 +124,3 @@ class SearchTuning:
     textured_colour_weight: float = above(0.0, 16.0)
     anchor_likeness: float = share(0.8)
     bone_weight: float = at_least(0.0, 1.0)
-
-    def __post_init__(self) -> None:
-        check_ranges(self)

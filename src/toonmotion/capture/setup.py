@@ -8,7 +8,9 @@ curve skeleton's branches, its junctions and evenly along long branches), each w
 as wide as the figure is thick there: twice the largest distance to the outline within 3 px
 of the joint (within a few pixels, since a branch's end point sits near the tip, where the
 figure is thinnest), clamped to [8, 48] px, so small joints still have some texture and big
-ones do not drag in much of the background.
+ones do not drag in much of the background. These values are
+:class:`~toonmotion.capture.figure_tuning.FigureTuning`'s ``thickness_reach``, ``size_low`` and
+``size_high`` (with ``frame_side``), given as ``tuning`` (default its defaults).
 
 Rectangles: ``sizes[j] = (width, height)`` in pixels, centred on joint ``j``. Integer
 coordinates are pixel centres, so a ``w`` x ``h`` frame spans ``[-0.5, w - 0.5]`` x
@@ -25,27 +27,18 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage as ndi
 
+from toonmotion.capture.figure_tuning import FigureTuning
 from toonmotion.capture.foreground import guide_skeleton
-from toonmotion.capture.track_scale import WORKING_SIDE, halvings
+from toonmotion.capture.track_scale import halvings
 from toonmotion.errors import TrackingError
 from toonmotion.rig.auto_skeleton import skeleton_from_curve_skeleton
 from toonmotion.rig.skeleton import Skeleton
 
-SIZE_RANGE = (8.0, 48.0)
-# The range is for frames at most FRAME_SIDE pixels on their larger side; it doubles each time the
-# frame does beyond that (size_scale), as the tracker halves such frames to track them
-# (track_scale): there the rectangles are within the range again. (A joint's window is half its
-# rectangle: before the tracker halved large frames, the drawings' footage doubled, 5 clips, was
-# tracked 102.5 px off summed with the range's cap at 48, against 32.8 at its own size.)
-FRAME_SIDE = WORKING_SIDE
-# How far from a joint (pixels) the figure's thickness is looked for.
-THICKNESS_REACH = 3
-
 _EPS = 1e-9
 
 
-def suggest_setup(mask: NDArray[np.bool_], *, max_bone: float | None = None,
-                  prune: float = 0.5) -> tuple[Skeleton, NDArray[np.float64]]:
+def suggest_setup(mask: NDArray[np.bool_], *, max_bone: float | None = None, prune: float = 0.5,
+                  tuning: FigureTuning | None = None) -> tuple[Skeleton, NDArray[np.float64]]:
     """Joints to track on frame 1, from its curve skeleton, and a rectangle for each.
 
     Parameters
@@ -57,6 +50,8 @@ def suggest_setup(mask: NDArray[np.bool_], *, max_bone: float | None = None,
         curve skeleton's bounding-box diagonal.
     prune : float
         Spur pruning of the curve skeleton.
+    tuning : FigureTuning, optional
+        The rectangles' sizes (:func:`rectangle_sizes`); default its defaults.
 
     Returns
     -------
@@ -78,22 +73,24 @@ def suggest_setup(mask: NDArray[np.bool_], *, max_bone: float | None = None,
     """
     mask = np.asarray(mask, dtype=bool)
     skeleton = skeleton_from_curve_skeleton(guide_skeleton(mask, prune=prune), max_bone=max_bone)
-    return skeleton, rectangle_sizes(mask, skeleton.positions)
+    return skeleton, rectangle_sizes(mask, skeleton.positions, tuning)
 
 
-def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64]) -> NDArray[np.float64]:
+def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64],
+                    tuning: FigureTuning | None = None) -> NDArray[np.float64]:
     """The tracking rectangle :func:`suggest_setup` gives a joint at each of ``positions``
     ``(k, 2)`` on the figure ``mask`` ``(h, w)``: a square twice the figure's local thickness (the
-    largest distance to its outline within :data:`THICKNESS_REACH` px), within
-    :data:`SIZE_RANGE` (times :func:`size_scale` of the frame), shrunk about the
-    joint to lie inside the frame. ``(k, 2)`` widths and heights, pixels.
+    largest distance to its outline within ``tuning.thickness_reach`` px), within
+    ``tuning.size_low`` to ``tuning.size_high`` (times :func:`size_scale` of the frame), shrunk
+    about the joint to lie inside the frame. ``(k, 2)`` widths and heights, pixels; ``tuning``
+    default its defaults.
 
     >>> mask = np.zeros((40, 120), bool); mask[14:26, 0:110] = True
     >>> rectangle_sizes(mask, np.array([[54.0, 19.5]])).tolist()
     [[12.0, 12.0]]
 
     A body 200 px thick gets the range's largest square, twice as large on a frame twice as
-    large as :data:`FRAME_SIDE`:
+    large as ``tuning.frame_side``:
 
     >>> body = np.zeros((600, 800), bool); body[200:400, 100:700] = True
     >>> large = np.zeros((1200, 1600), bool); large[400:800, 200:1400] = True
@@ -102,32 +99,33 @@ def rectangle_sizes(mask: NDArray[np.bool_], positions: NDArray[np.float64]) -> 
     >>> rectangle_sizes(large, np.array([[800.0, 600.0]])).tolist()
     [[96.0, 96.0]]
     """
+    tuning = FigureTuning() if tuning is None else tuning
     mask = np.asarray(mask, dtype=bool)
     positions = np.asarray(positions, dtype=float)
     h, w = mask.shape
-    # Largest distance to the outline within THICKNESS_REACH px of each pixel.
-    reach = 2 * THICKNESS_REACH + 1
+    # Largest distance to the outline within thickness_reach px of each pixel.
+    reach = 2 * tuning.thickness_reach + 1
     radius = ndi.maximum_filter(ndi.distance_transform_edt(mask), size=reach, mode="constant")
     cols = np.clip(np.rint(positions[:, 0]).astype(int), 0, w - 1)
     rows = np.clip(np.rint(positions[:, 1]).astype(int), 0, h - 1)
-    scale = size_scale((w, h))
-    side = np.clip(2.0 * radius[rows, cols], SIZE_RANGE[0] * scale, SIZE_RANGE[1] * scale)
+    scale = size_scale((w, h), tuning)
+    side = np.clip(2.0 * radius[rows, cols], tuning.size_low * scale, tuning.size_high * scale)
     sizes = np.stack([side, side], axis=1)
     # Shrink about the joint until the rectangle is inside the frame.
     room = 2.0 * np.minimum(positions + 0.5, np.array([w, h]) - 0.5 - positions)
     return np.minimum(sizes, np.maximum(room, 0.0))
 
 
-def size_scale(frame_size: tuple[float, float]) -> float:
-    """How many times :data:`SIZE_RANGE` a suggested rectangle's size is on a frame of
-    ``frame_size`` ``(width, height)``: 1 up to :data:`FRAME_SIDE` pixels on its larger side,
-    doubling each time the frame does beyond that (the tracker halves the frame as many times,
-    :func:`~toonmotion.capture.track_scale.halvings`).
+def size_scale(frame_size: tuple[float, float], tuning: FigureTuning | None = None) -> float:
+    """How many times the size range a suggested rectangle's size is on a frame of ``frame_size``
+    ``(width, height)``: 1 up to ``tuning.frame_side`` pixels on its larger side (default the
+    tracker's working side), doubling each time the frame does beyond that (the tracker halves the
+    frame as many times, :func:`~toonmotion.capture.track_scale.halvings`).
 
     >>> [size_scale(size) for size in ((640, 480), (1280, 960), (1920, 1080), (3840, 2160))]
     [1.0, 2.0, 2.0, 4.0]
     """
-    return 2.0 ** halvings(frame_size, FRAME_SIDE)
+    return 2.0 ** halvings(frame_size, (FigureTuning() if tuning is None else tuning).frame_side)
 
 
 def check_setup(skeleton: Skeleton, sizes: ArrayLike, frame_size: Sequence[int]) -> None:

@@ -5,14 +5,15 @@ well anywhere along the fill: its own templates cannot say where it is, and
 :class:`~toonmotion.capture.track_search.FrameSearch` calls it *ambiguous* and places it among the
 places that match as well, where its neighbours carry it. When its neighbours are inside the fill
 too, they cannot say either, and the whole group drifts (a drawing's torso, neck and shoulders
-on one grey body went 146 px off). Its *context* is a square round it :data:`CONTEXT_GROWTH`
+on one grey body went 146 px off). Its *context* is a square round it ``context_growth``
 times its rectangle's larger side (larger still where that is not distinct), cut with its
 anchor where tracking started, at the level of the frame's Gaussian pyramid (``cv2.pyrDown``)
-where the square is at most :data:`CONTEXT_SIDE` pixels wide: there it takes in the fill's
+where the square is at most ``context_side`` pixels wide: there it takes in the fill's
 outline and what lies round it. It is matched near the joint's match at the rectangle's angle
-and at :data:`CONTEXT_TURNS` more (a root's rectangle does not turn, but a body leans), and where
-it matches at least :data:`CONTEXT_CONFIDENCE`, next to a place alike to the joint's match, it
-places the joint. A figure whose parts move within the square (legs folding under the hips in a
+and at ``context_turns`` more (a root's rectangle does not turn, but a body leans), and where
+it matches at least ``context_confidence``, next to a place alike to the joint's match, it
+places the joint (each of :class:`~toonmotion.capture.match_tuning.MatchTuning`, given as
+``tuning``). A figure whose parts move within the square (legs folding under the hips in a
 squat) matches it badly there, and the neighbours decide, as before.
 """
 
@@ -27,24 +28,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.joint_plan import Context, Templates
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.patches import confidence, distinct_size, is_distinct, sample
-
-# The context's side, times the rectangle's larger side. Over the drawings' footage (43 clips,
-# 287.2 px summed without a context), 2 placed the joints 236.0 px off summed, 2.5 241.7, 3
-# 259.1 and 4 265.3; at 1.5 the demo went 28.2 px off (1.9 at 2.5).
-# 2.5 keeps away from that.
-CONTEXT_GROWTH = 2.5
-# The context is matched at the first pyramid level where it is at most this wide (pixels); at
-# 32 (with contexts 3 rectangles wide) the demo went 3.4 px off.
-CONTEXT_SIDE = 48
-# Turns of the rectangle's angle the context is also matched at, radians. At the rectangle's
-# angle alone, a flat body leaning 14 degrees lost its joints (the tests: 30-36 px off).
-CONTEXT_TURNS = tuple(math.radians(turn) for turn in (0, 10, -10, 20, -20))
-# A context matching less than this does not place the joint. On the drawings' footage, where it
-# matched at least 0.7 (near a place alike to the joint's match) it was 5.0 px from the joint
-# on average, where the neighbours carried it 7.4 px; below 0.3, 39 px. A bar of 0.6 or 0.8
-# placed the joints 247.1 and 249.1 px off summed (241.7 at 0.7).
-CONTEXT_CONFIDENCE = 0.7
 
 
 class Pyramid:
@@ -75,34 +60,37 @@ def at_level(xy: NDArray[np.float64], n: int) -> NDArray[np.float64]:
     return np.asarray(xy, dtype=float) / 2.0**n
 
 
-def cut_context(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int]
-                ) -> Context | None:
+def cut_context(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int],
+                tuning: MatchTuning | None = None) -> Context | None:
     """The context of a ``size`` rectangle at ``centre`` turned by ``angle`` radians, grown further
     where it is not distinct (:func:`~toonmotion.capture.patches.distinct_size`); None where
-    it is not distinct even so (all inside a fill, it would match anywhere in it).
+    it is not distinct even so (all inside a fill, it would match anywhere in it). ``tuning``
+    default its defaults.
     """
+    tuning = MatchTuning() if tuning is None else tuning
     centre = np.asarray(centre, dtype=float)
-    grown = round(CONTEXT_GROWTH * max(size))
-    side = max(distinct_size(pyramid.level(0), centre, (grown, grown)))
-    if not is_distinct(pyramid.level(0), centre, (side, side)):
+    grown = round(tuning.context_growth * max(size))
+    side = max(distinct_size(pyramid.level(0), centre, (grown, grown), tuning))
+    if not is_distinct(pyramid.level(0), centre, (side, side), tuning):
         return None
-    level = max(0, math.ceil(math.log2(side / CONTEXT_SIDE)))
+    level = max(0, math.ceil(math.log2(side / tuning.context_side)))
     s = max(1, round(side / 2**level))
     return Context(sample(pyramid.level(level), at_level(centre, level), angle, (s, s)), level)
 
 
-def cut_templates(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int]
-                  ) -> Templates:
+def cut_templates(pyramid: Pyramid, centre: NDArray[np.float64], angle: float, size: tuple[int, int],
+                  tuning: MatchTuning | None = None) -> Templates:
     """A joint's templates cut from the frame ``pyramid`` holds, with its :class:`Context` (if it
     has one)."""
     return replace(Templates.cut(pyramid.level(0), centre, angle, size),
-                   context=cut_context(pyramid, centre, angle, size))
+                   context=cut_context(pyramid, centre, angle, size, tuning))
 
 
 def place_by_context(pyramid: Pyramid, context: Context, centre: NDArray[np.float64], angle: float,
-                     radius: float) -> tuple[NDArray[np.float64], float]:
+                     radius: float, tuning: MatchTuning | None = None) -> tuple[NDArray[np.float64], float]:
     """Where ``context`` matches best within ``radius`` pixels of ``centre`` (full resolution), its
-    rectangle turned by ``angle`` and by each of :data:`CONTEXT_TURNS` more.
+    rectangle turned by ``angle`` and by each of ``tuning.context_turns`` more (default its
+    defaults).
 
     Returns
     -------
@@ -122,7 +110,7 @@ def place_by_context(pyramid: Pyramid, context: Context, centre: NDArray[np.floa
     >>> _ = cv2.ellipse(later, (109, 100), (60, 40), 8, 0, 360, (40, 90, 200), -1)
     >>> context = cut_context(Pyramid(first), np.array([100.0, 100.0]), 0.0, (16, 16))
     >>> xy, sure = place_by_context(Pyramid(later), context, np.array([104.0, 100.0]), 0.0, 24.0)
-    >>> bool(np.hypot(*(xy - [109.0, 100.0])) < 2.0), sure > CONTEXT_CONFIDENCE
+    >>> bool(np.hypot(*(xy - [109.0, 100.0])) < 2.0), sure > MatchTuning().context_confidence
     (True, True)
 
     On the plain ground alone, however large, no context is distinct: none is cut.
@@ -130,12 +118,13 @@ def place_by_context(pyramid: Pyramid, context: Context, centre: NDArray[np.floa
     >>> cut_context(Pyramid(ground), np.array([100.0, 100.0]), 0.0, (16, 16)) is None
     True
     """
+    tuning = MatchTuning() if tuning is None else tuning
     n, patch = context.level, context.patch
     s = patch.shape[0]
     R = max(1, math.ceil(radius / 2**n))
     image, middle = pyramid.level(n), at_level(centre, n)
     best: tuple[float, float, float, float] | None = None  # ssd, dx, dy (level pixels), angle
-    for turn in CONTEXT_TURNS:
+    for turn in tuning.context_turns:
         window = sample(image, middle, angle + turn, (s + 2 * R, s + 2 * R))
         ssd = cv2.matchTemplate(window, patch, cv2.TM_SQDIFF)
         i, j = divmod(int(np.argmin(ssd)), 2 * R + 1)
@@ -146,7 +135,7 @@ def place_by_context(pyramid: Pyramid, context: Context, centre: NDArray[np.floa
     least, dx, dy, turned = best
     c, s_ = math.cos(turned), math.sin(turned)
     offset = 2.0**n * np.array([c * dx - s_ * dy, s_ * dx + c * dy])
-    return np.asarray(centre, dtype=float) + offset, confidence(least, (s, s))
+    return np.asarray(centre, dtype=float) + offset, confidence(least, (s, s), tuning)
 
 
 def _vertex(costs: NDArray[Any]) -> float:

@@ -25,48 +25,16 @@ from numpy.typing import NDArray
 
 from toonmotion.capture.coarse_search import rank_turns
 from toonmotion.capture.joint_plan import (
-    UPDATE_CONFIDENCE,
-    VISIBLE_CONFIDENCE,
     BoneRule,
     JointPlan,
     Templates,
     bone_cost,
 )
 from toonmotion.capture.patches import (
-    CONFIDENCE_SCALE,
     confidence,
     sample,
 )
 from toonmotion.capture.track_figure import figure_cells
-
-# The anchor's and the latest template's matches agree when they lie within this many pixels.
-DRIFT_TOLERANCE = 2.0
-
-# A turning rectangle matching less confidently than this at its predicted angle tries TURNS too
-# (radians).
-TURN_CONFIDENCE = 0.6
-# A rectangle on a bone seen nearly end-on (shorter than the rectangle) has no angle to go by:
-# the bone's direction swings wildly with the least movement. Matching badly, it is looked for
-# coarsely at turns all round (:func:`locate`).
-SPIN_TURNS = tuple(math.radians(step) for step in range(0, 360, 20))
-# The extra turns are ranked at half resolution; at most this many, best first, are then matched
-# finely, until one matches at TURN_CONFIDENCE.
-FINE_TURNS = 2
-
-
-# A joint's anchor found again as it was cut (every cell within ALIKE_LEVEL grey levels, RMS per
-# channel: compression noise) at no more than EXACT_CELLS whole-pixel cells (a place between cells
-# takes up to 2 x 2) is there, however far from the prediction: among plain cells eq. 4.6's colour
-# weight leaves the choice to the distance from the prediction, which holds a joint that drifted
-# along a flat limb where it drifted to, even once its limb is back as it was drawn. A flat anchor
-# is found as cut along a stretch of fill; the prediction still chooses there.
-EXACT_CELLS = 9
-
-# Besides its match, a joint's search keeps up to OTHERS other places where the texture is found
-# (local minima of the colour cost, OTHER_SPACING px apart and at least VISIBLE_CONFIDENCE
-# confident), for the whole-sequence pass to choose among (:mod:`~toonmotion.capture.track_path`).
-OTHERS = 4
-OTHER_SPACING = 2
 
 
 @dataclass(frozen=True)
@@ -82,8 +50,9 @@ class _Cells:
 
     @cached_property
     def parts(self) -> NDArray[np.int32]:
-        """The cells matching as well as the match's (:data:`ALIKE_LEVEL`), labelled by connected
-        part (8-connected)."""
+        """The cells matching as well as the match's (``tuning.alike_level`` of the plan's
+        :class:`~toonmotion.capture.match_tuning.MatchTuning`), labelled by connected part
+        (8-connected)."""
         i, j = self.cell
         alike = (self.ssd <= self.ssd[i, j] + self.joint.alike) & self.allowed
         alike[i, j] = True
@@ -96,23 +65,24 @@ class _Cells:
         return np.column_stack([cols - R, rows - R]).astype(float)
 
     def others(self) -> NDArray[np.float64]:
-        """Up to :data:`OTHERS` local minima of the colour cost, :data:`OTHER_SPACING` cells apart,
-        among the allowed cells not joined to the match's alike ones, at least
-        :data:`VISIBLE_CONFIDENCE` confident, most confident first: ``(m, 3)`` offsets from the
-        window's centre and confidence."""
+        """Up to ``tuning.others`` local minima of the colour cost, the least of the cells
+        ``tuning.other_spacing`` round them, among the allowed cells not joined to the match's
+        alike ones, at least ``tuning.visible_confidence`` confident, most confident first:
+        ``(m, 3)`` offsets from the window's centre and confidence (the plan's tuning)."""
         ssd, joint = self.ssd, self.joint
-        R = joint.radius
+        R, tuning = joint.radius, joint.tuning
         apart = (ssd <= joint.visible) & self.allowed
         apart &= self.parts != self.parts[self.cell]
         if not apart.any():
             return np.zeros((0, 3))
-        side = 2 * OTHER_SPACING + 1
+        side = 2 * tuning.other_spacing + 1
         rows, cols = np.nonzero(apart & (ssd <= cv2.erode(ssd, np.ones((side, side), np.uint8))))
-        order = np.argsort(ssd[rows, cols], kind="stable")[:OTHERS]
+        order = np.argsort(ssd[rows, cols], kind="stable")[:tuning.others]
         rows, cols = rows[order], cols[order]
         # confidence(), for every place at once
         mean = ssd[rows, cols].astype(float) / (3 * joint.size[0] * joint.size[1])
-        return np.column_stack([cols - R, rows - R, np.exp(-mean / (2 * CONFIDENCE_SCALE**2))]).astype(float)
+        sure = np.exp(-mean / (2 * tuning.confidence_scale**2))
+        return np.column_stack([cols - R, rows - R, sure]).astype(float)
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,14 +96,15 @@ class Match:
     confidence : float in [0, 1]
     agree : bool
         Whether the latest template may be re-cut at the match: the anchor's match lies within
-        :data:`DRIFT_TOLERANCE` of the latest's, or the anchor matches plainly
-        (:data:`UPDATE_CONFIDENCE`), or there is no latest apart from the anchor.
+        ``drift_tolerance`` of the latest's, or the anchor matches plainly
+        (``update_confidence``), or there is no latest apart from the anchor (the plan's
+        :class:`~toonmotion.capture.match_tuning.MatchTuning`, as below).
     alike : (n, 2) float
         The whole-pixel places of the search, joined to the match's, that match as well as it
-        (:data:`ALIKE_LEVEL`), (x, y) pixels: where the texture cannot tell the joint apart.
+        (``alike_level``), (x, y) pixels: where the texture cannot tell the joint apart.
     others : (m, 3) float
-        Up to :data:`OTHERS` other places of the search where the template is found, apart from
-        the alike ones: local minima of the colour cost at least :data:`VISIBLE_CONFIDENCE`
+        Up to ``others`` other places of the search where the template is found, apart from
+        the alike ones: local minima of the colour cost at least ``visible_confidence``
         confident, whole-pixel ``(x, y)`` and the confidence there, most confident first.
     cells : _Cells or None
         The search's colour costs, from which ``alike`` and ``others`` are worked out when first
@@ -175,10 +146,11 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
           turn_ranks: list[float] | None = None) -> Match:
     """Match a joint's templates round ``predicted``, its rectangle turned by ``angle`` radians.
 
-    A rectangle that turns and matches less confidently than :data:`TURN_CONFIDENCE` is also
-    looked for turned by the plan's turns more (:data:`TURNS`, scaled by its pace): they are
-    ranked at half resolution (:func:`locate`), and the :data:`FINE_TURNS` best are matched finely,
-    best first, until one matches at :data:`TURN_CONFIDENCE`; the most confident match is kept.
+    A rectangle that turns and matches less confidently than ``turn_confidence`` (of the plan's
+    :class:`~toonmotion.capture.match_tuning.MatchTuning`) is also looked for turned by the plan's
+    turns more (its ``turns``, scaled by its pace): they are ranked at half resolution
+    (:func:`locate`), and the ``fine_turns`` best are matched finely, best first, until one matches
+    at ``turn_confidence``; the most confident match is kept.
 
     Parameters
     ----------
@@ -209,15 +181,16 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
     Match
     """
     found = _match_turned(image, templates, predicted, angle, joint, bone, figure)
-    if joint.parent < 0 or not turn or found.confidence >= TURN_CONFIDENCE:
+    enough = joint.tuning.turn_confidence
+    if joint.parent < 0 or not turn or found.confidence >= enough:
         return found
     # The turns are ranked at half resolution, and matched finely best first.
     coarse = turn_ranks
     if coarse is None:
         half: NDArray[np.uint8] = np.asarray(cv2.pyrDown(image) if small is None else small, np.uint8)
         coarse = rank_turns(half, templates, predicted, angle, joint, bone, figure, joint.turns)
-    for k in np.argsort(coarse)[::-1][:FINE_TURNS]:
-        if found.confidence >= TURN_CONFIDENCE:
+    for k in np.argsort(coarse)[::-1][:joint.tuning.fine_turns]:
+        if found.confidence >= enough:
             break
         other = _match_turned(image, templates, predicted, angle + joint.turns[k], joint, bone, figure)
         if other.confidence > found.confidence:
@@ -228,10 +201,10 @@ def match(image: NDArray[np.uint8], templates: Templates, predicted: NDArray[np.
 def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     """:func:`match` at one angle: the anchor's match where it is trusted, else the latest's.
 
-    An anchor matching plainly (:data:`UPDATE_CONFIDENCE`) is taken without matching the latest:
-    it does not drift, and the joint is plainly there (the latest may be re-cut).
+    An anchor matching plainly (the plan's ``tuning.update_confidence``) is taken without matching
+    the latest: it does not drift, and the joint is plainly there (the latest may be re-cut).
     """
-    R, (tw, th) = joint.radius, joint.size
+    R, (tw, th), tuning = joint.radius, joint.size, joint.tuning
     prior = joint.geometric if bone is None else joint.geometric + bone_cost(predicted, angle, R, bone)
     if figure is not None:
         prior = np.where(figure_cells(figure, predicted, angle, R), prior, np.inf)
@@ -241,11 +214,11 @@ def _match_turned(image, templates, predicted, angle, joint, bone, figure=None):
     window = sample(image, predicted, angle, (tw + 2 * R, th + 2 * R))
     anchor = _best(window, templates.anchor, joint, prior, allowed, exact=True)
     (offset, confidence, cells), agree = anchor, True
-    if anchor[1] < UPDATE_CONFIDENCE and templates.anchor is not templates.latest:
+    if anchor[1] < tuning.update_confidence and templates.anchor is not templates.latest:
         latest = _best(window, templates.latest, joint, prior, allowed)
         (offset, confidence, cells) = latest
-        agree = bool(np.hypot(*(anchor[0] - latest[0])) <= DRIFT_TOLERANCE)
-        if agree and anchor[1] >= VISIBLE_CONFIDENCE:
+        agree = bool(np.hypot(*(anchor[0] - latest[0])) <= tuning.drift_tolerance)
+        if agree and anchor[1] >= tuning.visible_confidence:
             # Both find the joint here: the anchor's place (it does not drift), and the latest's
             # confidence when higher (the anchor is older, the joint's looks may have changed:
             # a limb bends at it). The latest may then be re-cut: an occluder sliding over the
@@ -266,8 +239,13 @@ def _best(window, template, joint, prior, allowed, exact=False):
 
     The mixed cost (colour plus ``prior``, the geometric and kinematic terms per cell; ``allowed``
     where it is finite, some cell) picks the cell among the plain ones, if any; with ``exact``
-    (the anchor), among the cells where the template is found again as cut, if they are few
-    (:data:`EXACT_CELLS`). The colour cost alone then places the match: a descent to its local
+    (the anchor), among the cells where the template is found again as cut (every cell within the
+    plan's ``tuning.alike_level``, compression noise), if they are few (``tuning.exact_cells``;
+    a place between cells takes up to 2 x 2): there it is, however far from the prediction. Among
+    plain cells eq. 4.6's colour weight leaves the choice to the distance from the prediction,
+    which holds a joint that drifted along a flat limb where it drifted to, even once its limb is
+    back as it was drawn; a flat anchor is found as cut along a stretch of fill, and there the
+    prediction still chooses. The colour cost alone then places the match: a descent to its local
     minimum and a parabola through it in x and in y.
     """
     R, (tw, th) = joint.radius, joint.size
@@ -277,7 +255,7 @@ def _best(window, template, joint, prior, allowed, exact=False):
     if plain.any():
         if exact:
             same = plain & (ssd <= joint.alike)
-            if 0 < np.count_nonzero(same) <= EXACT_CELLS:
+            if 0 < np.count_nonzero(same) <= joint.tuning.exact_cells:
                 plain = same
         cost[~plain] = np.inf
     i, j = np.unravel_index(int(np.argmin(cost)), ssd.shape)
@@ -288,7 +266,7 @@ def _best(window, template, joint, prior, allowed, exact=False):
     dx = _vertex(ssd[i, j - 1] if j > 0 else None, exact, ssd[i, j + 1] if j < 2 * R else None, joint.tie)
     dy = _vertex(ssd[i - 1, j] if i > 0 else None, exact, ssd[i + 1, j] if i < 2 * R else None, joint.tie)
     cells = _Cells(ssd, allowed, (i, j), joint)
-    return np.array([j - R + dx, i - R + dy]), confidence(exact, joint.size), cells
+    return np.array([j - R + dx, i - R + dy]), confidence(exact, joint.size, joint.tuning), cells
 
 
 def _descend(cost, i, j, tie):

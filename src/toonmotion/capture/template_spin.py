@@ -3,8 +3,8 @@
 :func:`~toonmotion.capture.coarse_search.locate` turns the search window for each turn it tries
 and matches the anchor's coarse template in each (``cv2.matchTemplate``, which transforms the
 template anew every call): 18 turns cost 18 searches. Here the *template* turns instead: the disc
-inscribed in the anchor's coarse template, turned by each of
-:data:`~toonmotion.capture.template_match.SPIN_TURNS`, is transformed once per window size
+inscribed in the anchor's coarse template, turned by each of the turns all round
+(:attr:`~toonmotion.capture.match_tuning.MatchTuning.spin_turns`), is transformed once per window size
 (:class:`TurnedDiscs`, made once per joint), the window, not turned, once per search, and every
 turn's sums of squared differences come from one product of spectra and one batch of inverse
 transforms (``scipy.fft``): the 18 turns in about a fifth of the time (130-350 us against
@@ -26,17 +26,18 @@ import scipy.fft as sp_fft
 from numpy.typing import NDArray
 
 from toonmotion.capture.coarse_search import coarse_geometric
-from toonmotion.capture.joint_plan import UPDATE_CONFIDENCE, JointPlan
+from toonmotion.capture.joint_plan import JointPlan
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.patches import Patch, confidence, sample, ssd_at
-from toonmotion.capture.template_match import SPIN_TURNS
 from toonmotion.capture.track_figure import figure_cells
 
 _SUM = np.ones((1, 3), np.float32)  # cv2.transform by it sums the channels
 
 
 class TurnedDiscs:
-    """The disc inscribed in a coarse template ``(h, w, 3)``, turned by each of ``turns`` (radians),
-    and its spectra per window size, made when first asked for.
+    """The disc inscribed in a coarse template ``(h, w, 3)``, turned by each of ``turns`` (radians;
+    default :class:`~toonmotion.capture.match_tuning.MatchTuning`'s ``spin_turns``), and its
+    spectra per window size, made when first asked for.
 
     Attributes
     ----------
@@ -57,7 +58,8 @@ class TurnedDiscs:
         Each turned disc's sum of squares.
     """
 
-    def __init__(self, coarse: Patch, turns: tuple[float, ...] = SPIN_TURNS) -> None:
+    def __init__(self, coarse: Patch, turns: tuple[float, ...] | None = None) -> None:
+        turns = MatchTuning().spin_turns if turns is None else turns
         h, w = coarse.shape[:2]
         side = min(h, w)
         r = (side - 1) / 2
@@ -140,7 +142,7 @@ def locate_all_round(small: NDArray[np.uint8], discs: TurnedDiscs, centre: NDArr
     cost = joint.w_alpha * joint.size[0] * joint.size[1] / area * ssd + prior
     # As in the fine search, plain cells first (per turn); per turn the cell of least cost, and of
     # the turns the one whose cell matches best.
-    plain = (ssd <= ssd_at(UPDATE_CONFIDENCE, (1, 1)) * area) & np.isfinite(cost)
+    plain = (ssd <= ssd_at(joint.tuning.update_confidence, (1, 1), joint.tuning) * area) & np.isfinite(cost)
     some_plain = np.asarray(plain.any(axis=(1, 2)))
     cost[some_plain[:, None, None] & ~plain] = np.inf
     every = np.arange(len(cost))
@@ -152,4 +154,4 @@ def locate_all_round(small: NDArray[np.uint8], discs: TurnedDiscs, centre: NDArr
         return centre, 0.0, 0.0
     i, j = divmod(int(chosen[k]), cells)
     xy = centre + [2.0 * (j - R), 2.0 * (i - R)]
-    return xy, confidence(float(turn_ssd[k]) / area, (1, 1)), discs.turns[k]
+    return xy, confidence(float(turn_ssd[k]) / area, (1, 1), joint.tuning), discs.turns[k]

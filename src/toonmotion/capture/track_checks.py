@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Mapping, Sequence
-from dataclasses import field, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -141,9 +141,9 @@ def check_number(value: object, what: str, bound: float, rule: str, *, strict: b
     return number
 
 
-def whole(default: int) -> Any:
-    """A settings field that is a whole number >= 1 (:func:`check_ranges`)."""
-    return field(default=default, metadata={"whole": True})
+def whole(default: int, least: int = 1) -> Any:
+    """A settings field that is a whole number >= ``least`` (:func:`check_ranges`)."""
+    return field(default=default, metadata={"whole": least})
 
 
 def share(default: float) -> Any:
@@ -168,9 +168,10 @@ def check_ranges(settings: Any) -> None:
     for item in fields(settings):
         name, value = item.name, getattr(settings, item.name)
         number: int | float
-        if item.metadata.get("whole"):
-            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-                raise TrackingError(f"{name} must be a whole number >= 1, got {value!r}")
+        if "whole" in item.metadata:
+            least = item.metadata["whole"]
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
+                raise TrackingError(f"{name} must be a whole number >= {least}, got {value!r}")
             number = int(value)
         elif "least" in item.metadata:
             least, most = item.metadata["least"], item.metadata.get("most")
@@ -183,3 +184,29 @@ def check_ranges(settings: Any) -> None:
         else:
             continue
         object.__setattr__(settings, name, number)
+
+
+def check_order(settings: Any, low: str, high: str) -> None:
+    """Raise a one-line :class:`TrackingError` unless field ``low`` of ``settings`` is at most its
+    field ``high`` (the two ends of a range)."""
+    if getattr(settings, low) > getattr(settings, high):
+        raise TrackingError(
+            f"{low} must be at most {high}, got {getattr(settings, low)!r} > {getattr(settings, high)!r}"
+        )
+
+
+@dataclass(frozen=True)
+class Tuning:
+    """A frozen set of the tracker's tuning values, each declared with its range (:func:`whole`,
+    :func:`share`, :func:`at_least`, :func:`above`) and checked when the set is made
+    (:func:`check_ranges`). Each subclass documents its values, their units and ranges, and the
+    measurement that chose each default.
+
+    Raises
+    ------
+    TrackingError
+        A value out of its range, in one line naming it.
+    """
+
+    def __post_init__(self) -> None:
+        check_ranges(self)

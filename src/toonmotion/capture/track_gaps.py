@@ -17,7 +17,8 @@ after it (a hidden pelvis between hip joints that show); the mean of those place
 root's guesses are corrected by the mismatch at the span's end, growing linearly across the span
 (the correction of a smoother with a random-walk model). Spans at the end of the clip, where the joint
 is never found again, keep their guesses, and joints keep their confidence (below
-``VISIBLE_CONFIDENCE``): they are still guesses, only better ones.
+``MatchTuning.visible_confidence``, the bar of a joint found): they are still guesses, only better
+ones.
 
 Arrays are the tracker's: ``P`` ``(T, k, 2)`` joint centres, ``C`` ``(T, k)`` confidence.
 """
@@ -28,13 +29,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.clip_tuning import ClipTuning
-from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.geometry.coordinates import as_complex, as_points
 
 
 def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: NDArray[np.int_],
                       tracked: NDArray[np.bool_], held: NDArray[np.bool_], since: int = 0, *,
-                      tuning: ClipTuning | None = None) -> NDArray[np.float64]:
+                      tuning: ClipTuning | None = None, match: MatchTuning | None = None
+                      ) -> NDArray[np.float64]:
     """``P`` with every hidden span that has a found frame on both sides re-placed (module
     docstring); joints are taken parents first, so a child's bone is read off its parent's
     re-placed positions.
@@ -54,6 +56,8 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
         that ends after it is re-placed from it on only.
     tuning : ClipTuning, optional
         Its ``trusted``; default its defaults.
+    match : MatchTuning, optional
+        Its ``visible_confidence``: a joint less confident was hidden; default its defaults.
 
     Returns
     -------
@@ -67,16 +71,17 @@ def fill_hidden_spans(P: NDArray[np.float64], C: NDArray[np.float64], parents: N
     """
     out = np.array(P, dtype=float)
     trusted = (ClipTuning() if tuning is None else tuning).trusted
+    visible = (MatchTuning() if match is None else match).visible_confidence
     drawings = np.flatnonzero(tracked & ~held)
     for m in range(out.shape[1]):
-        found = C[drawings, m] >= VISIBLE_CONFIDENCE
+        found = C[drawings, m] >= visible
         for a, b in _spans(found):
             before, inside, after = drawings[a], drawings[a + 1:b], drawings[b]
             if not (tracked[before:after + 1]).all():
                 continue
             s = ((inside - before) / (after - before))[:, None]
             g = parents[m]
-            held_by = [] if g >= 0 else _found_throughout(out, C, drawings[a:b + 1], m, parents)
+            held_by = [] if g >= 0 else _found_throughout(out, C, drawings[a:b + 1], m, parents, visible)
             if held_by:
                 out[inside, m] = np.mean([out[inside, c] + as_points(_blend(start, 1.0, end / start, s[:, 0]))
                                           for c, start, end in held_by], axis=0)
@@ -126,13 +131,13 @@ def _blend(guess, first, last, t):
     return guess * scale * np.exp(1j * ((1 - t) * start_turn + t * end_turn))
 
 
-def _found_throughout(P, C, span, m, parents):
-    """The children of root ``m`` found at every frame of ``span`` (its ends included), each with
-    its bone to ``m`` (complex, child to root) at the span's first and last frames; none whose
-    bone is zero at either."""
+def _found_throughout(P, C, span, m, parents, visible):
+    """The children of root ``m`` found (at least ``visible`` confident) at every frame of ``span``
+    (its ends included), each with its bone to ``m`` (complex, child to root) at the span's first
+    and last frames; none whose bone is zero at either."""
     held_by = []
     for c in np.flatnonzero(parents == m):
-        if (C[span, c] >= VISIBLE_CONFIDENCE).all():
+        if (C[span, c] >= visible).all():
             start, end = (complex(as_complex(P[f, m] - P[f, c])) for f in (span[0], span[-1]))
             if start != 0 and end != 0:
                 held_by.append((int(c), start, end))

@@ -1,6 +1,8 @@
 """Joints out of sight in the joint tracker (thesis 4.4): where a hidden joint is carried (by its
 parent, a root on its velocity, :func:`place_hidden`), how long each has been hidden
-(:func:`hidden_for`), and how far a bone may reach from its parent (:func:`longest_bones`)."""
+(:func:`hidden_for`), and how far a bone may reach from its parent (:func:`longest_bones`). A
+joint is hidden where its confidence is under ``visible``, the run's
+:attr:`~toonmotion.capture.match_tuning.MatchTuning.visible_confidence`."""
 
 from __future__ import annotations
 
@@ -9,9 +11,6 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from toonmotion.capture.joint_plan import (
-    VISIBLE_CONFIDENCE,
-)
 from toonmotion.capture.track_prediction import hidden_at
 
 
@@ -70,27 +69,28 @@ def moves_below(P: NDArray[np.float64], t: int, seen: NDArray[np.bool_], hangs_f
     return np.array([[math.nan, math.nan] if move is None else move for move in moves])
 
 
-def hidden_for(C: NDArray[np.float64], drawings: list[int], history: NDArray[np.int_]) -> NDArray[np.int_]:
+def hidden_for(C: NDArray[np.float64], drawings: list[int], history: NDArray[np.int_], *,
+               visible: float) -> NDArray[np.int_]:
     """For each joint, the drawings it has been hidden for up to ``drawings[-1]`` (0: visible),
     counting only frames in its history (from ``history``)."""
-    hidden = (C[drawings] < VISIBLE_CONFIDENCE) & (np.array(drawings)[:, None] >= history)
+    hidden = (C[drawings] < visible) & (np.array(drawings)[:, None] >= history)
     return np.cumprod(hidden[::-1], axis=0).sum(axis=0)
 
 
 def longest_bones(P: NDArray[np.float64], C: NDArray[np.float64], drawings: list[int],
-                  hangs_from: NDArray[np.int_]) -> NDArray[np.float64]:
+                  hangs_from: NDArray[np.int_], *, visible: float) -> NDArray[np.float64]:
     """Each joint's bone (from its parent) at its longest over ``drawings``, pixels; 0 for roots."""
     longest = np.zeros(len(hangs_from))
     for s in drawings:
-        lengthen(longest, P[s], C[s], hangs_from)
+        lengthen(longest, P[s], C[s], hangs_from, visible=visible)
     return longest
 
 
 def lengthen(longest: NDArray[np.float64], points: NDArray[np.float64], confidence: NDArray[np.float64],
-             hangs_from: NDArray[np.int_]) -> None:
+             hangs_from: NDArray[np.int_], *, visible: float) -> None:
     """Raise ``longest`` to the bones seen (both ends visible) at ``points``."""
     child = np.flatnonzero(hangs_from >= 0)
-    visible = confidence >= VISIBLE_CONFIDENCE
-    seen = child[visible[child] & visible[hangs_from[child]]]
+    shows = confidence >= visible
+    seen = child[shows[child] & shows[hangs_from[child]]]
     length = np.hypot(*(points[seen] - points[hangs_from[seen]]).T)
     longest[seen] = np.maximum(longest[seen], length)

@@ -10,7 +10,7 @@ the path of least total cost over the drawings (held frames are left out and rep
 before):
 
 - each place costs ``-log(confidence)`` (a joint not found has the place the tracker put it at,
-  with its confidence, which is below ``VISIBLE_CONFIDENCE``; tracked both ways, it also has the
+  with its confidence, which is below ``MatchTuning.visible_confidence``; tracked both ways, it also has the
   place the tracking backwards gave it);
 - each step costs ``|e|^2 / (2 s^2)``, ``e`` the change from one drawing to the next of the
   joint's velocity relative to its parent (its own, for a root), in pixels a frame, and

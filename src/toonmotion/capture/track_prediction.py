@@ -16,14 +16,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.clip_tuning import ClipTuning
-from toonmotion.capture.joint_plan import VISIBLE_CONFIDENCE
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.rig.skeleton import MIN_BONE_LENGTH
 
 Points = NDArray[np.float64]
 
 
 def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history: NDArray[np.int_], *,
-            tuning: ClipTuning | None = None) -> tuple[Points, Points]:
+            tuning: ClipTuning | None = None, match: MatchTuning | None = None) -> tuple[Points, Points]:
     """Eq. 4.4 from each joint's last (up to) three positions, and where a hidden root coasts to.
 
     Parameters
@@ -38,6 +38,9 @@ def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history
     history : (k,) int
         The frame each joint's history starts at (where tracking started or it was corrected):
         its velocity there is 0.
+    tuning, match : ClipTuning, MatchTuning, optional
+        The clip's ``coast_steps``, and the matching's ``visible_confidence``, below which a
+        position is a guess made while the joint was hidden; default their defaults.
 
     Returns
     -------
@@ -51,11 +54,12 @@ def predict(P: Points, C: NDArray[np.float64], frames: NDArray[np.int_], history
         partly covered, and without acceleration.
     """
     steps = (ClipTuning() if tuning is None else tuning).coast_steps
+    bar = (MatchTuning() if match is None else match).visible_confidence
     frames = np.asarray(frames)[-(steps + 1):]
     k, n = len(history), len(frames)
     mine = frames[:, None] >= history  # (n, k): frames in each joint's history
     seen = mine.sum(axis=0)[:, None]
-    visible = (C[frames] >= VISIBLE_CONFIDENCE) & mine
+    visible = (C[frames] >= bar) & mine
     v1, v2, v3 = (visible[-i][:, None] if i <= n else np.zeros((k, 1), bool) for i in (1, 2, 3))
     p1 = P[frames[-1]]
     p2 = np.where(seen >= 2, P[frames[max(n - 2, 0)]], p1)

@@ -1,11 +1,12 @@
 """Large footage tracked at a working resolution: halved until it is at most :data:`WORKING_SIDE`
 pixels on its larger side.
 
-The tracker's constants in pixels (the largest rectangle it suggests, the context's width, the
-slack round the figure) were chosen on frames up to 640 x 480, and the cost of a match grows with
-the square of its rectangle's side. A 1920 x 1080 video is tracked at 960 x 540, every rectangle
-and window halved with it: four times fewer pixels to match, the rectangles of the sizes the
-tracker was made for, and the joints' places given back in the frames' own pixels. On the
+The tracker's values in pixels (the largest rectangle it suggests, ``FigureTuning.size_high``;
+the context's width, ``MatchTuning.context_side``; the slack round the figure,
+``ClipTuning.figure_slack``) were chosen on frames up to 640 x 480, and the cost of a match
+grows with the square of its rectangle's side. A 1920 x 1080 video is tracked at 960 x 540, every
+rectangle and window halved with it: four times fewer pixels to match, the rectangles of the sizes
+the tracker was made for, and the joints' places given back in the frames' own pixels. On the
 rendered clips at 1280 x 960 this tracked 2.0-3.2 times as fast, as close to the truth
 (docs/capture.md, "Large footage").
 

@@ -47,23 +47,18 @@ from numpy.typing import NDArray
 
 from toonmotion.capture.coarse_search import locate, rank_turns, search_round
 from toonmotion.capture.joint_plan import (
-    UPDATE_CONFIDENCE,
-    VISIBLE_CONFIDENCE,
     BoneRule,
     Plans,
     Templates,
 )
 from toonmotion.capture.patches import is_textured, likeness, sample
 from toonmotion.capture.search_tuning import SearchTuning
-from toonmotion.capture.template_context import CONTEXT_CONFIDENCE, Pyramid, place_by_context
-from toonmotion.capture.template_match import SPIN_TURNS, TURN_CONFIDENCE, Match, match
+from toonmotion.capture.template_context import Pyramid, place_by_context
+from toonmotion.capture.template_match import Match, match
 from toonmotion.capture.template_spin import TurnedDiscs, locate_all_round
 from toonmotion.capture.track_figure import FigureMasks, onto_figure
 from toonmotion.capture.track_hidden import carried_by_parent, lengthen, moves_below, place_hidden
 from toonmotion.capture.track_prediction import bone_turn, hidden_at, turns
-
-# The confidence a joint taken to be hidden is saved with, at most: just under VISIBLE_CONFIDENCE.
-_HIDDEN = float(np.nextafter(VISIBLE_CONFIDENCE, 0))
 
 
 class FrameSearch:
@@ -87,7 +82,8 @@ class FrameSearch:
         The joints held to the figure (those on it where tracking started); default all.
     tuning : SearchTuning, optional
         The search's tuning (:class:`~toonmotion.capture.search_tuning.SearchTuning`); default
-        its defaults.
+        its defaults. The matching's (:class:`~toonmotion.capture.match_tuning.MatchTuning`) is
+        the one ``plans`` carry.
     """
 
     def __init__(self, plans: Plans, templates: list[Templates], P: NDArray[np.float64],
@@ -96,13 +92,16 @@ class FrameSearch:
                  on_figure: NDArray[np.bool_] | None = None, tuning: SearchTuning | None = None) -> None:
         self.plans, self.templates = plans, templates
         self.tuning = SearchTuning() if tuning is None else tuning
+        self.match = plans.tuning
+        # The confidence a joint taken to be hidden is saved with, at most: just under the visible bar.
+        self._hidden = float(np.nextafter(self.match.visible_confidence, 0))
         self.P, self.C, self.angles = P, C, angles
         self.lost: NDArray[np.int_] = np.array(lost, dtype=int)
         self.longest: NDArray[np.float64] = np.array(longest, dtype=float)
         self.figure = figure
         self.held_to_figure = np.ones(len(plans), bool) if on_figure is None else np.asarray(on_figure, bool)
         self._near: NDArray[np.uint8] | None = None
-        self._textured = [is_textured(t.anchor) for t in templates]
+        self._textured = [is_textured(t.anchor, self.match) for t in templates]
         self._turned: list[TurnedDiscs | None] = [None] * len(plans)
         self._pyramid: Pyramid | None = None
         self._pace = 1.0
@@ -131,8 +130,8 @@ class FrameSearch:
         self.C[t] = 0.0
         for m in range(k):  # down
             if not self.lost[m]:
-                self._try(image, t, m, self._plan(m, pace), predicted[m], angle[m], VISIBLE_CONFIDENCE, seen,
-                          agree)
+                self._try(image, t, m, self._plan(m, pace), predicted[m], angle[m],
+                          self.match.visible_confidence, seen, agree)
                 if seen[m]:
                     continue
             carried = hidden_at(P, t, m, coast[m], plans.hangs_from)
@@ -171,7 +170,7 @@ class FrameSearch:
         self.angles[t] = self.angles[t - 1] + turns(P[t - 1], P[t], plans.parents, True)
         for j in np.flatnonzero(seen & agree):
             self._learn(image, t, int(j))
-        lengthen(self.longest, P[t], self.C[t], plans.hangs_from)
+        lengthen(self.longest, P[t], self.C[t], plans.hangs_from, visible=self.match.visible_confidence)
 
     def _settle(self, t, coast, seen):
         """Put each ambiguous joint found at ``t`` (its alike places reach farther than
@@ -200,7 +199,7 @@ class FrameSearch:
     def _placed_by_context(self, t, m):
         """Where ambiguous joint ``m``'s context places it at ``t``, looked for within twice its
         window of its match (the match may lie anywhere along the fill in its window, the joint as
-        far beyond), if it matches at least :data:`CONTEXT_CONFIDENCE` within
+        far beyond), if it matches at least ``match.context_confidence`` within
         ``tuning.ambiguous_spread`` of the rectangle from a place alike to the match; else None (also
         with no context)."""
         context = self.templates[m].context
@@ -208,12 +207,12 @@ class FrameSearch:
             return None
         assert self._pyramid is not None  # set by frame()
         radius, angle = 2 * self.plans(m, self._pace).radius, float(self.angles[t - 1, m])
-        xy, sure = place_by_context(self._pyramid, context, self.P[t, m], angle, radius)
+        xy, sure = place_by_context(self._pyramid, context, self.P[t, m], angle, radius, self.match)
         # It chooses among the places alike to the joint's match: where it points elsewhere
         # (an elbow's context, the arm raised, found on the head), the two disagree.
         spread = self.tuning.ambiguous_spread * max(self.plans(m).size)
         near = float(np.hypot(*(self._alike[m] - xy).T).min()) <= spread
-        return xy if sure >= CONTEXT_CONFIDENCE and near else None
+        return xy if sure >= self.match.context_confidence and near else None
 
     def _places_to_look(self, small, t, m, carried, angle, seen, hidden):
         """Where to look for joint ``m``, hidden for ``hidden`` drawings, at full resolution, with
@@ -245,7 +244,7 @@ class FrameSearch:
         """Joint ``m``'s anchor's coarse disc turned all round (made when first asked for)."""
         coarse = self.templates[m].coarse
         if self._turned[m] is None or self._turned[m].coarse is not coarse:
-            self._turned[m] = TurnedDiscs(coarse)
+            self._turned[m] = TurnedDiscs(coarse, self.match.spin_turns)
         return self._turned[m]
 
     def _coarse_ranks(self, small, t, m, centre, angle, seen):
@@ -262,7 +261,7 @@ class FrameSearch:
         where it is ``expected``: default ``centre``; a hidden joint with a textured template, given
         ``expected``, anywhere), write it into ``P[t]``, ``C[t]``, ``seen``
         and ``agree`` (its latest template may be re-cut there) and return True, else keep its best
-        confidence so far (below VISIBLE_CONFIDENCE)."""
+        confidence so far (below ``match.visible_confidence``)."""
         # A hidden joint with a texture of its own is looked for again where it looks alike: not
         # held to its bone's last length (the bone may have come out of foreshortening meanwhile),
         # and a weak match taken wherever its search reached (tuning.weak_reach).
@@ -271,15 +270,16 @@ class FrameSearch:
         figure = self._figure(m)
         found = match(image, self.templates[m], centre, angle, joint, bone, turn=turn, figure=figure,
                       small=self._small(), turn_ranks=turn_ranks)
-        refit = self._refit_turn(t, m, found, seen) if turn and found.confidence < TURN_CONFIDENCE else None
+        poor = found.confidence < self.match.turn_confidence
+        refit = self._refit_turn(t, m, found, seen) if turn and poor else None
         if refit is not None:
             other = match(image, self.templates[m], found.xy, refit, joint, bone, turn=False, figure=figure)
             if other.confidence > found.confidence:
                 found = other
-        if found.confidence < TURN_CONFIDENCE and turn and self._end_on(t, m):
+        if found.confidence < self.match.turn_confidence and turn and self._end_on(t, m):
             # A bone seen end-on gives no angle: the rectangle is looked for at turns all round.
             place, coarse, turned = locate(self._small(), self.templates[m], centre, angle, joint,
-                                           joint.radius, bone, figure, turns=SPIN_TURNS)
+                                           joint.radius, bone, figure, turns=self.match.spin_turns)
             if coarse >= self.tuning.coarse_confidence:
                 other = match(image, self.templates[m], place, turned, joint, bone, turn=False, figure=figure)
                 if other.confidence > found.confidence:
@@ -296,9 +296,9 @@ class FrameSearch:
         if self._textured[m] and bounded and far <= joint.radius:
             # Within its window of where it is carried, a joint with a texture of its own is found
             # again as plainly as it showed (see SearchTuning.reacquire_confidence).
-            needed = min(needed, VISIBLE_CONFIDENCE)
+            needed = min(needed, self.match.visible_confidence)
         if confidence < needed or weak_and_far or (bounded and self._taken(t, m, xy, seen, apart)):
-            self.C[t, m] = max(self.C[t, m], min(confidence, _HIDDEN))
+            self.C[t, m] = max(self.C[t, m], min(confidence, self._hidden))
             return False
         self.P[t, m], self.C[t, m], seen[m], agree[m] = xy, confidence, True, found.agree
         self._alike[m] = found.alike
@@ -309,9 +309,9 @@ class FrameSearch:
         """Re-cut joint ``m``'s latest template where it was found at ``t``, its two templates
         agreeing: with a texture of its own, if the patch there looks like its anchor at least
         ``tuning.anchor_likeness`` (:func:`~toonmotion.capture.patches.likeness`); else if it
-        was found plainly (``UPDATE_CONFIDENCE``)."""
+        was found plainly (``match.update_confidence``)."""
         textured = self._textured[m]
-        if not textured and self.C[t, m] < UPDATE_CONFIDENCE:
+        if not textured and self.C[t, m] < self.match.update_confidence:
             return
         patch = sample(image, self.P[t, m], self.angles[t, m], self.plans(m).size)
         if not textured or likeness(self.templates[m].anchor, patch) >= self.tuning.anchor_likeness:

@@ -11,6 +11,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from toonmotion.capture.clip_tuning import ClipTuning
+from toonmotion.capture.figure_tuning import FigureTuning
+from toonmotion.capture.match_tuning import MatchTuning
 from toonmotion.capture.search_tuning import SearchTuning
 from toonmotion.capture.track_checks import (
     check_number,
@@ -118,6 +120,15 @@ class TrackSettings:
     clip : ClipTuning
         How the clip is read round the search: held drawings, coasting, hidden spans, the
         figure's edge, the light (:class:`~toonmotion.capture.clip_tuning.ClipTuning`).
+    match : MatchTuning
+        How a joint's templates are matched and the match read: confidence and its bars, the
+        turns tried, templates' size and texture, the wider view
+        (:class:`~toonmotion.capture.match_tuning.MatchTuning`).
+    cutout : FigureTuning
+        How the figure the joints are held to is found on a flat colour (``figure``): its
+        threshold's range (:class:`~toonmotion.capture.figure_tuning.FigureTuning`, which the
+        functions that suggest joints take too). Read by
+        :func:`~toonmotion.capture.footage.capture_motion`.
     """
 
     search: float | None = None
@@ -132,6 +143,8 @@ class TrackSettings:
     working_side: float | None = WORKING_SIDE
     tuning: SearchTuning = field(default_factory=SearchTuning)
     clip: ClipTuning = field(default_factory=ClipTuning)
+    match: MatchTuning = field(default_factory=MatchTuning)
+    cutout: FigureTuning = field(default_factory=FigureTuning)
 
     def __post_init__(self) -> None:
         if self.search is not None:
@@ -147,10 +160,11 @@ class TrackSettings:
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise TrackingError(f"{name} must be True or False, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
-        if not isinstance(self.tuning, SearchTuning):
-            raise TrackingError(f"tuning must be a SearchTuning, got {type(self.tuning).__name__}")
-        if not isinstance(self.clip, ClipTuning):
-            raise TrackingError(f"clip must be a ClipTuning, got {type(self.clip).__name__}")
+        tunings = {"tuning": SearchTuning, "clip": ClipTuning, "match": MatchTuning, "cutout": FigureTuning}
+        for name, kind in tunings.items():
+            given = getattr(self, name)
+            if not isinstance(given, kind):
+                raise TrackingError(f"{name} must be a {kind.__name__}, got {type(given).__name__}")
         if self.both_ways and not self.best_path:
             raise TrackingError(
                 "both_ways needs best_path: the whole-sequence pass chooses between the two ways"
@@ -170,9 +184,9 @@ class Tracking:
         bone's change of direction, unwrapped); 0 for roots and with ``rotate=False``; NaN at
         frames not tracked.
     confidence : (T, k) float in [0, 1]
-        How well the texture matched: near 1 on a clean match, below :data:`VISIBLE_CONFIDENCE`
-        where the joint was taken to be hidden (then carried by its parent, or coasting if a
-        root); 0 at frames not tracked.
+        How well the texture matched: near 1 on a clean match, below the settings'
+        ``match.visible_confidence`` where the joint was taken to be hidden (then carried by its
+        parent, or coasting if a root); 0 at frames not tracked.
     tracked : (T,) bool
         Frames that have been tracked: ``start`` up to ``stop``.
     held : (T,) bool, optional

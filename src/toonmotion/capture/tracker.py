@@ -9,7 +9,7 @@ each rectangle frame by frame to the place where the mixed cost of eq. 4.6 is le
 :mod:`~toonmotion.capture.template_match`), ``D_g`` the squared distance from the centre
 predicted by constant acceleration (eq. 4.4, :mod:`~toonmotion.capture.track_prediction`).
 Rectangles of joints with a parent turn with their bone (eq. 4.2). A joint matched less
-confidently than :data:`VISIBLE_CONFIDENCE` is taken to be hidden: it is carried by its parent
+confidently than ``MatchTuning.visible_confidence`` is taken to be hidden: it is carried by its parent
 (a root coasts on its velocity). :func:`retrack` takes a user's corrections at one frame and
 tracks again from there (thesis 4.4.3 and 6.3e).
 
@@ -28,10 +28,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
-from toonmotion.capture.joint_plan import UPDATE_CONFIDENCE, VISIBLE_CONFIDENCE, Plans, Templates
+from toonmotion.capture.joint_plan import Plans, Templates
 from toonmotion.capture.patches import distinct_size
 from toonmotion.capture.template_context import Pyramid, at_level, cut_templates
-from toonmotion.capture.template_match import OTHERS
 from toonmotion.capture.track_checks import (
     Frames,
     check_corrections,
@@ -121,14 +120,14 @@ def track(frames: Frames, setup: TrackSetup, *, settings: TrackSettings | None =
         first, initial = read_frame(frames, start, None), at_level(initial, n)
     if settings.relight:
         frames = Relit(frames, first, settings.clip)
-    out = _Arrays.empty(count, k)
+    out = _Arrays.empty(count, k, settings.match.others)
     out.positions[start] = initial
     out.angles[start] = 0.0
     out.confidence[start] = 1.0
     out.tracked[start] = True
     plan = _plans(setup, settings, first, initial)
     pyramid = Pyramid(first)
-    templates = [cut_templates(pyramid, initial[m], 0.0, plan(m).size) for m in range(k)]
+    templates = [cut_templates(pyramid, initial[m], 0.0, plan(m).size, settings.match) for m in range(k)]
     figure = None if masks is None else FigureMasks(masks, count, first.shape, tuning=settings.clip)
     on_figure = None if figure is None else figure.holds(start, initial)
     if progress:
@@ -192,7 +191,7 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     begin = _run_start(tracking.tracked, frame)
     stop = frame + 1 + int(np.argmin(np.append(tracking.tracked[frame + 1:], False)))
 
-    out = _Arrays.copy(tracking)
+    out = _Arrays.copy(tracking, settings.match.others)
     out.clear(frame + 1, stop)
     for m, xy in fixed.items():
         out.positions[frame, m] = xy
@@ -216,11 +215,11 @@ def retrack(tracking: Tracking, frames: Frames, setup: TrackSetup, frame: int,
     templates = []
     pyramids = {frame: Pyramid(current)}  # one per frame cut from, read and reduced once
     for m in range(k):
-        cut = _anchor_frame(out.confidence[:, m], begin, frame, m in fixed)
+        cut = _anchor_frame(out.confidence[:, m], begin, frame, m in fixed, settings.match.update_confidence)
         if cut not in pyramids:
             pyramids[cut] = Pyramid(read_frame(frames, cut, current.shape))
         centre, angle = out.positions[cut, m], out.angles[cut, m]
-        templates.append(cut_templates(pyramids[cut], centre, angle, plan(m).size))
+        templates.append(cut_templates(pyramids[cut], centre, angle, plan(m).size, settings.match))
     history = np.where(np.isin(np.arange(k), list(fixed)), frame, begin)
     figure = None if masks is None else FigureMasks(masks, count, current.shape, tuning=settings.clip)
     on_figure = None if figure is None else figure.holds(frame, out.positions[frame])
@@ -263,20 +262,21 @@ class _Arrays:
     confidence: np.ndarray
     tracked: np.ndarray
     held: np.ndarray
-    # (T, k, OTHERS + 1, 3): the other places each joint's search found and, tracked both ways, the
-    # place the tracking backwards gave it (the last), for the whole-sequence pass.
+    # (T, k, others + 1, 3): the other places each joint's search found (MatchTuning.others) and,
+    # tracked both ways, the place the tracking backwards gave it (the last), for the whole-sequence pass.
     options: np.ndarray
 
     @classmethod
-    def empty(cls, count: int, k: int) -> _Arrays:
+    def empty(cls, count: int, k: int, others: int) -> _Arrays:
         return cls(np.full((count, k, 2), np.nan), np.full((count, k), np.nan), np.zeros((count, k)),
-                   np.zeros(count, dtype=bool), np.zeros(count, dtype=bool), _no_options(count, k))
+                   np.zeros(count, dtype=bool), np.zeros(count, dtype=bool), _no_options(count, k, others))
 
     @classmethod
-    def copy(cls, tracking: Tracking) -> _Arrays:
+    def copy(cls, tracking: Tracking, others: int) -> _Arrays:
         assert tracking.held is not None  # Tracking fills it in
+        count, k = tracking.confidence.shape
         return cls(tracking.positions.copy(), tracking.angles.copy(), tracking.confidence.copy(),
-                   tracking.tracked.copy(), tracking.held.copy(), _no_options(*tracking.confidence.shape))
+                   tracking.tracked.copy(), tracking.held.copy(), _no_options(count, k, others))
 
     def clear(self, begin: int, end: int) -> None:
         self.positions[begin:end] = np.nan
@@ -296,11 +296,14 @@ def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, 
     (with ``options``, the other places each joint's search found too). A held drawing is told on
     ``own``, the footage's own frames where ``frames`` are halved (:func:`_held_on`); ``tuning``
     is the search's (:class:`~toonmotion.capture.search_tuning.SearchTuning`), ``clip`` the
-    reading of the clip's (:class:`~toonmotion.capture.clip_tuning.ClipTuning`)."""
-    P, C = out.positions, out.confidence
+    reading of the clip's (:class:`~toonmotion.capture.clip_tuning.ClipTuning`), the matching's
+    the one ``plans`` carry (:class:`~toonmotion.capture.match_tuning.MatchTuning`)."""
+    P, C, match = out.positions, out.confidence, plans.tuning
     drawings = _drawings(out, begin, clip.coast_steps)
-    search = FrameSearch(plans, templates, P, C, out.angles, hidden_for(C, drawings, history),
-                         longest_bones(P, C, drawings, plans.hangs_from), figure, on_figure, tuning)
+    visible = match.visible_confidence
+    lost = hidden_for(C, drawings, history, visible=visible)
+    longest = longest_bones(P, C, drawings, plans.hangs_from, visible=visible)
+    search = FrameSearch(plans, templates, P, C, out.angles, lost, longest, figure, on_figure, tuning)
     told = frames if own is None else own
     drawn = read_frame(told, begin - 1, None)
     work = np.empty_like(drawn)
@@ -311,7 +314,7 @@ def _run(frames, shape, plans: Plans, templates: list[Templates], out: _Arrays, 
         if is_held(seen, drawn, work=work, tuning=clip):
             P[t], C[t], out.angles[t], out.held[t] = P[t - 1], C[t - 1], out.angles[t - 1], True
         else:
-            predicted, coast = predict(P, C, np.array(drawings), history, tuning=clip)
+            predicted, coast = predict(P, C, np.array(drawings), history, tuning=clip, match=match)
             # A drawing held n frames moves n frames' worth by the next: the search widens with it.
             pace = float(min(t - drawings[-1], search.tuning.max_hold))
             search.frame(image, t, predicted, coast, pace=pace)
@@ -340,9 +343,10 @@ def _plans(setup, settings, image, centres):
     r = [settings.search if settings.search is not None
          else max(tune.min_search, tune.search_fraction * max(w, h)) for w, h in setup.sizes]
     whole = [(max(1, int(math.floor(w + 0.5))), max(1, int(math.floor(h + 0.5)))) for w, h in setup.sizes]
-    sizes = [distinct_size(image, centre, size) for centre, size in zip(centres, whole, strict=True)]
+    sizes = [distinct_size(image, centre, size, settings.match)
+             for centre, size in zip(centres, whole, strict=True)]
     return Plans(sizes, setup.skeleton.parents, r, w_alpha=settings.w_alpha, w_beta=settings.w_beta,
-                 rotate=settings.rotate, frame_shape=image.shape)
+                 rotate=settings.rotate, frame_shape=image.shape, tuning=settings.match)
 
 
 def _filled(out, plans, settings, figure, on_figure, since=0):
@@ -361,10 +365,11 @@ def _filled(out, plans, settings, figure, on_figure, since=0):
         out.positions, out.confidence = P, C
     if settings.fill_gaps:
         out.positions = fill_hidden_spans(out.positions, out.confidence, plans.hangs_from, out.tracked,
-                                          out.held, since, tuning=settings.clip)
+                                          out.held, since, tuning=settings.clip, match=settings.match)
         if figure is not None:
             limit = np.array([plans(m).radius * settings.tuning.max_widen for m in range(len(plans))])
-            hidden = (out.confidence < VISIBLE_CONFIDENCE) & on_figure & (out.tracked & ~out.held)[:, None]
+            hidden = out.confidence < settings.match.visible_confidence
+            hidden &= on_figure & (out.tracked & ~out.held)[:, None]
             hidden[:since] = False
             put_on_figure(out.positions, hidden, figure, limit)
             for t in np.flatnonzero(out.held[since:]) + since:  # held frames repeat the frame before
@@ -372,8 +377,8 @@ def _filled(out, plans, settings, figure, on_figure, since=0):
     return out
 
 
-def _no_options(count, k):
-    return np.full((count, k, OTHERS + 1, 3), np.nan)
+def _no_options(count, k, others):
+    return np.full((count, k, others + 1, 3), np.nan)
 
 
 def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figure, tuning, clip):
@@ -384,7 +389,8 @@ def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figur
     count, k = stop - start, out.positions.shape[1]
     if count < 3:
         return
-    back = _Arrays.empty(count, k)
+    others = plans.tuning.others
+    back = _Arrays.empty(count, k, others)
     back.positions[0], back.angles[0] = out.positions[stop - 1], out.angles[stop - 1]
     back.confidence[0], back.tracked[0] = out.confidence[stop - 1], True
     figure = None if masks is None else FigureMasks(_Backwards(masks, start, stop), count, shape, tuning=clip)
@@ -392,7 +398,7 @@ def _run_back(frames, masks, shape, plans, templates, out, start, stop, on_figur
     _run(_Backwards(frames, start, stop), shape, plans, anchors, back, np.zeros(k, int), 1, count - 1, None,
          figure, on_figure, options=False, tuning=tuning, clip=clip)
     for i in range(1, count - 1):
-        out.options[stop - 1 - i, :, OTHERS] = np.column_stack([back.positions[i], back.confidence[i]])
+        out.options[stop - 1 - i, :, others] = np.column_stack([back.positions[i], back.confidence[i]])
 
 
 class _Backwards(Sequence):
@@ -425,11 +431,12 @@ def _run_start(tracked, frame):
     return int(before[-1]) + 1 if before.size else 0
 
 
-def _anchor_frame(confidence, begin, frame, corrected):
-    """Where to re-cut a joint's templates: ``frame``, or the last confident frame before it."""
+def _anchor_frame(confidence, begin, frame, corrected, plain):
+    """Where to re-cut a joint's templates: ``frame``, or the last frame before it at least ``plain``
+    confident."""
     if corrected:
         return frame
-    confident = np.flatnonzero(confidence[begin:frame + 1] >= UPDATE_CONFIDENCE)
+    confident = np.flatnonzero(confidence[begin:frame + 1] >= plain)
     return begin + int(confident[-1]) if confident.size else begin
 
 

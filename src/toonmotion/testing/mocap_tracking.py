@@ -167,7 +167,8 @@ def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None =
 
     With ``figure`` the tracker holds joints to the figure's masks where the figure is drawn on
     a flat colour, as ``toonmotion track`` does
-    (:func:`~toonmotion.capture.foreground.flat_figure_masks`); the time includes making them.
+    (:func:`~toonmotion.capture.foreground.flat_figure_masks`, with the settings' ``cutout``); the
+    time includes making them.
 
     With ``restart``, tracking starts again from the true centres every ``restart`` frames
     (frames 0, ``restart``, ``2 restart``, ...), each stretch tracked on its own as if it were
@@ -186,7 +187,8 @@ def track_from_truth(rendered: RenderedClip, *, settings: TrackSettings | None =
     sizes = np.full((len(rendered.skeleton), 2), rendered.side)
     setup = TrackSetup(skeleton=rendered.skeleton, sizes=sizes)
     start = time.perf_counter()
-    masks = flat_figure_masks(rendered.images) if figure else None
+    cutout = None if settings is None else settings.cutout
+    masks = flat_figure_masks(rendered.images, tuning=cutout) if figure else None
     positions = np.empty_like(rendered.truth)
     for begin in range(0, count, step):
         stop = min(count, begin + step)
