@@ -287,7 +287,8 @@ def test_a_balloon_held_under_a_limb_starts_clear_of_it_and_floats_up_on_its_str
     """Held at a chest under a wide head, a string straight up would start the balloon inside the
     head's volume, which flings it out (and blew the simulation up in the editor's 3D panel): the
     string leans out until the balloon starts clear, and its lift carries it up."""
-    from toonmotion.scene.build import balloon_way, figure_height, first_frame_volumes
+    from toonmotion.scene.build import figure_height
+    from toonmotion.scene.clearance import balloon_way, first_frame_volumes
 
     T = 24
     chest = [[0.0, 1.0, 0], [0.0, 1.45, 0], [0.0, 1.9, 0]]  # chest, neck, the head's top

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from toonmotion import limits
 from toonmotion.errors import SceneError
 from toonmotion.proxy3d.proxy import Proxy
-from toonmotion.scene.clearance import clear, directions, first_frame_volumes, overlap
+from toonmotion.scene.clearance import balloon_way, clear, first_frame_volumes, overlap
 from toonmotion.scene.cloth import (
     CAPE_BODIES,
     SCARF_BODIES,
@@ -396,24 +396,6 @@ def _limb_radii(proxy, height):
     if proxy.radii is not None:
         return np.array(proxy.radii)
     return np.full((proxy.frame_count, len(proxy.limbs), 2), DEFAULT_LIMB_RADIUS * height)
-
-
-def balloon_way(proxy: Proxy, marker: int, balloon: Balloon, volumes: list,
-                height: float) -> NDArray[np.float64]:
-    """Which way a balloon's string starts from its marker: straight up, unless that starts the
-    balloon inside a limb's volume on the first frame (a balloon held at the chest, under the
-    head), which flings it out and can blow the simulation up; then the first that starts it
-    clear of leaning out away from the figure's middle, to either side or back, at 45 degrees,
-    then lower, then level (its lift then carries it up on its own). Up when none does."""
-    radius = balloon.radius or BALLOON_RADIUS * height
-    length = balloon.string_length or STRING_LENGTH * height
-    up = np.array([0.0, 1.0, 0.0])
-    outs = directions(proxy.points[0], marker)[1:5]
-    for way in [up] + [rise * up + w for rise in (1.0, 0.5, 0.0) for w in outs]:
-        way = way / np.linalg.norm(way)
-        if clear([proxy.points[0][marker] + way * (length + radius)], radius, volumes):
-            return way
-    return up
 
 
 def _balloon_xml(i, balloon, height, way):

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from toonmotion.scene.elements import BALLOON_RADIUS, STRING_LENGTH
+
 
 def across_way(way, axis):
     """A unit vector across ``way`` facing the camera's ``axis`` as far as it can."""
@@ -110,3 +112,20 @@ def closest_on_segment(p, a, b):
     denominator = float(ab @ ab)
     s = 0.0 if denominator == 0 else float(np.clip((p - a) @ ab / denominator, 0, 1))
     return a + s * ab
+
+
+def balloon_way(proxy, marker, balloon, volumes, height):
+    """Which way a balloon's string starts from its marker: straight up, unless that starts the
+    balloon inside a limb's volume on the first frame (a balloon held at the chest, under the
+    head), which flings it out and can blow the simulation up; then the first that starts it
+    clear of leaning out away from the figure's middle, to either side or back, at 45 degrees,
+    then lower, then level (its lift then carries it up on its own). Up when none does."""
+    radius = balloon.radius or BALLOON_RADIUS * height
+    length = balloon.string_length or STRING_LENGTH * height
+    up = np.array([0.0, 1.0, 0.0])
+    outs = directions(proxy.points[0], marker)[1:5]
+    for way in [up] + [rise * up + w for rise in (1.0, 0.5, 0.0) for w in outs]:
+        way = way / np.linalg.norm(way)
+        if clear([proxy.points[0][marker] + way * (length + radius)], radius, volumes):
+            return way
+    return up
