@@ -156,6 +156,41 @@ def test_edit_opens_the_browser_with_a_one_time_code_not_the_token(capsys, tmp_p
     assert code_given in served[0].state.sign_in_codes
 
 
+def test_edit_offers_the_clips_of_its_mocap_folder_as_the_3d_panel_s_priors(capsys, tmp_path, monkeypatch):
+    import uvicorn
+
+    from toonmotion.io.project import save_project
+    from toonmotion.rig.pipeline import rig_drawing
+    from toonmotion.samples import sample_character
+    from toonmotion.web import server
+    from toonmotion.web.editing import Editing
+    from toonmotion.web.proxy_requests import priors
+
+    drawing, skeleton = sample_character(scale=0.4)
+    save_project(tmp_path / "hero", rig_drawing(drawing, skeleton=skeleton))
+    clips = tmp_path / "clips"
+    code, out, err = _run(["edit", tmp_path / "hero", "--mocap", clips], capsys)
+    said = f"toonmotion: error: --mocap must be a folder of .bvh clips; {clips} is not a folder\n"
+    assert (code, err) == (2, said)
+    clips.mkdir()
+    for name in ("walk.bvh", "run.bvh", "notes.txt"):
+        (clips / name).write_text("")
+    given = []
+    create_app = server.create_app
+
+    def creating(*args, **kw):
+        given.append(kw["library"])
+        return create_app(*args, **kw)
+
+    monkeypatch.setattr(server, "create_app", creating)
+    monkeypatch.setattr(uvicorn.Server, "run", lambda server, sockets: None)
+    monkeypatch.setenv("TOONMOTION_MOCAP", str(clips))  # the variable stands for --mocap
+    code, out, err = _run(["edit", tmp_path / "hero"], capsys)
+    assert code == 0 and given == [clips]
+    offered = priors(Editing.open(tmp_path / "hero", library=given[0]))
+    assert offered == ["library/run.bvh", "library/walk.bvh"]
+
+
 def test_edit_rigs_a_drawing_into_a_project_beside_it_once(capsys, tmp_path):
     import socket
 

@@ -42,6 +42,8 @@ def edit(
     from toonmotion.web.server import create_app, new_token, sign_in_code
 
     _check_host(host)
+    if mocap is not None and not mocap.is_dir():
+        raise SettingsError(f"--mocap must be a folder of .bvh clips; {mocap} is not a folder")
 
     # imageio-ffmpeg starts ffmpeg with preexec_fn (to keep Ctrl+C from it); started from the
     # server's worker threads, Python prints an "Exception ignored in _after_fork" traceback for
@@ -55,8 +57,6 @@ def edit(
     shown = f"[{host}]" if ":" in host else host
     names = dict.fromkeys((shown, "127.0.0.1", "localhost", "[::1]"))
     origins = tuple(f"http://{name}:{bound}" for name in names)
-    if mocap is not None and not mocap.is_dir():
-        raise SettingsError(f"--mocap must be a folder of .bvh clips; {mocap} is not a folder")
     server_app = create_app(Path(project), token=token, origins=origins, library=mocap)
     url = f"http://{shown}:{bound}/?token={token}"
     typer.echo(f"toonmotion editor for {project}: {url}")
