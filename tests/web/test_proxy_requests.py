@@ -72,7 +72,7 @@ def lifted(editable, library):
     folder, client = editable
     with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
         reply, progress = _ask(socket, {"id": 4, "type": "lift", "prior": f"library/{PRIOR}", "view": [0, 0]})
-    assert reply["type"] == "proxy", reply
+    assert reply["type"] == "lifted", reply
     return folder, client, reply, progress
 
 
@@ -95,6 +95,19 @@ def test_the_animation_lifted_in_the_editor_is_the_library_s_lift(lifted, librar
     with again.websocket_connect(f"/ws?token={TOKEN}") as socket:
         shown, _ = _ask(socket, {"type": "proxy"})
     assert shown["proxy"] == reply["proxy"] and shown["lift"] == reply["lift"]
+
+
+def test_another_page_is_told_of_a_lift_and_a_scene(editable):
+    folder, client = editable
+    with client.websocket_connect(f"/ws?token={TOKEN}") as other, \
+            client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _ask(other, {"type": "proxy"})  # both pages are open
+        _ask(socket, {"type": "lift", "prior": f"library/{PRIOR}", "view": [0, 0]})
+        told = other.receive_json()
+        _ask(socket, {"type": "scene", "elements": [{"kind": "balloon", "markers": ["neck"]}]})
+        told_again = other.receive_json()
+    assert (told["type"], told["kind"], told["says"]) == ("changed", "lifted", "the animation lifted into 3D")
+    assert (told_again["kind"], told_again["says"]) == ("scene", "a 3D scene simulated")
 
 
 def test_a_balloon_is_simulated_and_composited_as_the_scene_command_does(lifted):

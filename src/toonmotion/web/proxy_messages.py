@@ -11,7 +11,7 @@ other message (:mod:`toonmotion.web.messages`, whose ``MODELS`` holds them too).
   leans in the picture), ``hold_elevation``, ``ground`` ("prior" or "feet") and ``segment``
   ([start, stop]: the prior's frames to use, stop null for its end); off the event
   loop with progress. Saved as ``proxy3d/proxy.json`` (what ``toonmotion scene`` reads). Reply as
-  ``proxy``'s.
+  ``proxy``'s, typed ``lifted``; every other page open on the project is told, as of a ``scene``.
 * ``scene``: the ``elements`` (each ``{"kind": "balloon" | "balls" | "scarf" | "skirt" | "cape" |
   "rain", "markers": [...], "count"}``) simulated round the proxy and composited into the
   animation's frames (:func:`toonmotion.api.simulate_scene`, :func:`~toonmotion.api.composite_scene`),

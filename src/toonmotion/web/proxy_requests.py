@@ -115,7 +115,8 @@ def proxy_view(proxy: Proxy) -> dict[str, Any]:
 
 @off_loop("lift the animation")
 def lift(editing: Editing, message: Lift, progress: Progress) -> dict[str, Any]:
-    """The reply to a ``lift`` message: the proxy saved, then shown (as :func:`state`)."""
+    """The reply to a ``lift`` message: the proxy saved, then shown (as :func:`state`, typed
+    ``lifted``: the other pages are told)."""
     clip = load_bvh(prior_file(editing, message.prior))
     with editing.lock:
         character, animation = editing.character, editing.animation
@@ -138,7 +139,7 @@ def lift(editing: Editing, message: Lift, progress: Progress) -> dict[str, Any]:
         "found": [round(report.azimuth, 2), round(report.elevation, 2)],
         "searched": report.view_found, "camera_px": round(report.camera_px, 3), "warnings": warnings,
         "keys": _keys_digest(editing)}, indent=1))
-    return state(editing)
+    return {**state(editing), "type": "lifted", "says": "the animation lifted into 3D"}
 
 
 @off_loop("simulate the scene")
@@ -161,7 +162,7 @@ def scene(editing: Editing, message: Scene, progress: Progress) -> dict[str, Any
             "fps": proxy.fps, "warnings": api.scene_warnings(motion), "shading": message.shading,
             "antialias": message.antialias}
     write_text(editing.path(PROXY_DIR, SCENE_FILE), json.dumps(said, indent=1))
-    return {"type": "scene", **said}
+    return {"type": "scene", **said, "says": "a 3D scene simulated"}
 
 
 @off_loop("write the export")

@@ -81,7 +81,7 @@ FOOTAGE_SUFFIXES = ("mp4", "mov", "avi", "mkv", "webm", "gif", "png", "apng", "w
 log = logging.getLogger("toonmotion.web")
 
 # Replies that say the project changed: the other pages are told (module docstring).
-CHANGES = frozenset({"regions", "keys", "undone", "redone", "rigged", "opened"})
+CHANGES = frozenset({"regions", "keys", "undone", "redone", "rigged", "opened", "lifted", "scene"})
 
 # The cookie a sign-in code is exchanged for, and how long a code is good for (seconds).
 TOKEN_COOKIE = "toonmotion_token"
