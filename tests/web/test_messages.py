@@ -68,7 +68,7 @@ def test_a_good_message_reads_as_its_model_with_unknown_fields_ignored():
 
 
 def test_every_message_has_exactly_one_handler():
-    slow = {"export", "track", "open_drawing", "suggest"}
+    slow = {"export", "track", "open_drawing", "suggest", "keyshape_model", "keyshape_capture"}
     assert set(session._HANDLERS) | slow | {"cancel"} == set(MODELS)
     assert not set(session._HANDLERS) & slow
     assert issubclass(MessageError, ToonmotionError)  # the page shows it as every other error

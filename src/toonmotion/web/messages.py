@@ -55,6 +55,10 @@ an older page's extra fields do no harm. What each message does, and its reply, 
   ``size``, ``background`` and ``overlays``, off the event loop with progress messages
   ``{"type": "progress", "index", "count"}`` carrying the request's id. Reply ``{"type":
   "exported", "file", "files", "frames", "size"}``. The name never names a path.
+* ``keyshapes``, ``keyshape_model``, ``keyshape_pick``, ``keyshape_capture``,
+  ``keyshape_retarget``: the Key-shapes panel's (key-shape models, capture and retargeting, kept in
+  the project folder's ``keyshapes/``), listed in :mod:`toonmotion.web.keyshape_messages`; a
+  ``frame`` message with ``"source": "keyshapes"`` gives a frame of the retargeted motion.
 * ``cancel``: stop the slow request ``id`` at its next progress step; its reply is then an
   error with ``"cancelled": true`` and nothing it would have saved is saved. Messages sent while
   a slow request runs are answered after it, in order.
@@ -223,7 +227,7 @@ class Timing(Message):
 
 class ShowFrame(Exaggerated):
     frame: Annotated[Frame, must("'frame' must be a frame number, a whole number >= 0")] = required()
-    source: Literal["keys", "capture"] | None = None
+    source: Literal["keys", "capture", "keyshapes"] | None = None
 
 
 class Joint(BaseModel):
@@ -302,7 +306,8 @@ class Cancel(Message):
     pass
 
 
-# Every message the editor sends, by its ``type``.
+# Every message the editor sends, by its ``type`` (the Key-shapes panel's are added by
+# :mod:`toonmotion.web.keyshape_messages`, which the package imports).
 MODELS: dict[str, type[Message]] = {
     "pose": Pose, "drag": Drag, "sketch": Sketch, "overlaps": Overlaps, "depth": Depth, "correct": Correct,
     "undo": Message, "redo": Message, "set_key": SetKey, "delete_key": DeleteKey, "move_key": MoveKey,

@@ -17,6 +17,7 @@ from fastapi import WebSocket
 from toonmotion.errors import Cancelled, ToonmotionError
 from toonmotion.web import messages
 from toonmotion.web.editing import Editing
+from toonmotion.web.keyshape_requests import SLOW as KEYSHAPE_SLOW
 from toonmotion.web.messages import MAX_MESSAGE_BYTES
 from toonmotion.web.slow_requests import export, open_drawing, suggest, track
 
@@ -58,7 +59,7 @@ def cancels(text: str, ident: Any) -> bool:
 def slow_handler(text: str) -> Callable[..., dict[str, Any]] | None:
     """The handler of a message that runs off the event loop (an export, a tracking, joints
     suggested on footage), or None (checked cheaply; a bad message goes to ``answer``)."""
-    slow = ("export", "track", "open_drawing", "suggest")
+    slow = ("export", "track", "open_drawing", "suggest", *KEYSHAPE_SLOW)
     if len(text) > MAX_MESSAGE_BYTES or not any(f'"{kind}"' in text for kind in slow):
         return None
     try:
@@ -66,5 +67,6 @@ def slow_handler(text: str) -> Callable[..., dict[str, Any]] | None:
     except (ValueError, RecursionError):
         return None
     kind = message.get("type") if isinstance(message, dict) else None
-    handlers = {"export": export, "track": track, "open_drawing": open_drawing, "suggest": suggest}
+    handlers = {"export": export, "track": track, "open_drawing": open_drawing, "suggest": suggest,
+                **KEYSHAPE_SLOW}
     return handlers.get(kind) if isinstance(kind, str) else None
