@@ -315,7 +315,7 @@ def read_upload(editing: Editing, part: str, file: Path, points: int | None) -> 
     key ``outlines`` come back to the page to add; ``contours`` are kept to capture."""
     shapes, fps, closed = load_contours(file, points=points)
     if part == "outlines":
-        return {"outlines": _rounded(shapes, 3), "closed": closed}
+        return {"outlines": shapes.tolist(), "closed": closed}  # in full: the model is built from them
     save_contours(_file(editing, CONTOURS), shapes, fps=fps, closed=closed)
     return {"frames": len(shapes), "points": shapes.shape[1], "fps": fps}
 
