@@ -119,6 +119,7 @@ def test_contours_are_captured_retargeted_onto_timeline_keys_and_saved_as_the_cl
     fitted = np.asarray(captured["capture"]["shapes"])
     model = np.stack([warp(a, w, space.keys) for a, w in zip(found.affine, found.weights, strict=True)])
     assert np.allclose(fitted, model, atol=0.01)
+    assert np.allclose(captured["capture"]["path"], model.mean(axis=1), atol=0.01)  # the affine path
     rms = np.sqrt(((model - hero.contours) ** 2).sum(axis=2).mean(axis=1))
     assert np.allclose(rms, found.error, atol=1e-6)
     # The retargeted motion is retarget_keyposes' on the chosen keys, the character's outline its reference.

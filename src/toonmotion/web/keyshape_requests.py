@@ -118,9 +118,10 @@ def state(editing: Editing, message: km.Message | None = None) -> dict[str, Any]
 def described_capture(found: api.ContourCapture, keys: NDArray[np.float64], shapes: NDArray[np.float64],
                       fps: float, source: str) -> dict[str, Any]:
     """A capture for the page: each frame's weights, affine, error, the captured shape, and the
-    path of the keys' centre under each frame's affine (the motion's place)."""
-    centre = keys.mean(axis=(0, 1))
-    path = np.einsum("tij,j->ti", found.affine[:, :, :2], centre) + found.affine[:, :, 2]
+    affine path: each frame's affine applied to the centre of its blend of the keys (where the
+    model's shape is centred)."""
+    centre = np.einsum("tk,kd->td", found.weights, keys.mean(axis=1))
+    path = np.einsum("tij,tj->ti", found.affine[:, :, :2], centre) + found.affine[:, :, 2]
     return {"source": source, "fps": fps, "weights": _rounded(found.weights, 5),
             "affine": _rounded(found.affine, 5), "error": _rounded(found.error, 4), "path": _rounded(path),
             "shapes": _rounded(shapes)}

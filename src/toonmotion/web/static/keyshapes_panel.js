@@ -96,7 +96,11 @@ export function mount(ctx) {
       const at = Math.min(frame, capture.shapes.length - 1);
       if (state.contours && capture.source === "contours") curve(pen, state.contours.shapes[at], "#999", 1.5, true, [4, 3]);
       curve(pen, capture.path, "rgba(128, 90, 213, 0.8)", 1.5, false);
-      const [px, py] = toCanvas(capture.path[at]);
+      const [px, py] = toCanvas(capture.path[at]), A = capture.affine[at], arm = 30 / fit().scale;
+      for (const column of [0, 1]) { // the affine's axes at this frame: its turn, scale and shear
+        const tip = [capture.path[at][0] + arm * A[0][column], capture.path[at][1] + arm * A[1][column]];
+        curve(pen, [capture.path[at], tip], column ? "#38a169" : "#dd6b20", 2, false);
+      }
       pen.fillStyle = "#805ad5";
       pen.beginPath();
       pen.arc(px, py, 4 * (window.devicePixelRatio || 1), 0, 2 * Math.PI);
