@@ -11,6 +11,7 @@ import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
 
+from tests.web.slow_work import slow_work
 from toonmotion import api
 from toonmotion.cli import main
 from toonmotion.io.frames import load_frames
@@ -291,3 +292,26 @@ def test_an_svg_of_shapes_is_read_as_outlines_resampled_into_correspondence(edit
     outlines = np.asarray(reply.json()["outlines"])
     assert outlines.shape == (2, 32, 2)
     assert np.allclose(np.hypot(*(outlines[0] - 100).T), 40, atol=0.5)
+
+
+def test_a_capture_can_be_cancelled_and_the_earlier_one_is_kept(editable, hero, monkeypatch):
+    folder, client = editable
+    _put(client, "contours", _contours_file(hero.contours))
+    saved = folder / "keyshapes" / "motion.json"
+    stopped: list[str] = []
+    with client.websocket_connect(f"/ws?token={TOKEN}") as socket:
+        _send(socket, {"type": "keyshape_model", "outlines": hero.contours[list(hero.key_frames)].tolist()})
+        first, _ = _send(socket, {"type": "keyshape_capture", "source": "contours"})
+        before = saved.read_bytes()
+        monkeypatch.setattr(api, "capture_contours", slow_work(stopped))
+        socket.send_text(json.dumps({"id": 7, "type": "keyshape_capture", "source": "contours"}))
+        assert socket.receive_json() == {"id": 7, "type": "progress", "index": 0, "count": 3000}
+        socket.send_text(json.dumps({"id": 7, "type": "cancel"}))
+        cancelled, _ = _send(socket, {"type": "keyshapes"})  # the reply to 7 comes first
+        while cancelled.get("id") != 7:
+            cancelled = socket.receive_json()
+        state, _ = _send(socket, {"type": "keyshapes"})
+    said = "cancelled: did not capture the key-shapes; nothing saved before was changed"
+    assert cancelled == {"id": 7, "type": "error", "cancelled": True, "message": said}
+    assert stopped == ["Cancelled"]
+    assert saved.read_bytes() == before and state["capture"] == first["capture"]

@@ -180,6 +180,7 @@ def build_model(editing: Editing, message: km.KeyshapeModel,
         progress(1, 3)
         sheet = api.keyshape_sheet(space)
         progress(2, 3)
+        progress(3, 3)  # all made: a cancel comes no later than here, so nothing is saved
     save_model(_file(editing, MODEL), space)
     save_png(_file(editing, SHEET), sheet)
     for stale in (MOTION, CAPTURED, POSES, RETARGETED):  # captured with other keys
@@ -187,7 +188,6 @@ def build_model(editing: Editing, message: km.KeyshapeModel,
     with editing.lock:
         editing.keyshaped = None
     _remember(editing, points=message.points, key_frames=message.key_frames, inbetweens=message.inbetweens)
-    progress(3, 3)
     return state(editing)
 
 
@@ -288,7 +288,7 @@ def retarget(editing: Editing, message: km.KeyshapeRetarget) -> dict[str, Any]:
     save_keyframes(_file(editing, POSES), skeleton, poses)
     save_motion(_file(editing, RETARGETED), motion)
     with editing.lock:
-        editing.keyshaped = animation
+        editing.keyshaped = (character, animation)
     _remember(editing, retarget_keys=list(message.keys))
     return {"type": "keyshape_retargeted", "first": 0, "last": motion.frame_count - 1, "fps": motion.fps,
             "file": f"{KEYSHAPES}/{RETARGETED}"}
@@ -298,12 +298,14 @@ def keyshaped(editing: Editing) -> api.Animation:
     """The retargeted key-shape motion's animation, for ``frame`` with ``"source": "keyshapes"``
     (read from ``keyshapes/retargeted.json`` after a restart)."""
     with editing.lock:
-        if editing.keyshaped is None:
+        # Animated again for a drawing rigged since (its mesh is another).
+        if editing.keyshaped is None or editing.keyshaped[0] is not editing.character:
             file = _file(editing, RETARGETED)
             if not file.is_file():
                 raise MotionError("nothing is retargeted from key-shapes yet: capture, then retarget")
-            editing.keyshaped = api.animate_character(editing.deformer, load_motion(file))
-        return editing.keyshaped
+            animation = api.animate_character(editing.deformer, load_motion(file))
+            editing.keyshaped = (editing.character, animation)
+        return editing.keyshaped[1]
 
 
 def receive_limit() -> int:
