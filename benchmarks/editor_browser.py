@@ -1,7 +1,9 @@
 """The editor as the animator feels it: a joint dragged in headless Chromium, from the pointer's
-move to the server's reply and to the frame painted; JSON lines.
+move to the server's reply and to the frame painted; and the 3D panel's lift and simulation, from
+the click to the reply shown; JSON lines.
 
-    python benchmarks/editor_browser.py [DRAWING_DIR|sample ...] [--moves N]
+    python benchmarks/editor_browser.py [DRAWING_DIR|sample ...] [--moves N] [--prior CLIP.bvh]
+                                        [--keys KEYS.json]
         [--keyshape-footage VIDEO|DIR --keyshape-outlines KEYS.json --keyshape-key-frames 0,8,16]
         [--only-keyshapes]
 
@@ -21,6 +23,13 @@ Keys, one line per drawing:
                                   the new mesh is on the screen (goal: median at most 50)
   webgl                           the page's WebGL renderer (SwiftShader: drawn on the CPU here)
 
+And one line per drawing for the 3D panel (``"step": "3d"``), its project keyed with ``--keys``
+(a key-frames file for that skeleton) or else a swing of the skeleton made from its structure
+(every joint whose parent has a parent turned 0.3 rad one way, then the other, twice), lifted with the
+``--prior`` clip (default: ../shared/data/mocap's CMU jump) from the view 0, 0, then a balloon held
+at the dragged joint simulated and composited:
+  frames, markers                 the animation's frames, the proxy's markers
+  lift_s, simulate_s              the click on Lift (Simulate) -> the panel showing the reply
 Then one line for the Key-shapes panel's capture step, on the generated clip
 (``toonmotion.sample_cartoons.morphing_character``, 24 frames, its outlines on its key frames) and
 on footage given with ``--keyshape-footage`` (a video, GIF or folder of frames, sent as the page
@@ -40,7 +49,6 @@ import math
 import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from toonmotion import api
@@ -51,6 +59,8 @@ from toonmotion.testing.browser import CHROMIUM_ARGS, chromium_path
 from toonmotion.web.background import serving
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "drawings"
+DEFAULT_PRIOR = DEFAULT_DIR.parent / "mocap" / "cmu_16_07_jump.bvh"
+SWING = 0.3  # radians each joint turns in the swing key-frames
 WARM_UP = 5
 
 # Installed in the page: every pointer move on the stage, every reply of the live connection and
@@ -148,6 +158,72 @@ def bench(folder, moves):
     }
 
 
+def swing_keys(skeleton):
+    """Key-frames made from the skeleton's structure alone: rest, every joint whose parent has a
+    parent turned by SWING, then by -SWING, twice, then rest; 6 frames apart at 12 fps."""
+    from toonmotion.animate.timeline import Keyframe, make_timeline
+    from toonmotion.rig.pose import Pose, rotate_about
+
+    turned = {}
+    pivots = sorted({int(p) for p in skeleton.parents if p >= 0 and skeleton.parents[p] >= 0})
+    for sign in (1, -1):
+        positions = skeleton.positions
+        for pivot in pivots:
+            positions = rotate_about(skeleton, positions, skeleton.names[pivot], sign * SWING)
+        turned[sign] = positions
+    poses = {0: skeleton.positions, 6: turned[1], 12: turned[-1], 18: turned[1], 24: turned[-1],
+             30: skeleton.positions}
+    return make_timeline(skeleton, [Keyframe(f, Pose(p)) for f, p in poses.items()], fps=12.0)
+
+
+def bench_3d(folder, prior, keys_file):
+    """The 3D panel on one drawing: Lift, then Simulate a balloon, each timed click to reply."""
+    import time
+
+    from playwright.sync_api import sync_playwright
+
+    from toonmotion.io.pose_json import load_keyframes, save_keyframes
+
+    name, character = rig(folder)
+    skeleton = character.skeleton
+    keys = load_keyframes(keys_file, skeleton) if keys_file else swing_keys(skeleton)
+    with tempfile.TemporaryDirectory() as scratch:
+        project = Path(scratch) / "project"
+        api.save_project(project, character)
+        save_keyframes(project / "keys.json", skeleton, keys)
+        with serving(project, library=prior.parent) as served, sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
+            page = browser.new_page(viewport={"width": 1280, "height": 800})
+            page.goto(served.page)
+            page.wait_for_function("document.getElementById('status').textContent === 'ready'",
+                                   timeout=60_000)
+            page.click("nav button[data-panel=proxy]")
+            page.wait_for_function("document.querySelectorAll('#proxy-prior option').length > 0")
+            page.select_option("#proxy-prior", f"library/{prior.name}")
+            timed, lifted = {}, ""
+            for step, button, said in (("lift_s", "#proxy-lift", "lifted"), ("simulate_s", "#proxy-simulate",
+                                                                              "simulated")):
+                if step == "simulate_s":
+                    page.select_option("#proxy-kind", "balloon")
+                    page.select_option("#proxy-marker", dragged_joint(skeleton))
+                    page.click("#proxy-add")
+                started = time.perf_counter()
+                page.click(button)
+                page.wait_for_function(
+                    f"""() => document.getElementById('status').textContent.startsWith({said!r})
+                              || !document.getElementById('error').hidden""", timeout=600_000)
+                timed[step] = round(time.perf_counter() - started, 2)
+                error = page.locator("#error")
+                if error.is_visible():
+                    said = error.text_content()
+                    browser.close()
+                    return {"drawing": name, "step": "3d", "prior": prior.name, "error": said}
+                lifted = lifted or page.locator("#status").text_content()  # "lifted N markers over T frames"
+            browser.close()
+    markers, frames = (int(word) for word in lifted.split() if word.isdigit())
+    return {"drawing": name, "step": "3d", "prior": prior.name, "frames": frames, "markers": markers, **timed}
+
+
 def keyshape_inputs(scratch, footage, outlines, key_frames):
     """``(name, footage file, outlines file, key frames)``: the generated clip written into
     ``scratch`` when no footage is given."""
@@ -190,6 +266,8 @@ def send_footage(served, clip):
 
 def bench_keyshapes(footage=None, outlines=None, key_frames=None):
     """The Key-shapes panel's model and capture steps, timed in the page, and the library's."""
+    import time
+
     from playwright.sync_api import sync_playwright
 
     from toonmotion.io.frames import load_frames
@@ -247,6 +325,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("drawings", nargs="*", type=Path, help="drawing folders, or 'sample'")
     parser.add_argument("--moves", type=int, default=60, help="pointer moves timed per drawing (default 60)")
+    parser.add_argument("--prior", type=Path, default=DEFAULT_PRIOR, help="the 3D panel's prior (.bvh)")
+    parser.add_argument("--keys", type=Path, help="key-frames for the drawings' skeleton (default: a swing)")
     parser.add_argument("--keyshape-footage", type=Path, help="footage for the key-shape capture step")
     parser.add_argument("--keyshape-outlines", type=Path, help="its key outlines (contours file or SVG)")
     parser.add_argument("--keyshape-key-frames", help="the frames the outlines are drawn on, e.g. 0,8,16")
@@ -261,6 +341,10 @@ def main(argv=None):
                                 Path("sample")]
     for folder in [] if args.only_keyshapes else folders:
         print(json.dumps(bench(folder, args.moves)), flush=True)
+        if args.prior.is_file():
+            print(json.dumps(bench_3d(folder, args.prior, args.keys)), flush=True)
+        else:
+            print(json.dumps({"drawing": str(folder), "step": "3d", "skipped": f"no prior at {args.prior}"}))
     print(json.dumps(bench_keyshapes()), flush=True)
     if args.keyshape_footage is not None:
         print(json.dumps(bench_keyshapes(*given)), flush=True)

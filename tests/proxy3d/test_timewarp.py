@@ -86,8 +86,12 @@ def test_a_prior_too_short_is_refused_in_one_line(walk_prior):
     with pytest.raises(ProxyError, match="too short"):
         align_prior(drawn, one, camera(0, 0))
     few = Markers(drawn.names, drawn.positions[:10], drawn.fps)
-    with pytest.raises(ProxyError, match="too long to align"):
+    with pytest.raises(ProxyError, match=r"too long to align: .* \(at most 20 frames\)$"):
         align_prior(few, walk_prior, camera(0, 0))
+    # At another rate, the most it may be is said in the clip's own frames too (what --segment cuts).
+    slower = Markers(drawn.names, drawn.positions[:10], drawn.fps / 2)
+    with pytest.raises(ProxyError, match=rf"\(at most 20 frames, 40 of its own at {walk_prior.fps:g} fps\)$"):
+        align_prior(slower, walk_prior, camera(0, 0))
 
 
 def test_align_prior_needs_the_markers_names(walk_prior):

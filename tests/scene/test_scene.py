@@ -281,3 +281,27 @@ def test_balls_a_limb_sweeps_through_too_fast_are_warned_of_in_one_line():
     assert len(warnings) == 1 and "\n" not in warnings[0]
     assert warnings[0].startswith("balls sank up to 50 mm into the proxy's volumes, more than 50% of their "
                                   "radius (45 mm)")
+
+
+def test_a_balloon_held_under_a_limb_starts_clear_of_it_and_floats_up_on_its_string():
+    """Held at a chest under a wide head, a string straight up would start the balloon inside the
+    head's volume, which flings it out (and blew the simulation up in the editor's 3D panel): the
+    string leans out until the balloon starts clear, and its lift carries it up."""
+    from toonmotion.scene.build import balloon_way, figure_height, first_frame_volumes
+
+    T = 24
+    chest = [[0.0, 1.0, 0], [0.0, 1.45, 0], [0.0, 1.9, 0]]  # chest, neck, the head's top
+    proxy = make_proxy(np.repeat([chest], T, axis=0), radius=0.18)
+    balloon = Balloon("m0")
+    volumes = first_frame_volumes(proxy, np.asarray(proxy.radii))
+    height = figure_height(proxy)
+    way = balloon_way(proxy, 0, balloon, volumes, height)
+    assert way[1] < 1  # leaning out
+    motion = simulate_scene(proxy, [balloon])
+    centre, radius = motion.spheres[:, 0, :3], motion.spheres[0, 0, 3]
+    assert np.isfinite(centre).all()
+    on = [np.clip((centre[0] - a) @ (b - a) / ((b - a) @ (b - a)), 0, 1) for a, b, _ in volumes]
+    nearest = [a + s * (b - a) for s, (a, b, _) in zip(on, volumes, strict=True)]
+    gaps = [np.linalg.norm(centre[0] - q) - r for q, (_, _, r) in zip(nearest, volumes, strict=True)]
+    assert min(gaps) >= radius  # it starts clear of every volume
+    assert centre[-1, 1] > proxy.points[-1, 0, 1]  # and floats above its hand's marker

@@ -8,6 +8,7 @@ import pytest
 from toonmotion.errors import MessageError, ToonmotionError
 from toonmotion.web import messages, session
 from toonmotion.web.messages import MODELS, parse, read
+from toonmotion.web.socket_flow import SLOW_HANDLERS
 
 
 @pytest.mark.parametrize("message, said", [
@@ -68,7 +69,9 @@ def test_a_good_message_reads_as_its_model_with_unknown_fields_ignored():
 
 
 def test_every_message_has_exactly_one_handler():
-    slow = {"export", "track", "open_drawing", "suggest", "keyshape_model", "keyshape_capture"}
+    slow = set(SLOW_HANDLERS)
+    assert {"export", "track", "open_drawing", "suggest", "lift", "scene", "proxy_export"} <= slow
+    assert {"keyshape_model", "keyshape_capture"} <= slow
     assert set(session._HANDLERS) | slow | {"cancel"} == set(MODELS)
     assert not set(session._HANDLERS) & slow
     assert issubclass(MessageError, ToonmotionError)  # the page shows it as every other error

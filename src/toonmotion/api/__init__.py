@@ -63,7 +63,7 @@ from toonmotion.api.posing import (
     rotate_joint,
     sketch_pose,
 )
-from toonmotion.api.proxy3d import lift_proxy, lift_warnings, preview_proxy, project_mocap
+from toonmotion.api.proxy3d import lift_animation, lift_proxy, lift_warnings, preview_proxy, project_mocap
 from toonmotion.api.rigging import correct_regions, redo_edits, rig_again, rig_image, set_depth, undo_edits
 from toonmotion.api.scene3d import (
     animation_frames,

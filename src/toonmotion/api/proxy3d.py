@@ -5,15 +5,19 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from toonmotion.animate.animation import Animation
 from toonmotion.animate.motion import Motion
+from toonmotion.api.animation import motion_in_frames
 from toonmotion.capture.bvh_kinematics import BvhClip
 from toonmotion.capture.mocap import find_joints, fit_to_frame
 from toonmotion.errors import MotionError, ProxyError
 from toonmotion.geometry.arrays import frame_rate
+from toonmotion.io.frames import lay_on
 from toonmotion.progress import Progress
 from toonmotion.proxy3d.camera_fit import CameraWeights
 from toonmotion.proxy3d.lift import LiftReport, lift
@@ -23,6 +27,8 @@ from toonmotion.proxy3d.prior import prior_from_bvh, resample_prior
 from toonmotion.proxy3d.proxy import Proxy
 from toonmotion.proxy3d.skeleton import SkeletonWeights
 from toonmotion.render.proxy_preview import preview_frames
+from toonmotion.render.sequence import render_animation
+from toonmotion.rig.character import Character
 from toonmotion.rig.skeleton import Skeleton
 
 
@@ -129,6 +135,49 @@ def lift_proxy(
                          skeleton_weights=skeleton_weights, progress=progress)
     return proxy, replace(report, left_out=left_out)
 
+
+
+def lift_animation(character: Character, animation: Animation, prior: BvhClip, *,
+                   size: tuple[int, int] | None = None, **options: Any) -> tuple[Proxy, LiftReport]:
+    """Lift a rigged character's animation into a 3D proxy: its joints in its frames are the markers,
+    and its frames, on white, give the collision volumes.
+
+    What ``animate --save-frame-motion`` and ``animate -o FRAMES`` write, then ``lift --frames``
+    reads, in one call (``lift --project --keys`` and the editor's 3D panel); ``scene --project``
+    then composites into the same frames (:func:`toonmotion.api.animation_frames`).
+
+    Parameters
+    ----------
+    character : Character
+    animation : Animation
+        From :func:`toonmotion.api.animate_character`.
+    prior : BvhClip
+        The motion prior.
+    size : (int, int), optional
+        The frames' ``(width, height)``, as :func:`toonmotion.api.motion_in_frames`'s.
+    **options
+        :func:`lift_proxy`'s keywords (``view``, ``ground``, ``hold_elevation``, ``up``, ...), but
+        ``frames`` and ``size``, which the animation gives.
+
+    Returns
+    -------
+    proxy : Proxy
+    report : LiftReport
+
+    Examples
+    --------
+    See :func:`lift_proxy`, whose example lifts markers with a clip built in place; a rigged
+    character's animation needs a clip with its joints (``tests/proxy3d/test_lift_animation.py``
+    lifts the bundled character with a CMU jump, and checks the result is :func:`lift_proxy`'s on
+    the same motion and frames).
+    """
+    for given in ("frames", "markers"):
+        if given in options:
+            raise ProxyError(f"an animation gives its own {given}; lift them with lift_proxy instead")
+    motion = motion_in_frames(character, animation, size=size)
+    frames = lay_on(np.stack(list(render_animation(character, animation, size=size))))
+    height, width = frames.shape[1:3]
+    return lift_proxy(motion, prior, frames=frames, size=(width, height), **options)
 
 # Beyond these, a lift's result deserves a second look (lift_warnings).
 POOR_MATCH_DEG = 12.0  # limbs this far apart on average between the drawing and its aligned prior

@@ -32,8 +32,11 @@ def edit(
     open_browser: Annotated[bool, typer.Option(
         "--open", help="Open the editor in the web browser (with a one-time sign-in code, not the token).")]
     = False,
+    mocap: Annotated[Path | None, typer.Option(
+        "--mocap", envvar="TOONMOTION_MOCAP", help="A folder of motion-capture clips (.bvh) the 3D panel "
+        "offers as priors (clips can also be sent from the page).")] = None,
 ) -> None:
-    """Edit a project in the browser: rig, pose, regions, key-frames, exaggerate, capture, export."""
+    """Edit a project in the browser: rig, pose, regions, key-frames, exaggerate, capture, 3D, export."""
     import uvicorn
 
     from toonmotion.web.server import create_app, new_token, sign_in_code
@@ -52,7 +55,9 @@ def edit(
     shown = f"[{host}]" if ":" in host else host
     names = dict.fromkeys((shown, "127.0.0.1", "localhost", "[::1]"))
     origins = tuple(f"http://{name}:{bound}" for name in names)
-    server_app = create_app(Path(project), token=token, origins=origins)
+    if mocap is not None and not mocap.is_dir():
+        raise SettingsError(f"--mocap must be a folder of .bvh clips; {mocap} is not a folder")
+    server_app = create_app(Path(project), token=token, origins=origins, library=mocap)
     url = f"http://{shown}:{bound}/?token={token}"
     typer.echo(f"toonmotion editor for {project}: {url}")
     if open_browser:  # a code good once, for two minutes: the token itself is on no command line

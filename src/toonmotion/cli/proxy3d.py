@@ -14,6 +14,7 @@ from toonmotion import api
 from toonmotion.animate.motion import Motion
 from toonmotion.cli import options
 from toonmotion.cli.app import app
+from toonmotion.cli.scene3d import project_animation
 from toonmotion.errors import SettingsError
 from toonmotion.io.bvh import load_bvh, save_bvh
 from toonmotion.io.exchange.proxy_gltf import save_proxy_glb
@@ -31,12 +32,12 @@ EXPORTS = (".glb", ".bvh")
 
 @app.command("lift")
 def lift_command(
-    source: Annotated[Path, typer.Argument(
-        metavar="MARKERS", help="A markers file (.json or .csv: named markers per frame) or a motion file "
-        "(from 'track' or an animation).")],
     prior: Annotated[Path, typer.Option("--prior",
                                         help="Motion-capture clip (.bvh) that moves like the drawing.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="Proxy file to write (.json).")],
+    source: Annotated[Path | None, typer.Argument(
+        metavar="[MARKERS]", help="A markers file (.json or .csv: named markers per frame) or a motion file "
+        "(from 'track' or an animation); or give --project and --keys.")] = None,
     joint_map: Annotated[str | None, typer.Option(
         "--map", help="Markers named otherwise than the clip's joints: MARKER=JOINT[,MARKER=JOINT...]."
     )] = None,
@@ -80,6 +81,12 @@ def lift_command(
     glb: Annotated[Path | None, typer.Option("--glb",
                                              help="Also export the proxy as glTF binary (.glb).")] = None,
     bvh: Annotated[Path | None, typer.Option("--bvh", help="Also export the skeleton as BVH (.bvh).")] = None,
+    project: Annotated[Path | None, typer.Option(
+        "--project", help="Instead of MARKERS and --frames: a rigged character, whose animation through "
+        "--keys is lifted (its joints in its frames, and its frames for the volumes), as 'scene --project' "
+        "composites it.")] = None,
+    keys: Annotated[Path | None, typer.Option(
+        "--keys", help="With --project: the key-frames or motion it is animated with.")] = None,
     preview: Annotated[Path | None, typer.Option(
         "--preview", help="Also write a preview: the proxy over the drawing beside a side view (.mp4, .gif "
         "or a folder).")] = None,
@@ -92,23 +99,34 @@ def lift_command(
         options.suffix(bvh, ".bvh", "a BVH file")
     if preview is not None:
         animation_format(preview)
+    if (source is None) == (project is None) or (project is None) != (keys is None):
+        raise SettingsError("give the drawn markers (MARKERS) or a project and its keys (--project, --keys)")
+    if project is not None and (frames is not None or fps is not None):
+        raise SettingsError("--project gives its own frames and frame rate: leave out --frames and --fps")
     overrides = _widths(widths)
-    if overrides and frames is None:
+    if overrides and frames is None and project is None:
         raise SettingsError("--width sets a limb's width on the drawn frames: give them with --frames")
-    markers = read_markers(source, fps)
     clip = load_bvh(prior)
+    given = dict(joint_map=_pairs(joint_map, "--map"), segment=_segment(segment),
+                 view=None if view is None else options.numbers(view, 2, "--view"),
+                 focal=focal, still_camera=still_camera, up=_up(up), hold_elevation=hold_elevation,
+                 ground=ground, widths=overrides, units=_units(units),
+                 extra=[load_bvh(p) for p in extra or ()])
     pictures = None
-    if frames is not None:
-        pictures = lay_on(load_frames(frames, alpha=True)[0])  # transparent PNGs on white
-    with options.progress("lifting") as report:
-        proxy, found = api.lift_proxy(
-            markers, clip, joint_map=_pairs(joint_map, "--map"), segment=_segment(segment),
-            view=None if view is None else options.numbers(view, 2, "--view"),  # type: ignore[arg-type]
-            focal=focal, still_camera=still_camera, up=_up(up), hold_elevation=hold_elevation, ground=ground,
-            size=options.size(size), frames=pictures,
-            widths=overrides,
-            units=_units(units), extra=[load_bvh(p) for p in extra or ()], progress=report,
-        )
+    if project is not None and keys is not None:
+        character, animation = project_animation(project, keys)
+        with options.progress("lifting") as report:
+            proxy, found = api.lift_animation(character, animation, clip, size=options.size(size),
+                                              progress=report, **given)
+        if preview is not None:
+            pictures = lay_on(api.animation_frames(character, animation, proxy)[0])
+    else:
+        markers = read_markers(source, fps)  # type: ignore[arg-type]
+        if frames is not None:
+            pictures = lay_on(load_frames(frames, alpha=True)[0])  # transparent PNGs on white
+        with options.progress("lifting") as report:
+            proxy, found = api.lift_proxy(markers, clip, size=options.size(size), frames=pictures,
+                                          progress=report, **given)  # type: ignore[arg-type]
     save_proxy(output, proxy)
     written = [str(output)]
     if glb is not None:

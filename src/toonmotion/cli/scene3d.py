@@ -104,7 +104,7 @@ def scene_command(
         if frames is not None:
             pictures, _ = load_frames(frames, alpha=True)
         elif project is not None and keys is not None:
-            character, animation = _animation(project, keys)
+            character, animation = project_animation(project, keys)
             pictures, limbs = api.animation_frames(character, animation, proxy)
         motion = api.simulate_scene(proxy, elements, progress=report)
         made = api.composite_scene(proxy, pictures, motion, shading=shading, background=under, limbs=limbs,
@@ -130,7 +130,7 @@ def _opaque(frames):
         yield np.concatenate([f, np.full(f.shape[:2] + (1,), 255, np.uint8)], axis=2)
 
 
-def _animation(project: Path, keys: Path) -> tuple[api.Character, api.Animation]:
+def project_animation(project: Path, keys: Path) -> tuple[api.Character, api.Animation]:
     """The project's character and its animation through ``keys`` (key-frames or a motion)."""
     character = api.load_project(project)
     source: Motion | Timeline

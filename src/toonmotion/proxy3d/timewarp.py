@@ -218,9 +218,11 @@ def align_prior(
             f"({n / max_stretch / markers.fps:.3g} s) long"
         )
     if n * max_stretch < m:
+        most = n * max_stretch
+        own = f", {most * prior.fps / markers.fps:.0f} of its own at {prior.fps:g} fps"
         raise ProxyError(f"the prior is too long to align: {m} frames at {markers.fps:g} fps for {n} drawn "
                          "frames; cut it to the part that matches the drawing (at most "
-                         f"{n * max_stretch:.0f} frames)")
+                         f"{most:.0f} frames{own if prior.fps != markers.fps else ''})")
     projection = np.asarray(R, dtype=float)
     if projection.shape != (2, 3) or not np.isfinite(projection).all():
         raise ProxyError(f"the camera must be a finite 2x3 matrix, got shape {projection.shape}")

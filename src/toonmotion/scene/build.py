@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from toonmotion import limits
 from toonmotion.errors import SceneError
 from toonmotion.proxy3d.proxy import Proxy
-from toonmotion.scene.clearance import clear, first_frame_volumes, overlap
+from toonmotion.scene.clearance import clear, directions, first_frame_volumes, overlap
 from toonmotion.scene.cloth import (
     CAPE_BODIES,
     SCARF_BODIES,
@@ -300,7 +300,8 @@ def build_scene(proxy: Proxy, elements: list[Element] | tuple[Element, ...]) -> 
             continue
         at = held_xml.setdefault(names.index(element.marker), [])
         if isinstance(element, Balloon):
-            at.append(_balloon_xml(i, element, height))
+            way = balloon_way(proxy, names.index(element.marker), element, volumes, height)
+            at.append(_balloon_xml(i, element, height, way))
         elif isinstance(element, Scarf):
             marker = names.index(element.marker)
             at.append(scarf_xml(f"e{i}_scarf", element, proxy, marker, radii, height))
@@ -397,8 +398,26 @@ def _limb_radii(proxy, height):
     return np.full((proxy.frame_count, len(proxy.limbs), 2), DEFAULT_LIMB_RADIUS * height)
 
 
-def _balloon_xml(i, balloon, height):
-    """A string of capsules straight up from the holding marker's body, the balloon at its top."""
+def balloon_way(proxy: Proxy, marker: int, balloon: Balloon, volumes: list,
+                height: float) -> NDArray[np.float64]:
+    """Which way a balloon's string starts from its marker: straight up, unless that starts the
+    balloon inside a limb's volume on the first frame (a balloon held at the chest, under the
+    head), which flings it out and can blow the simulation up; then the first that starts it
+    clear of leaning out away from the figure's middle, to either side or back, at 45 degrees,
+    then lower, then level (its lift then carries it up on its own). Up when none does."""
+    radius = balloon.radius or BALLOON_RADIUS * height
+    length = balloon.string_length or STRING_LENGTH * height
+    up = np.array([0.0, 1.0, 0.0])
+    outs = directions(proxy.points[0], marker)[1:5]
+    for way in [up] + [rise * up + w for rise in (1.0, 0.5, 0.0) for w in outs]:
+        way = way / np.linalg.norm(way)
+        if clear([proxy.points[0][marker] + way * (length + radius)], radius, volumes):
+            return way
+    return up
+
+
+def _balloon_xml(i, balloon, height, way):
+    """A string of capsules from the holding marker's body along ``way``, the balloon at its top."""
     radius = balloon.radius or BALLOON_RADIUS * height
     link = (balloon.string_length or STRING_LENGTH * height) / STRING_LINKS
     rgba = rgba_text(balloon.colour)
@@ -406,14 +425,27 @@ def _balloon_xml(i, balloon, height):
              f'<joint type="ball" damping="0.0002"/><geom name="e{i}_balloon" type="sphere" '
              f'pos="0 {radius!r} 0" size="{radius!r}" mass="{BALLOON_MASS}" rgba="{rgba}" {ELEMENT_BITS} '
              f'{CONTACT}/></body>')
+    turn = _turn_from_up(way)
     for s in reversed(range(STRING_LINKS)):
         pos = "0 0 0" if s == 0 else f"0 {link!r} 0"
-        inner = (f'<body name="e{i}_link{s}" pos="{pos}"><joint type="ball" damping="0.00005"/>'
+        quat = f' quat="{vec(turn)}"' if s == 0 else ""
+        inner = (f'<body name="e{i}_link{s}" pos="{pos}"{quat}><joint type="ball" damping="0.00005"/>'
                  f'<geom name="e{i}_string{s}" type="capsule" pos="0 {link / 2!r} 0" zaxis="0 1 0" '
                  f'size="{STRING_RADIUS} {link / 2!r}" mass="0.0005" rgba="0.15 0.15 0.15 1" contype="0" '
                  f'conaffinity="0"/>'
                  f'{inner}</body>')
     return inner
+
+
+def _turn_from_up(way):
+    """MuJoCo's quaternion (w, x, y, z) turning +Y onto the unit vector ``way``."""
+    up = np.array([0.0, 1.0, 0.0])
+    axis = np.cross(up, way)
+    w = 1.0 + float(up @ way)
+    if w < 1e-9:  # straight down: half a turn about X
+        return np.array([0.0, 1.0, 0.0, 0.0])
+    q = np.array([w, *axis])
+    return q / np.linalg.norm(q)
 
 
 def _air(elements):

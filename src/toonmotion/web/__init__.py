@@ -4,6 +4,3 @@
 for live posing; it calls :mod:`toonmotion.api` like the CLI does. Start it with
 ``toonmotion edit PROJECT``.
 """
-
-# The Key-shapes panel's messages join the editor's (web.messages.MODELS) whichever module is used first.
-from toonmotion.web import keyshape_messages as _keyshape_messages  # noqa: E402, F401

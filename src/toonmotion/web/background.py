@@ -34,8 +34,9 @@ class Served:
 
 
 @contextlib.contextmanager
-def serving(project: str | Path) -> Iterator[Served]:
-    """The editor on the project folder ``project``, served until the block ends."""
+def serving(project: str | Path, *, library: str | Path | None = None) -> Iterator[Served]:
+    """The editor on the project folder ``project`` (with the priors' folder ``library``), served
+    until the block ends."""
     import uvicorn
 
     listener = socket.socket()
@@ -43,7 +44,7 @@ def serving(project: str | Path) -> Iterator[Served]:
     listener.listen(64)
     port = listener.getsockname()[1]
     token = new_token()
-    app = create_app(project, token=token, origins=(f"http://127.0.0.1:{port}",))
+    app = create_app(project, token=token, origins=(f"http://127.0.0.1:{port}",), library=library)
     server = uvicorn.Server(uvicorn.Config(app, log_level="warning"))
     thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
     thread.start()

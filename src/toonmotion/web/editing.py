@@ -52,8 +52,8 @@ EXPORTS = "exports"
 
 
 # The files an export may leave, which the editor serves for download, by suffix.
-EXPORT_FILE = re.compile(r"(?P<stem>[A-Za-z0-9][A-Za-z0-9_-]{0,63})(?:\.spine|\.sheet)?"
-                         r"\.(?P<suffix>gif|mp4|apng|webp|webm|glb|json|atlas|png)")
+EXPORT_FILE = re.compile(r"(?P<stem>[A-Za-z0-9][A-Za-z0-9_-]{0,79})(?:\.spine|\.sheet)?"
+                         r"\.(?P<suffix>gif|mp4|apng|webp|webm|glb|json|atlas|png|bvh)")
 
 
 log = logging.getLogger("toonmotion.web")
@@ -84,6 +84,9 @@ class Editing:
     # ``PUT /api/footage`` described it, the joints last tracked (with their rectangles) and the
     # ``tracked`` reply; None before footage is sent.
     capture_page: dict[str, Any] | None = None
+    # The motion-capture clips (.bvh) the 3D panel offers as priors, besides those sent to the
+    # project (toonmotion edit --mocap DIR); None: none.
+    library: Path | None = None
     _history: History | None = None
 
     @property
@@ -95,16 +98,18 @@ class Editing:
             return self._history
 
     @classmethod
-    def open(cls, folder: str | Path) -> Editing:
+    def open(cls, folder: str | Path, *, library: str | Path | None = None) -> Editing:
         """The project in ``folder`` and its ``keys.json`` if it has one (errors name the file); a
-        project holding a symbolic link is refused (:mod:`toonmotion.io.links`)."""
+        project holding a symbolic link is refused (:mod:`toonmotion.io.links`). ``library``: the
+        folder of motion-capture priors (:attr:`library`)."""
         folder = Path(folder)
         if folder.is_dir():
             no_links(folder)
         character = api.load_project(folder)
         keys = folder / KEYS_FILE
         timeline = load_keyframes(keys, character.skeleton) if keys.is_file() else None
-        return cls(folder=folder, character=character, timeline=timeline)
+        return cls(folder=folder, character=character, timeline=timeline,
+                   library=None if library is None else Path(library))
 
     def check_links(self) -> None:
         """Refuse to go on while anything under the project is a symbolic link

@@ -1,6 +1,6 @@
-"""The Key-shapes panel's WebSocket messages (Bregler et al. 2002 capture in the editor), added to
-:data:`toonmotion.web.messages.MODELS` when this module is imported (the package does); what each
-does is :mod:`toonmotion.web.keyshape_requests`'s.
+"""The Key-shapes panel's WebSocket messages (Bregler et al. 2002 capture in the editor), part of
+:data:`toonmotion.web.messages.MODELS` (:data:`KEYSHAPE_MODELS`); what each does is
+:mod:`toonmotion.web.keyshape_requests`'s.
 
 * ``keyshapes``: what the project folder's ``keyshapes/`` holds, to show again after a reload or a
   restart. Reply ``{"type": "keyshapes", "outlines", "key_frames", "points", "inbetweens", "model",
@@ -31,8 +31,9 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, StrictStr
 
 from toonmotion.io.schema import Float, Point
-from toonmotion.web import messages
-from toonmotion.web.messages import Frame, Message, must, required
+from toonmotion.web.message_base import Message, must, required
+
+Frame = Annotated[StrictInt, Field(ge=0, le=2**31 - 1)]
 
 # At most this many key outlines, points per outline, and points resampled to.
 MOST_KEYS, MOST_POINTS = 64, 10_000
@@ -83,8 +84,7 @@ class KeyshapeRetarget(Message):
     pin: Annotated[Pin | None, must("'pin' must be null or {\"joint\": name, \"at\": [x, y]}")] = None
 
 
-MODELS: dict[str, type[Message]] = {
+KEYSHAPE_MODELS: dict[str, type[Message]] = {
     "keyshapes": Message, "keyshape_model": KeyshapeModel, "keyshape_pick": KeyshapePick,
     "keyshape_capture": KeyshapeCapture, "keyshape_retarget": KeyshapeRetarget,
 }
-messages.MODELS.update(MODELS)

@@ -5,7 +5,8 @@ too, ``{"id": ..., "type": "error", "message": "..."}``, and changes nothing. :f
 a message's text into its model, or raises a one-line :class:`~toonmotion.errors.MessageError`
 saying which field is wrong and what it must be; fields the model does not know are ignored, so
 an older page's extra fields do no harm. What each message does, and its reply, is
-:mod:`toonmotion.web.session`'s and :mod:`toonmotion.web.slow_requests`'s.
+:mod:`toonmotion.web.session`'s and :mod:`toonmotion.web.slow_requests`'s. The 3D panel's messages
+(``proxy``, ``lift``, ``scene``, ``proxy_export``) are :mod:`toonmotion.web.proxy_messages`'.
 
 * ``pose``: every joint's ``positions`` in the skeleton's order and optional fine-tuning
   ``edits`` (thesis 3.5) in the key-frames file's form (``{"kind": "curve", "points": [...]}``
@@ -79,13 +80,15 @@ from pydantic import (
     StrictStr,
     ValidationError,
 )
-from pydantic_core import ErrorDetails
 
 from toonmotion import limits
 from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.errors import MessageError
 from toonmotion.io.schema import Float, Point, describe, explained, problem
 from toonmotion.rig.skeleton import Skeleton
+from toonmotion.web.keyshape_messages import KEYSHAPE_MODELS
+from toonmotion.web.message_base import Message, must, required
+from toonmotion.web.proxy_messages import PROXY_MODELS
 
 # A WebSocket message longer than this is refused unread (a pose of 10,000 joints fits easily).
 MAX_MESSAGE_BYTES = 1_000_000
@@ -93,22 +96,6 @@ MAX_MESSAGE_BYTES = 1_000_000
 # atlas are both JSON, so they carry a second suffix (their .atlas and .png are written beside them).
 EXPORT_FORMATS = {"gif": ".gif", "mp4": ".mp4", "png": "", "apng": ".apng", "webp": ".webp", "webm": ".webm",
                   "glb": ".glb", "spine": ".spine.json", "sheet": ".sheet.json"}
-
-
-def _got(value: Any) -> str:
-    return repr(value)[:40]
-
-
-def must(text: str, *, inner: str | None = None) -> Any:
-    """A field whose every problem reads ``"{text}, got {value}"``; a problem inside one of its
-    items reads ``"{inner}, got {item}"`` when ``inner`` is given."""
-
-    def say(value: Any, errors: list[ErrorDetails]) -> str:
-        if inner is not None and len(errors[0]["loc"]) >= 2:
-            return f"{inner}, got {_got(errors[0]['input'])}"
-        return f"{text}, got {_got(value)}"
-
-    return explained(say)
 
 
 def _always(text: str) -> Any:
@@ -129,12 +116,6 @@ def _one_layer(by: int) -> int:
     return by
 
 
-def required() -> Any:
-    """A field the message must give: missing, it is validated as null, so its own message says so
-    (``'joint' must name the joint dragged, got None``) rather than pydantic's."""
-    return Field(default=None, validate_default=True)
-
-
 Frame = Annotated[StrictInt, Field(ge=0, le=2**31 - 1)]
 Byte = Annotated[StrictInt, Field(ge=0, le=255)]
 Background = Annotated[tuple[Byte, Byte, Byte] | None,
@@ -143,15 +124,6 @@ Positions = Annotated[list[Point] | None,
                       must("'positions' must list [x, y] pairs of numbers, one for each joint")]
 Edits = Annotated[list[Any] | None, must("'edits' must be a list of edits")]
 Flag = StrictBool
-
-
-class Message(BaseModel):
-    """What every message has: its ``type`` and an ``id`` to echo back."""
-
-    model_config = ConfigDict(extra="ignore", frozen=True, allow_inf_nan=False)
-
-    type: str
-    id: int | str | None = None
 
 
 class Exaggerated(Message):
@@ -306,13 +278,13 @@ class Cancel(Message):
     pass
 
 
-# Every message the editor sends, by its ``type`` (the Key-shapes panel's are added by
-# :mod:`toonmotion.web.keyshape_messages`, which the package imports).
+# Every message the editor sends, by its ``type``.
 MODELS: dict[str, type[Message]] = {
     "pose": Pose, "drag": Drag, "sketch": Sketch, "overlaps": Overlaps, "depth": Depth, "correct": Correct,
     "undo": Message, "redo": Message, "set_key": SetKey, "delete_key": DeleteKey, "move_key": MoveKey,
     "timing": Timing, "frame": ShowFrame, "rig": Rig, "retarget": Message, "track": Track,
-    "suggest": Suggest, "open_drawing": OpenDrawing, "export": Export, "cancel": Cancel,
+    "suggest": Suggest, "open_drawing": OpenDrawing, "export": Export, "cancel": Cancel, **PROXY_MODELS,
+    **KEYSHAPE_MODELS,
 }
 
 

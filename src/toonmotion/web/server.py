@@ -34,7 +34,6 @@ import logging
 import secrets
 import threading
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
@@ -47,16 +46,17 @@ from starlette.exceptions import HTTPException
 
 from toonmotion import api, limits
 from toonmotion.errors import LinkError, ToonmotionError
-from toonmotion.io.atomic import atomic_path
 from toonmotion.io.frames import load_frames
 from toonmotion.io.image import load_image, png_bytes
 from toonmotion.io.skeleton_json import load_skeleton_file
 from toonmotion.web import keyshape_routes
 from toonmotion.web.editing import EXPORT_FILE, EXPORTS, FOOTAGE, UPLOAD_PARTS, UPLOADS, Editing
 from toonmotion.web.messages import MAX_MESSAGE_BYTES, bug, one_line
+from toonmotion.web.proxy_routes import add_proxy_routes
 from toonmotion.web.session import answer, describe
-from toonmotion.web.slow_requests import export, suggested_joints
-from toonmotion.web.socket_flow import animate_for_export, cancels, progress_sender, slow_handler
+from toonmotion.web.slow_requests import suggested_joints
+from toonmotion.web.socket_flow import animate_first, cancels, progress_sender, slow_handler
+from toonmotion.web.uploads import as_sent, receive_body
 
 __all__ = ["MAX_MESSAGE_BYTES", "PAGE_FILES", "create_app", "new_token", "sign_in_code"]
 
@@ -67,7 +67,8 @@ PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "te
               "regions_panel.js": "text/javascript", "timeline_panel.js": "text/javascript",
               "exaggerate_panel.js": "text/javascript", "export_panel.js": "text/javascript",
               "rig_panel.js": "text/javascript", "panel_kit.js": "text/javascript",
-              "capture_panel.js": "text/javascript", "keyshapes_panel.js": "text/javascript"}
+              "capture_panel.js": "text/javascript", "proxy_panel.js": "text/javascript",
+              "proxy_view.js": "text/javascript", "keyshapes_panel.js": "text/javascript"}
 
 # Images a folder of frames may hold (sent one by one).
 FRAME_SUFFIXES = ("png", "jpg", "jpeg", "webp")
@@ -75,7 +76,7 @@ FRAME_SUFFIXES = ("png", "jpg", "jpeg", "webp")
 # What an export's download is served as, by suffix.
 EXPORT_MEDIA_TYPES = {"gif": "image/gif", "mp4": "video/mp4", "apng": "image/apng", "webp": "image/webp",
                       "webm": "video/webm", "glb": "model/gltf-binary", "json": "application/json",
-                      "atlas": "text/plain", "png": "image/png"}
+                      "atlas": "text/plain", "png": "image/png", "bvh": "text/plain"}
 FOOTAGE_SUFFIXES = ("mp4", "mov", "avi", "mkv", "webm", "gif", "png", "apng", "webp")
 
 log = logging.getLogger("toonmotion.web")
@@ -104,7 +105,8 @@ def sign_in_code(app: FastAPI) -> str:
     return code
 
 
-def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()) -> FastAPI:
+def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = (),
+               library: str | Path | None = None) -> FastAPI:
     """The editor for the project folder ``project``.
 
     Parameters
@@ -117,8 +119,11 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         The page's own origins (``http://127.0.0.1:PORT``); a browser request from any other
         origin is refused. Requests without an ``Origin`` header (not from a page) are allowed.
         A request's ``Host`` must be one of :data:`LOOPBACK_NAMES` or an origin's host name.
+    library : path, optional
+        A folder of motion-capture clips (``.bvh``) the 3D panel offers as priors: the one
+        folder outside the project the editor reads, and only the clips it lists there.
     """
-    editing = Editing.open(project)
+    editing = Editing.open(project, library=library)
     hosts = {*LOOPBACK_NAMES, *(urlsplit(origin).hostname or "" for origin in origins)}
     hosts |= {f"[{name}]" for name in hosts if ":" in name}
     threading.Thread(target=editing.prepare_deformer, name="toonmotion-prepare", daemon=True).start()
@@ -220,6 +225,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
             raise HTTPException(404, f"no page file {name!r}")
         return FileResponse(STATIC / name, media_type=PAGE_FILES[name])
 
+    add_proxy_routes(app, editing)
+
     @app.get("/api/project")
     def project_data() -> dict[str, Any]:
         return describe(editing)
@@ -236,8 +243,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
             raise HTTPException(400, f"send footage as {', '.join(FOOTAGE_SUFFIXES)}, not {suffix[:10]!r}")
         editing.check_links()
         file = editing.path(FOOTAGE, f"clip.{suffix.lower()}")
-        await _receive(request, file, "the footage")
-        with _as_sent(file, name or "the footage sent"):
+        await receive_body(request, file, "the footage")
+        with as_sent(file, name or "the footage sent"):
             return await footage_read(file)
 
     @app.put("/api/footage/frames/{index}")
@@ -256,7 +263,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
             for old in folder.iterdir():
                 old.unlink()
         sent = sum(f.stat().st_size for f in folder.iterdir()) if folder.is_dir() else 0
-        await _receive(request, folder / f"{index:06d}.{suffix.lower()}", "the frames together", already=sent)
+        await receive_body(request, folder / f"{index:06d}.{suffix.lower()}", "the frames together",
+                           already=sent)
         if index < count - 1:
             return {"received": index + 1, "count": count}
         return await footage_read(folder)
@@ -296,8 +304,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         editing.check_links()
         file = editing.path(UPLOADS, f"skeleton.{format}" if part == "skeleton" else part)
         limit = "skeleton_bytes" if part == "skeleton" else "upload_bytes"
-        await _receive(request, file, "the file", limit=limit)
-        with _as_sent(file, name or f"the {part} file sent"):
+        await receive_body(request, file, "the file", limit=limit)
+        with as_sent(file, name or f"the {part} file sent"):
             return await read_upload(part, file)
 
     async def read_upload(part: str, file: Path) -> dict[str, Any]:
@@ -377,8 +385,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                     ident = json.loads(text).get("id")
                     stop = threading.Event()
                     progress = progress_sender(socket, loop, ident, stop)
-                    if slow is export:  # the animation is solved where messages are answered
-                        await loop.run_in_executor(answers, animate_for_export, editing, text)
+                    # the animation is solved where messages are answered
+                    await loop.run_in_executor(answers, animate_first, editing, text)
                     job = asyncio.ensure_future(asyncio.to_thread(slow, editing, text, progress))
                     while not job.done():
                         heard = asyncio.ensure_future(inbox.get())
@@ -414,41 +422,6 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
                     await socket.close(code=1003, reason="the editor sends text messages only; reload")
 
     return app
-
-
-@contextlib.contextmanager
-def _as_sent(file: Path, name: str) -> Iterator[None]:
-    """Errors reading ``file``, where an upload was kept, told of ``name``, the file the user sent
-    (not the server's path), with the editor's way to raise a limit."""
-    try:
-        yield
-    except ToonmotionError as error:
-        message = str(error)
-        # Its path, and its bare name where that cannot be a word of the message (clip.mp4, or
-        # "drawing" opening it).
-        for form in (str(file.resolve()), str(file), *([file.name] if "." in file.name else [])):
-            message = message.replace(form, name[:200])
-        if message.startswith(f"{file.name} "):
-            message = name[:200] + message[len(file.name):]
-        message = message.replace("(--max-pixels, or --limit image_pixels=N)",
-                                  "(start the editor with toonmotion --limit image_pixels=N edit ...)")
-        raise HTTPException(400, message) from None
-
-
-async def _receive(request: Request, file: Path, what: str, *, already: int = 0,
-                   limit: str = "upload_bytes") -> None:
-    """Stream the request's body into ``file`` (atomically), refused as soon as it passes the
-    limit named ``limit`` (``already``: bytes sent before it that count too): a body over it is
-    never held whole, nor read."""
-    most = getattr(limits.current(), limit)
-    received = already
-    with atomic_path(file) as partial, open(partial, "wb") as out:
-        async for chunk in request.stream():
-            received += len(chunk)
-            if received > most:
-                raise HTTPException(413, f"{what} is over the limit {limit}={most:,}; make it "
-                                         "smaller (or raise the limit with --limit)")
-            out.write(chunk)
 
 
 def _host_name(host: str | None) -> str:

@@ -42,6 +42,7 @@ from toonmotion.web.history import History
 from toonmotion.web.keyshape_requests import HANDLERS as KEYSHAPE_HANDLERS
 from toonmotion.web.keyshape_requests import keyshaped
 from toonmotion.web.messages import bug, one_line, skeleton_of
+from toonmotion.web.proxy_requests import PROXY_HANDLERS, scene_summary
 from toonmotion.web.wire import encode_vertices
 
 
@@ -67,6 +68,7 @@ def describe(editing: Editing) -> dict[str, Any]:
         "keys": keys(editing.timeline),
         "history": editing.history.counts(),
         "capture": editing.capture_page,
+        "scene": scene_summary(editing),
     }
 
 
@@ -352,6 +354,7 @@ _HANDLERS: dict[str, Handler] = {
     "frame": _frame_of_animation,
     "rig": _rig,
     "retarget": _retarget,
+    **PROXY_HANDLERS,
     **KEYSHAPE_HANDLERS,
 }
 

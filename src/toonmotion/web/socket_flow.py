@@ -19,16 +19,24 @@ from toonmotion.web import messages
 from toonmotion.web.editing import Editing
 from toonmotion.web.keyshape_requests import SLOW as KEYSHAPE_SLOW
 from toonmotion.web.messages import MAX_MESSAGE_BYTES
+from toonmotion.web.proxy_requests import PROXY_SLOW
 from toonmotion.web.slow_requests import export, open_drawing, suggest, track
 
+# The messages answered off the event loop, by type.
+SLOW_HANDLERS: dict[str, Callable[..., dict[str, Any]]] = {
+    "export": export, "track": track, "open_drawing": open_drawing, "suggest": suggest, **PROXY_SLOW,
+    **KEYSHAPE_SLOW}
 
-def animate_for_export(editing: Editing, text: str) -> None:
-    """Solve the animation an export message asks for, in the answers' thread (the export then
-    only renders it); a bad message is the export's to refuse."""
+
+def animate_first(editing: Editing, text: str) -> None:
+    """Solve the animation an export, a lift or a scene needs, in the answers' thread (the slow
+    request then only takes it); a bad message is the request's to refuse."""
     with contextlib.suppress(ToonmotionError):
         message = messages.read(messages.parse(text))
         if isinstance(message, messages.Export):
             editing.animated(message.exaggeration())
+        elif message.type in ("lift", "scene"):
+            editing.animated(None)
 
 
 def progress_sender(socket: WebSocket, loop: asyncio.AbstractEventLoop, ident: Any,
@@ -59,14 +67,11 @@ def cancels(text: str, ident: Any) -> bool:
 def slow_handler(text: str) -> Callable[..., dict[str, Any]] | None:
     """The handler of a message that runs off the event loop (an export, a tracking, joints
     suggested on footage), or None (checked cheaply; a bad message goes to ``answer``)."""
-    slow = ("export", "track", "open_drawing", "suggest", *KEYSHAPE_SLOW)
-    if len(text) > MAX_MESSAGE_BYTES or not any(f'"{kind}"' in text for kind in slow):
+    if len(text) > MAX_MESSAGE_BYTES or not any(f'"{kind}"' in text for kind in SLOW_HANDLERS):
         return None
     try:
         message = json.loads(text)
     except (ValueError, RecursionError):
         return None
     kind = message.get("type") if isinstance(message, dict) else None
-    handlers = {"export": export, "track": track, "open_drawing": open_drawing, "suggest": suggest,
-                **KEYSHAPE_SLOW}
-    return handlers.get(kind) if isinstance(kind, str) else None
+    return SLOW_HANDLERS.get(kind) if isinstance(kind, str) else None

@@ -10,9 +10,10 @@ import * as timelinePanel from "./timeline_panel.js";
 import * as exaggeratePanel from "./exaggerate_panel.js";
 import * as exportPanel from "./export_panel.js";
 import * as capturePanel from "./capture_panel.js";
+import * as proxyPanel from "./proxy_panel.js";
 import * as keyshapesPanel from "./keyshapes_panel.js";
 
-const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, capturePanel, exportPanel,
+const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, capturePanel, proxyPanel, exportPanel,
                 keyshapesPanel];
 
 const token = new URLSearchParams(location.search).get("token") || "";

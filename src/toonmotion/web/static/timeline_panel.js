@@ -23,6 +23,7 @@ export function mount(ctx) {
     <p><input id="timeline-scrub" type="range" min="0" value="0" style="width: 100%"
        aria-label="frame"> frame <output id="timeline-frame">0</output></p>
     <p><button id="timeline-key">Key this frame</button> <button id="timeline-play">Play</button></p>
+    <p id="timeline-scene-row" hidden><label title="The frames the 3D panel composited, its simulated elements in them"><input id="timeline-scene" type="checkbox"> Show the 3D scene</label></p>
     <p><label>Rate <input id="timeline-fps" type="number" min="0.01" max="1000" step="1" style="width: 4em">
       fps</label> <label>Easing <select id="timeline-ease"><option>linear</option><option>in-out</option>
       <option>in</option><option>out</option></select></label></p>
@@ -84,8 +85,34 @@ export function mount(ctx) {
     }
   }
 
+  // The 3D panel's scene, when one was made from these key-frames: its composited frame at the
+  // current frame, fitted to the stage, in place of the drawing.
+  const sceneBox = element("timeline-scene", HTMLInputElement), sceneImages = {};
+  element("timeline-scene-row", HTMLParagraphElement).hidden = !project.scene;
+  function sceneFrame(pen) {
+    // The scene's frames are the animation's, from the first key to the last.
+    const first = project.keys ? project.keys.keys[0].frame : 0, scene = project.scene;
+    const at = Math.max(0, Math.min(ctx.frame - first, scene.frames - 1)), key = `${scene.made}/${at}`;
+    if (!sceneImages[key]) {
+      sceneImages[key] = new Image();
+      sceneImages[key].onload = () => view.draw();
+      sceneImages[key].src = `api/scene/${at}.png?token=${encodeURIComponent(ctx.token)}&v=${scene.made}`;
+    }
+    const image = sceneImages[key], o = view.overlay;
+    pen.fillStyle = "#f4f3f0";
+    pen.fillRect(0, 0, o.width, o.height);
+    if (!image.complete || !image.naturalWidth) return;
+    const k = Math.min(o.width / image.naturalWidth, (o.height - RULER * (window.devicePixelRatio || 1)) / image.naturalHeight);
+    pen.drawImage(image, (o.width - image.naturalWidth * k) / 2, 0, image.naturalWidth * k, image.naturalHeight * k);
+  }
+  sceneBox.onchange = () => {
+    view.canvas.style.visibility = sceneBox.checked ? "hidden" : "";
+    view.draw();
+  };
+
   // Onion skin: the keys either side of the current frame, as faint skeletons.
   view.drawOverlay = (pen) => {
+    if (sceneBox.checked && project.scene) return sceneFrame(pen);
     const keys = project.keys ? project.keys.keys : [];
     const before = keys.filter((k) => k.frame < ctx.frame).pop(), after = keys.find((k) => k.frame > ctx.frame);
     pen.lineWidth = 2 * (window.devicePixelRatio || 1);
@@ -299,6 +326,7 @@ export function mount(ctx) {
       for (const off of unlisten) off();
       ruler.remove();
       view.drawOverlay = () => {};
+      view.canvas.style.visibility = "";
     },
   };
 }
