@@ -29,7 +29,9 @@ document.getElementById("error").title = "click to dismiss";
 document.getElementById("error").addEventListener("click", () => showError(""));
 
 function status(text) {
-  document.getElementById("status").textContent = text;
+  const line = document.getElementById("status");
+  line.textContent = text;
+  line.title = text; // in full, when it is cut short
 }
 
 async function getJSON(path) {
