@@ -4,6 +4,8 @@ the click to the reply shown; JSON lines.
 
     python benchmarks/editor_browser.py [DRAWING_DIR|sample ...] [--moves N] [--prior CLIP.bvh]
                                         [--keys KEYS.json]
+        [--keyshape-footage VIDEO|DIR --keyshape-outlines KEYS.json --keyshape-key-frames 0,8,16]
+        [--only-keyshapes]
 
 Each drawing folder (texture.png, mask.png, char_cfg.yaml; default: every drawing in
 ../shared/data/drawings, then the bundled sample character, named ``sample``) is rigged to about
@@ -28,6 +30,16 @@ And one line per drawing for the 3D panel (``"step": "3d"``), its project keyed 
 at the dragged joint simulated and composited:
   frames, markers                 the animation's frames, the proxy's markers
   lift_s, simulate_s              the click on Lift (Simulate) -> the panel showing the reply
+Then one line for the Key-shapes panel's capture step, on the generated clip
+(``toonmotion.sample_cartoons.morphing_character``, 24 frames, its outlines on its key frames) and
+on footage given with ``--keyshape-footage`` (a video, GIF or folder of frames, sent as the page
+sends it) and ``--keyshape-outlines`` (a contours file or SVG, its outlines drawn on
+``--keyshape-key-frames``), in the sample character's project:
+  keyshapes, frames, size, keys, points   the clip and the model
+  model_ms                        "Build the model" clicked -> the sheet shown
+  capture_ms, capture_ms_per_frame "Capture the footage" clicked -> the capture shown in the page
+  library_ms                      api.capture_video and api.capture_contours on the same frames,
+                                  called directly (the editor's overhead is the difference)
 Needs Chromium (apt-get install chromium) and the dev extra (Playwright).
 """
 
@@ -212,23 +224,130 @@ def bench_3d(folder, prior, keys_file):
     return {"drawing": name, "step": "3d", "prior": prior.name, "frames": frames, "markers": markers, **timed}
 
 
+def keyshape_inputs(scratch, footage, outlines, key_frames):
+    """``(name, footage file, outlines file, key frames)``: the generated clip written into
+    ``scratch`` when no footage is given."""
+    if footage is not None:
+        return footage.name, footage, outlines, [int(f) for f in key_frames.split(",")]
+    from PIL import Image
+
+    from toonmotion.io.keyshape_json import save_contours
+    from toonmotion.sample_cartoons import morphing_character
+
+    clip = morphing_character(frames=24, hold=1)
+    pictures = [Image.fromarray(f) for f in clip.frames]
+    gif = Path(scratch) / "morphing.gif"
+    pictures[0].save(gif, save_all=True, append_images=pictures[1:], duration=42, loop=0)
+    keys = Path(scratch) / "keys.json"
+    save_contours(keys, clip.contours[list(clip.key_frames)], fps=clip.fps)
+    return "morphing_character", gif, keys, list(clip.key_frames)
+
+
+def send_footage(served, clip):
+    """Send ``clip`` (a file, or a folder of frames) as the editor's pages do; returns where the
+    project keeps it, given the project folder."""
+    import urllib.request
+
+    def put(path, body):
+        request = urllib.request.Request(f"http://127.0.0.1:{served.port}{path}", data=body, method="PUT",
+                                         headers={"X-Toonmotion-Token": served.token})
+        with urllib.request.urlopen(request, timeout=600) as reply:
+            return json.loads(reply.read())
+
+    if clip.is_dir():
+        images = sorted(p for p in clip.iterdir() if p.suffix.lower() in (".png", ".jpg", ".jpeg", ".webp"))
+        for index, image in enumerate(images):
+            put(f"/api/footage/frames/{index}?count={len(images)}&suffix={image.suffix[1:].lower()}",
+                image.read_bytes())
+        return lambda project: project / "footage" / "frames"
+    put(f"/api/footage?suffix={clip.suffix[1:].lower()}", clip.read_bytes())
+    return lambda project: project / "footage" / f"clip.{clip.suffix[1:].lower()}"
+
+
+def bench_keyshapes(footage=None, outlines=None, key_frames=None):
+    """The Key-shapes panel's model and capture steps, timed in the page, and the library's."""
+    import time
+
+    from playwright.sync_api import sync_playwright
+
+    from toonmotion.io.frames import load_frames
+    from toonmotion.io.keyshape_json import load_contours
+
+    rgba, skeleton = sample_character(scale=0.5)
+    with tempfile.TemporaryDirectory() as scratch:
+        name, clip, keys_file, frames_at = keyshape_inputs(scratch, footage, outlines, key_frames)
+        project = Path(scratch) / "project"
+        api.save_project(project, api.rig_image(rgba, skeleton=skeleton))
+        with serving(project) as served, sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
+            page = browser.new_page(viewport={"width": 1280, "height": 800})
+            page.goto(served.page)
+            page.wait_for_function("document.getElementById('status').textContent === 'ready'",
+                                   timeout=60_000)
+            sent = send_footage(served, clip)  # as the page sends it (a folder: frame by frame)
+            page.click("nav button[data-panel=keyshapes]")
+            status = "(t) => document.getElementById('status').textContent.startsWith(t)"
+            page.wait_for_function("document.getElementById('ks-inputs').textContent.includes('footage')",
+                                   timeout=60_000)
+            page.uncheck("#ks-resample")
+            page.set_input_files("#ks-outlines-file", str(keys_file))
+            page.wait_for_function("(n) => document.querySelectorAll('#ks-keys li').length === n",
+                                   arg=len(frames_at), timeout=60_000)
+            for i, frame in enumerate(frames_at):
+                page.locator("#ks-keys li input").nth(i).fill(str(frame))
+                page.locator("#ks-keys li input").nth(i).dispatch_event("change")
+            started = time.perf_counter()
+            page.click("#ks-build")
+            page.wait_for_function(status, arg="model built", timeout=600_000)
+            page.wait_for_function("document.getElementById('ks-sheet').naturalWidth > 0")
+            model_ms = (time.perf_counter() - started) * 1000
+            started = time.perf_counter()
+            page.click("#ks-capture-video")
+            page.wait_for_function(status, arg="captured", timeout=3_600_000)
+            capture_ms = (time.perf_counter() - started) * 1000
+            errors = page.evaluate("document.getElementById('error').textContent")
+            browser.close()
+        if errors:
+            sys.exit(f"the Key-shapes panel said: {errors}")
+        frames, _ = load_frames(sent(project))
+        keys = load_contours(keys_file)[0]
+        started = time.perf_counter()
+        found = api.capture_video(frames, keys, key_frames=frames_at)
+        api.capture_contours(found.shapes, keys)
+        library_ms = (time.perf_counter() - started) * 1000
+    return {"keyshapes": name, "frames": len(frames), "size": [frames.shape[2], frames.shape[1]],
+            "keys": len(keys), "points": keys.shape[1], "model_ms": round(model_ms, 1),
+            "capture_ms": round(capture_ms, 1), "capture_ms_per_frame": round(capture_ms / len(frames), 1),
+            "library_ms": round(library_ms, 1)}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("drawings", nargs="*", type=Path, help="drawing folders, or 'sample'")
     parser.add_argument("--moves", type=int, default=60, help="pointer moves timed per drawing (default 60)")
     parser.add_argument("--prior", type=Path, default=DEFAULT_PRIOR, help="the 3D panel's prior (.bvh)")
     parser.add_argument("--keys", type=Path, help="key-frames for the drawings' skeleton (default: a swing)")
+    parser.add_argument("--keyshape-footage", type=Path, help="footage for the key-shape capture step")
+    parser.add_argument("--keyshape-outlines", type=Path, help="its key outlines (contours file or SVG)")
+    parser.add_argument("--keyshape-key-frames", help="the frames the outlines are drawn on, e.g. 0,8,16")
+    parser.add_argument("--only-keyshapes", action="store_true", help="time the key-shape steps only")
     args = parser.parse_args(argv)
+    given = (args.keyshape_footage, args.keyshape_outlines, args.keyshape_key_frames)
+    if any(v is not None for v in given) and any(v is None for v in given):
+        parser.error("--keyshape-footage, --keyshape-outlines and --keyshape-key-frames go together")
     if chromium_path() is None:
         sys.exit("the browser benchmark needs Debian's chromium (apt-get install chromium)")
     folders = args.drawings or [*sorted(p for p in DEFAULT_DIR.glob("*") if (p / "char_cfg.yaml").is_file()),
                                 Path("sample")]
-    for folder in folders:
+    for folder in [] if args.only_keyshapes else folders:
         print(json.dumps(bench(folder, args.moves)), flush=True)
         if args.prior.is_file():
             print(json.dumps(bench_3d(folder, args.prior, args.keys)), flush=True)
         else:
             print(json.dumps({"drawing": str(folder), "step": "3d", "skipped": f"no prior at {args.prior}"}))
+    print(json.dumps(bench_keyshapes()), flush=True)
+    if args.keyshape_footage is not None:
+        print(json.dumps(bench_keyshapes(*given)), flush=True)
 
 
 if __name__ == "__main__":

@@ -93,3 +93,15 @@ def test_in_betweens_are_captured_in_the_extended_space_within_its_tolerance(smo
     assert np.abs(found.weights[:, :-1]).max() <= 1.5 + 1e-9
     # In-betweens the space was not built from (other t) still come within its tolerance, rms.
     assert found.error.max() <= space.tolerance
+
+
+def test_progress_counts_every_frame_captured_and_changes_nothing(outlines):
+    from toonmotion import api
+
+    rng = np.random.default_rng(3)
+    A, W = _affines(rng, 5), _weights(rng, 5, len(outlines))
+    contours = np.stack([warp(a, w, outlines) for a, w in zip(A, W, strict=True)])
+    seen = []
+    found = api.capture_contours(contours, outlines, progress=lambda *step: seen.append(step))
+    assert seen == [("capturing", t, 5) for t in range(1, 6)]
+    assert np.array_equal(found.weights, api.capture_contours(contours, outlines).weights)

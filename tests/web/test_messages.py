@@ -71,6 +71,7 @@ def test_a_good_message_reads_as_its_model_with_unknown_fields_ignored():
 def test_every_message_has_exactly_one_handler():
     slow = set(SLOW_HANDLERS)
     assert {"export", "track", "open_drawing", "suggest", "lift", "scene", "proxy_export"} <= slow
+    assert {"keyshape_model", "keyshape_capture"} <= slow
     assert set(session._HANDLERS) | slow | {"cancel"} == set(MODELS)
     assert not set(session._HANDLERS) & slow
     assert issubclass(MessageError, ToonmotionError)  # the page shows it as every other error

@@ -61,7 +61,8 @@ def keyshape_space(keys: ArrayLike, *, closed: bool = True, inbetweens: int = 5,
 
 
 def capture_contours(contours: ArrayLike, shapes: ArrayLike | KeyShapeSpace, *, lower: float = -0.5,
-                     upper: float = 1.5, support: int | None = None) -> ContourCapture:
+                     upper: float = 1.5, support: int | None = None, progress: Progress | None = None
+                     ) -> ContourCapture:
     """The affine motion and key weights of each contour (eq. 4-7).
 
     Parameters
@@ -75,6 +76,8 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike | KeyShapeSpace, *, 
         Each key's weight bounds (the paper's T1, T2).
     support : int, optional
         At most this many non-zero weights (the paper's J).
+    progress : callable, optional
+        ``progress("capturing", index, count)`` after each frame (the editor's progress bar).
 
     Returns
     -------
@@ -98,8 +101,8 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike | KeyShapeSpace, *, 
         L = len(shapes.eigen)
         low = np.append(np.full(L, -EIGEN_BOUND), -np.inf)
         high = np.append(np.full(L, EIGEN_BOUND), np.inf)
-        return _capture(contours, shapes.extended, lower=low, upper=high)
-    return _capture(contours, shapes, lower=lower, upper=upper, support=support)
+        return _capture(contours, shapes.extended, lower=low, upper=high, progress=progress)
+    return _capture(contours, shapes, lower=lower, upper=upper, support=support, progress=progress)
 
 
 def capture_video(frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8], shapes: ArrayLike, *,

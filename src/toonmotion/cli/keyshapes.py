@@ -91,10 +91,12 @@ def capture_contours(
     options.suffix(output, ".json", "an output", why="a key-shape motion is JSON; ")
     space = load_model(model)
     contours, fps, _ = load_contours(contours_file, points=points, start=_start(start, points))
-    if keys_only:
-        found = api.capture_contours(contours, space.keys, lower=lower, upper=upper, support=support)
-    else:
-        found = api.capture_contours(contours, space)
+    with options.progress("capturing") as report_progress:
+        if keys_only:
+            found = api.capture_contours(contours, space.keys, lower=lower, upper=upper, support=support,
+                                         progress=report_progress)
+        else:
+            found = api.capture_contours(contours, space, progress=report_progress)
     save_keymotion(output, found, fps=fps, space="keys" if keys_only else "extended")
     typer.echo(f"captured {len(contours)} frames: rms error {found.error.mean():.3g} px (largest "
                f"{found.error.max():.3g}), {found.rounds.mean():.1f} rounds a frame -> {output}")

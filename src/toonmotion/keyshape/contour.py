@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from toonmotion.errors import KeyShapeError
 from toonmotion.keyshape.model import check_shapes, fit_affine, warp
+from toonmotion.progress import Progress
 
 FloatArray = NDArray[np.float64]
 ROUNDS = 50
@@ -53,8 +54,8 @@ class ContourCapture:
 
 
 def capture_contours(contours: ArrayLike, shapes: ArrayLike, *, lower: ArrayLike = -0.5,
-                     upper: ArrayLike = 1.5, support: int | None = None, straight: bool = False
-                     ) -> ContourCapture:
+                     upper: ArrayLike = 1.5, support: int | None = None, straight: bool = False,
+                     progress: Progress | None = None) -> ContourCapture:
     """Capture ``contours`` (T, N, 2) with key-shapes ``shapes`` (K, N, 2).
 
     Parameters
@@ -101,6 +102,8 @@ def capture_contours(contours: ArrayLike, shapes: ArrayLike, *, lower: ArrayLike
         starts = [w, np.full(K, 1 / K), *np.eye(K)] if straight else [w]
         w, A, e, n = _best_frame(contour, S, starts, low, high, J, subsets)
         affine[t], weights[t], error[t], rounds[t] = A, w, e, n
+        if progress is not None:
+            progress("capturing", t + 1, len(V))
     return ContourCapture(affine=affine, weights=weights, error=error, rounds=rounds)
 
 

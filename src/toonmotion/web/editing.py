@@ -78,6 +78,8 @@ class Editing:
     footage: tuple[NDArray[np.uint8], float] | None = None  # frames and their rate
     capture: api.Capture | None = None
     captured: api.Animation | None = None  # the capture retargeted onto the character
+    # The key-shape capture retargeted, and the character it was animated on (web.keyshape_requests).
+    keyshaped: tuple[api.Character, api.Animation] | None = None
     # What the Capture panel last showed, to show it again after a reload: the footage as
     # ``PUT /api/footage`` described it, the joints last tracked (with their rectangles) and the
     # ``tracked`` reply; None before footage is sent.

@@ -56,6 +56,10 @@ an older page's extra fields do no harm. What each message does, and its reply, 
   ``size``, ``background`` and ``overlays``, off the event loop with progress messages
   ``{"type": "progress", "index", "count"}`` carrying the request's id. Reply ``{"type":
   "exported", "file", "files", "frames", "size"}``. The name never names a path.
+* ``keyshapes``, ``keyshape_model``, ``keyshape_pick``, ``keyshape_capture``,
+  ``keyshape_retarget``: the Key-shapes panel's (key-shape models, capture and retargeting, kept in
+  the project folder's ``keyshapes/``), listed in :mod:`toonmotion.web.keyshape_messages`; a
+  ``frame`` message with ``"source": "keyshapes"`` gives a frame of the retargeted motion.
 * ``cancel``: stop the slow request ``id`` at its next progress step; its reply is then an
   error with ``"cancelled": true`` and nothing it would have saved is saved. Messages sent while
   a slow request runs are answered after it, in order.
@@ -82,6 +86,7 @@ from toonmotion.animate.cartoon_filter import FilterSettings
 from toonmotion.errors import MessageError
 from toonmotion.io.schema import Float, Point, describe, explained, problem
 from toonmotion.rig.skeleton import Skeleton
+from toonmotion.web.keyshape_messages import KEYSHAPE_MODELS
 from toonmotion.web.message_base import Message, must, required
 from toonmotion.web.proxy_messages import PROXY_MODELS
 
@@ -194,7 +199,7 @@ class Timing(Message):
 
 class ShowFrame(Exaggerated):
     frame: Annotated[Frame, must("'frame' must be a frame number, a whole number >= 0")] = required()
-    source: Literal["keys", "capture"] | None = None
+    source: Literal["keys", "capture", "keyshapes"] | None = None
 
 
 class Joint(BaseModel):
@@ -279,6 +284,7 @@ MODELS: dict[str, type[Message]] = {
     "undo": Message, "redo": Message, "set_key": SetKey, "delete_key": DeleteKey, "move_key": MoveKey,
     "timing": Timing, "frame": ShowFrame, "rig": Rig, "retarget": Message, "track": Track,
     "suggest": Suggest, "open_drawing": OpenDrawing, "export": Export, "cancel": Cancel, **PROXY_MODELS,
+    **KEYSHAPE_MODELS,
 }
 
 

@@ -49,6 +49,7 @@ from toonmotion.errors import LinkError, ToonmotionError
 from toonmotion.io.frames import load_frames
 from toonmotion.io.image import load_image, png_bytes
 from toonmotion.io.skeleton_json import load_skeleton_file
+from toonmotion.web import keyshape_routes
 from toonmotion.web.editing import EXPORT_FILE, EXPORTS, FOOTAGE, UPLOAD_PARTS, UPLOADS, Editing
 from toonmotion.web.messages import MAX_MESSAGE_BYTES, bug, one_line
 from toonmotion.web.proxy_routes import add_proxy_routes
@@ -67,7 +68,7 @@ PAGE_FILES = {"index.html": "text/html", "editor.css": "text/css", "app.js": "te
               "exaggerate_panel.js": "text/javascript", "export_panel.js": "text/javascript",
               "rig_panel.js": "text/javascript", "panel_kit.js": "text/javascript",
               "capture_panel.js": "text/javascript", "proxy_panel.js": "text/javascript",
-              "proxy_view.js": "text/javascript"}
+              "proxy_view.js": "text/javascript", "keyshapes_panel.js": "text/javascript"}
 
 # Images a folder of frames may hold (sent one by one).
 FRAME_SUFFIXES = ("png", "jpg", "jpeg", "webp")
@@ -343,6 +344,8 @@ def create_app(project: str | Path, *, token: str, origins: tuple[str, ...] = ()
         if not file.is_file():
             raise HTTPException(404, f"no export {name!r}")
         return FileResponse(file, media_type=EXPORT_MEDIA_TYPES[allowed["suffix"]], filename=name)
+
+    keyshape_routes.add_routes(app, editing)  # the Key-shapes panel's sheet and files sent
 
     @app.websocket("/ws")
     async def live(socket: WebSocket) -> None:

@@ -39,6 +39,8 @@ from toonmotion.shape.curve_skeleton import joint_suggestions
 from toonmotion.web import messages
 from toonmotion.web.editing import SNAPSHOTS, Editing
 from toonmotion.web.history import History
+from toonmotion.web.keyshape_requests import HANDLERS as KEYSHAPE_HANDLERS
+from toonmotion.web.keyshape_requests import keyshaped
 from toonmotion.web.messages import bug, one_line, skeleton_of
 from toonmotion.web.proxy_requests import PROXY_HANDLERS, scene_summary
 from toonmotion.web.wire import encode_vertices
@@ -314,6 +316,8 @@ def _frame_of_animation(editing: Editing, message: messages.ShowFrame) -> dict[s
         if editing.captured is None:
             raise MotionError("nothing is retargeted yet: track footage, then retarget it")
         animation = editing.captured
+    elif message.source == "keyshapes":
+        animation = keyshaped(editing)
     else:
         animation = editing.animated(message.exaggeration())
     frames = [frame for frame, _ in animation.meshes]
@@ -351,6 +355,7 @@ _HANDLERS: dict[str, Handler] = {
     "rig": _rig,
     "retarget": _retarget,
     **PROXY_HANDLERS,
+    **KEYSHAPE_HANDLERS,
 }
 
 

@@ -17,13 +17,15 @@ from fastapi import WebSocket
 from toonmotion.errors import Cancelled, ToonmotionError
 from toonmotion.web import messages
 from toonmotion.web.editing import Editing
+from toonmotion.web.keyshape_requests import SLOW as KEYSHAPE_SLOW
 from toonmotion.web.messages import MAX_MESSAGE_BYTES
 from toonmotion.web.proxy_requests import PROXY_SLOW
 from toonmotion.web.slow_requests import export, open_drawing, suggest, track
 
 # The messages answered off the event loop, by type.
 SLOW_HANDLERS: dict[str, Callable[..., dict[str, Any]]] = {
-    "export": export, "track": track, "open_drawing": open_drawing, "suggest": suggest, **PROXY_SLOW}
+    "export": export, "track": track, "open_drawing": open_drawing, "suggest": suggest, **PROXY_SLOW,
+    **KEYSHAPE_SLOW}
 
 
 def animate_first(editing: Editing, text: str) -> None:

@@ -11,8 +11,10 @@ import * as exaggeratePanel from "./exaggerate_panel.js";
 import * as exportPanel from "./export_panel.js";
 import * as capturePanel from "./capture_panel.js";
 import * as proxyPanel from "./proxy_panel.js";
+import * as keyshapesPanel from "./keyshapes_panel.js";
 
-const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, capturePanel, proxyPanel, exportPanel];
+const PANELS = [posePanel, rigPanel, regionsPanel, timelinePanel, exaggeratePanel, capturePanel, proxyPanel, exportPanel,
+                keyshapesPanel];
 
 const token = new URLSearchParams(location.search).get("token") || "";
 
@@ -27,7 +29,9 @@ document.getElementById("error").title = "click to dismiss";
 document.getElementById("error").addEventListener("click", () => showError(""));
 
 function status(text) {
-  document.getElementById("status").textContent = text;
+  const line = document.getElementById("status");
+  line.textContent = text;
+  line.title = text; // in full, when it is cut short
 }
 
 async function getJSON(path) {

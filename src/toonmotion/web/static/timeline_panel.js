@@ -27,6 +27,7 @@ export function mount(ctx) {
     <p><label>Rate <input id="timeline-fps" type="number" min="0.01" max="1000" step="1" style="width: 4em">
       fps</label> <label>Easing <select id="timeline-ease"><option>linear</option><option>in-out</option>
       <option>in</option><option>out</option></select></label></p>
+    <p id="timeline-source" hidden></p>
     <ol id="timeline-keys"></ol>
     <p>Make the pose in the Pose panel, then key it here. On the ruler below the drawing, drag a
     key's diamond to move it, click to go to a frame.</p>
@@ -39,7 +40,22 @@ export function mount(ctx) {
   ruler.setAttribute("aria-label", "frame ruler: drag a key to move it, click to go to a frame");
   document.getElementById("stage").append(ruler);
 
+  // Another motion to play instead of the key-frames' (ctx.playSource, the Key-shapes panel's
+  // retargeted motion: {source, first, last, fps, file}), until "Back to the key-frames".
+  const played = () => ctx.playSource || null;
+  function showSource() {
+    const line = document.getElementById("timeline-source"), source = played();
+    line.hidden = !source;
+    line.replaceChildren();
+    if (!source) return;
+    const back = document.createElement("button");
+    back.textContent = "Back to the key-frames";
+    back.onclick = () => { stop(); ctx.playSource = null; showSource(); showKeys(); show(ctx.frame).catch((error) => showError(error.message)); };
+    line.append(`Playing the key-shape retarget (${source.file}), frames ${source.first} to ${source.last}. `, back);
+  }
+
   function lastFrame() {
+    if (played()) return played().last;
     const keys = project.keys ? project.keys.keys : [];
     return keys.length ? keys[keys.length - 1].frame : 0;
   }
@@ -251,20 +267,21 @@ export function mount(ctx) {
       return;
     }
     if (unkeyed) status(`the pose made at frame ${unkeyed.frame} is not keyed: it is kept there (K keys it)`);
-    if (!project.keys) return;
-    const reply = await live.request({ type: "frame", frame: at });
-    const key = project.keys.keys.find((k) => k.frame === reply.frame);
+    if (!project.keys && !played()) return;
+    const reply = await live.request({ type: "frame", frame: at, ...(played() ? { source: played().source } : {}) });
+    const key = project.keys && !played() ? project.keys.keys.find((k) => k.frame === reply.frame) : undefined;
     ctx.pose = reply.positions;
     ctx.tuning = key ? structuredClone(key.edits) : []; // a key's fine-tuning, to adjust and key again
     view.showDeformed(reply.U);
   }
 
   async function play() {
-    if (!project.keys || playing) return;
+    if ((!project.keys && !played()) || playing) return;
     playing = true;
     element("timeline-play", HTMLButtonElement).textContent = "Stop";
-    const keys = project.keys.keys, first = keys[0].frame, last = keys[keys.length - 1].frame;
-    const step = 1000 / project.keys.fps;
+    const keys = project.keys ? project.keys.keys : [];
+    const first = played() ? played().first : keys[0].frame, last = played() ? played().last : keys[keys.length - 1].frame;
+    const step = 1000 / (played() ? played().fps : project.keys.fps);
     let at = first;
     const next = async () => {
       if (!playing) return;
@@ -298,8 +315,10 @@ export function mount(ctx) {
   element("timeline-fps", HTMLInputElement).onchange = timing;
   element("timeline-ease", HTMLSelectElement).onchange = timing;
   showKeys();
+  showSource();
   mark(ctx.frame); // the drawing stays as the Pose panel left it, to be keyed here
-  status(project.keys ? "scrub or play" : "key a pose to start");
+  status(played() ? "the key-shape retarget: scrub or play" : project.keys ? "scrub or play" : "key a pose to start");
+  if (played()) show(ctx.frame).catch((error) => showError(error.message));
 
   return {
     unmount() {
