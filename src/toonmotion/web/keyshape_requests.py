@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from toonmotion import api, limits
+from toonmotion import api
 from toonmotion.errors import KeyframeError, KeyShapeError, MotionError, TrackingError
 from toonmotion.io.atomic import atomic_path, write_text
 from toonmotion.io.frames import load_frames
@@ -306,11 +306,6 @@ def keyshaped(editing: Editing) -> api.Animation:
             animation = api.animate_character(editing.deformer, load_motion(file))
             editing.keyshaped = (editing.character, animation)
         return editing.keyshaped[1]
-
-
-def receive_limit() -> int:
-    """The most bytes a file sent to the panel may hold."""
-    return limits.current().upload_bytes
 
 
 def read_upload(editing: Editing, part: str, file: Path, points: int | None) -> dict[str, Any]:

@@ -13,7 +13,6 @@ from fastapi.responses import FileResponse
 from starlette.exceptions import HTTPException
 
 from toonmotion.errors import ToonmotionError
-from toonmotion.io.atomic import atomic_path
 from toonmotion.web.editing import Editing
 from toonmotion.web.keyshape_messages import MOST_POINTS
 from toonmotion.web.keyshape_requests import (
@@ -22,8 +21,8 @@ from toonmotion.web.keyshape_requests import (
     SHEET,
     UPLOAD_PARTS,
     read_upload,
-    receive_limit,
 )
+from toonmotion.web.uploads import receive_body
 
 
 def add_routes(app: FastAPI, editing: Editing) -> None:
@@ -51,14 +50,7 @@ def add_routes(app: FastAPI, editing: Editing) -> None:
             raise HTTPException(400, f"points must be 3 to {MOST_POINTS:,}, got {points}")
         editing.check_links()
         file = editing.path(KEYSHAPES, f"sent-{part}.{suffix.lower()}")
-        most, received = receive_limit(), 0
-        with atomic_path(file) as partial, open(partial, "wb") as out:
-            async for chunk in request.stream():
-                received += len(chunk)
-                if received > most:
-                    raise HTTPException(413, f"the file is over the limit upload_bytes={most:,}; make it "
-                                             "smaller (or raise the limit with --limit)")
-                out.write(chunk)
+        await receive_body(request, file, "the file")
         try:
             return await asyncio.to_thread(read_upload, editing, part, file, points)
         except ToonmotionError as error:
