@@ -66,3 +66,20 @@ def test_bad_pairs_are_refused_in_one_line(second, message):
     with pytest.raises(KeyShapeError, match=message) as caught:
         ArapPair(first, second, closed=True)
     assert "\n" not in str(caught.value)
+
+
+def test_a_triangle_flat_in_a_later_key_takes_its_neighbours_map_and_the_pair_stays_rigid():
+    """The model triangulates its first key; a later key traced from pixels can hold three of
+    those corners on one straight run, a triangle of no area, whose map the inversion could not
+    find (a singular matrix on a blob picked in the editor). Between such a key and a turned copy
+    the in-betweens stay rigid, the flat triangle turned with the rest."""
+    first = np.array([(0.0, 0), (10, -6), (20, 0), (20, 20), (10, 24), (0, 20)])  # a triangle (0, 1, 2)
+    flat = first.copy()
+    flat[1] = (10, 0)  # in this key corners 0, 1 and 2 are on the line y = 0
+    triangles = triangulate_shape(first, closed=True)
+    assert any(set(t) == {0, 1, 2} for t in triangles.tolist())
+    turned = (flat - flat.mean(axis=0)) @ _rotation(np.radians(60)).T + flat.mean(axis=0)
+    pair = ArapPair(flat, turned, closed=True, triangles=triangles)
+    for t in np.linspace(0, 1, 5):
+        residual, angle = _rigid_fit_residual(pair.at(t), flat)
+        assert residual <= 1e-6 and np.degrees(angle) == pytest.approx(60 * t, abs=1e-6)

@@ -122,7 +122,7 @@ def _polar_parts(P: FloatArray, Q: FloatArray, F: NDArray[np.int64]) -> tuple[Fl
     """Each triangle's rotation angle (unwrapped across neighbours) and symmetric stretch (m, 2, 2)."""
     Pe = np.stack([P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]]], axis=-1)  # columns: edges
     Qe = np.stack([Q[F[:, 1]] - Q[F[:, 0]], Q[F[:, 2]] - Q[F[:, 0]]], axis=-1)
-    A = Qe @ np.linalg.inv(Pe)
+    A = _triangle_maps(Pe, Qe, F, float(np.ptp(P, axis=0).max()) ** 2)
     U, sigma, Vt = np.linalg.svd(A)
     flip = np.linalg.det(U @ Vt) < 0  # a mirrored triangle: the closest rotation, a negative stretch
     U[flip, :, 1] *= -1
@@ -131,6 +131,27 @@ def _polar_parts(P: FloatArray, Q: FloatArray, F: NDArray[np.int64]) -> tuple[Fl
     stretch = np.einsum("mji,mjk->mik", Vt, sigma[:, :, None] * Vt)
     angle = np.arctan2(R[:, 1, 0], R[:, 0, 0])
     return _unwrapped(angle, F), stretch
+
+
+def _triangle_maps(Pe: FloatArray, Qe: FloatArray, F: NDArray[np.int64], scale: float) -> FloatArray:
+    """Each triangle's linear map ``A`` (m, 2, 2) taking its edges ``Pe`` to ``Qe``.
+
+    A triangle flat in the first shape (its corners on a line: a straight run of a traced pixel
+    outline, where the triangulation was made on another key) has no such map; its map is the mean
+    of its neighbours' (the triangles sharing a corner), changed as little as takes its edges
+    where they go: ``A = N + (Qe - N Pe) Pe^+``, which for a proper triangle is ``Qe Pe^-1``.
+    """
+    det = Pe[:, 0, 0] * Pe[:, 1, 1] - Pe[:, 0, 1] * Pe[:, 1, 0]
+    good = np.abs(det) > 1e-9 * max(scale, 1e-300)
+    if not good.any():
+        raise KeyShapeError("a key shape has no area: its points lie on a line")
+    A = np.empty_like(Qe)
+    A[good] = Qe[good] @ np.linalg.inv(Pe[good])
+    for i in np.flatnonzero(~good):
+        near = good & np.isin(F, F[i]).any(axis=1)
+        N = A[near].mean(axis=0) if near.any() else A[good].mean(axis=0)
+        A[i] = N + (Qe[i] - N @ Pe[i]) @ np.linalg.pinv(Pe[i])
+    return A
 
 
 def _unwrapped(angle: FloatArray, F: NDArray[np.int64]) -> FloatArray:
