@@ -46,6 +46,8 @@ export function mount(ctx) {
   function showSource() {
     const line = document.getElementById("timeline-source"), source = played();
     line.hidden = !source;
+    offerScene();
+    view.canvas.style.visibility = sceneBox.checked && project.scene && !source ? "hidden" : "";
     line.replaceChildren();
     if (!source) return;
     const back = document.createElement("button");
@@ -88,7 +90,9 @@ export function mount(ctx) {
   // The 3D panel's scene, when one was made from these key-frames: its composited frame at the
   // current frame, fitted to the stage, in place of the drawing.
   const sceneBox = element("timeline-scene", HTMLInputElement), sceneImages = {};
-  element("timeline-scene-row", HTMLParagraphElement).hidden = !project.scene;
+  const offerScene = () => { // not while another motion plays: the scene is the key-frames'
+    element("timeline-scene-row", HTMLParagraphElement).hidden = !project.scene || !!played();
+  };
   function sceneFrame(pen) {
     // The scene's frames are the animation's, from the first key to the last.
     const first = project.keys ? project.keys.keys[0].frame : 0, scene = project.scene;
@@ -112,7 +116,7 @@ export function mount(ctx) {
 
   // Onion skin: the keys either side of the current frame, as faint skeletons.
   view.drawOverlay = (pen) => {
-    if (sceneBox.checked && project.scene) return sceneFrame(pen);
+    if (sceneBox.checked && project.scene && !played()) return sceneFrame(pen);
     const keys = project.keys ? project.keys.keys : [];
     const before = keys.filter((k) => k.frame < ctx.frame).pop(), after = keys.find((k) => k.frame > ctx.frame);
     pen.lineWidth = 2 * (window.devicePixelRatio || 1);
