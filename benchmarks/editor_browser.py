@@ -44,6 +44,7 @@ Needs Chromium (apt-get install chromium) and the dev extra (Playwright).
 """
 
 import argparse
+import contextlib
 import json
 import math
 import statistics
@@ -73,6 +74,23 @@ STAMPS = """() => {
         requestAnimationFrame(() => b.paints.push(performance.now()));
     });
 }"""
+
+
+@contextlib.contextmanager
+def editor_page(served):
+    """A Chromium page (1280x800) open on the editor ``served``, once it says it is ready."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
+        try:
+            page = browser.new_page(viewport={"width": 1280, "height": 800})
+            page.goto(served.page)
+            page.wait_for_function("document.getElementById('status').textContent === 'ready'",
+                                   timeout=60_000)
+            yield page
+        finally:
+            browser.close()
 
 
 def rig(folder):
@@ -122,18 +140,12 @@ def drag(page, joint, moves):
 
 
 def bench(folder, moves):
-    from playwright.sync_api import sync_playwright
 
     name, character = rig(folder)
     with tempfile.TemporaryDirectory() as scratch:
         project = Path(scratch) / "project"
         api.save_project(project, character)
-        with serving(project) as served, sync_playwright() as playwright:
-            browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
-            page = browser.new_page(viewport={"width": 1280, "height": 800})
-            page.goto(served.page)
-            page.wait_for_function("document.getElementById('status').textContent === 'ready'",
-                                   timeout=60_000)
+        with serving(project) as served, editor_page(served) as page:
             page.click("nav button[data-panel=pose]")
             webgl = page.evaluate("""() => {
                 const gl = document.createElement("canvas").getContext("webgl2");
@@ -141,7 +153,6 @@ def bench(folder, moves):
                 return info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : "unknown";
             }""")
             reply_ms, paint_ms = drag(page, dragged_joint(character.skeleton), moves)
-            browser.close()
 
     def p95(values):
         return round(statistics.quantiles(values, n=20)[18], 1)
@@ -180,8 +191,6 @@ def bench_3d(folder, prior, keys_file):
     """The 3D panel on one drawing: Lift, then Simulate a balloon, each timed click to reply."""
     import time
 
-    from playwright.sync_api import sync_playwright
-
     from toonmotion.io.pose_json import load_keyframes, save_keyframes
 
     name, character = rig(folder)
@@ -191,12 +200,7 @@ def bench_3d(folder, prior, keys_file):
         project = Path(scratch) / "project"
         api.save_project(project, character)
         save_keyframes(project / "keys.json", skeleton, keys)
-        with serving(project, library=prior.parent) as served, sync_playwright() as playwright:
-            browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
-            page = browser.new_page(viewport={"width": 1280, "height": 800})
-            page.goto(served.page)
-            page.wait_for_function("document.getElementById('status').textContent === 'ready'",
-                                   timeout=60_000)
+        with serving(project, library=prior.parent) as served, editor_page(served) as page:
             page.click("nav button[data-panel=proxy]")
             page.wait_for_function("document.querySelectorAll('#proxy-prior option').length > 0")
             page.select_option("#proxy-prior", f"library/{prior.name}")
@@ -215,11 +219,8 @@ def bench_3d(folder, prior, keys_file):
                 timed[step] = round(time.perf_counter() - started, 2)
                 error = page.locator("#error")
                 if error.is_visible():
-                    said = error.text_content()
-                    browser.close()
-                    return {"drawing": name, "step": "3d", "prior": prior.name, "error": said}
+                    return {"drawing": name, "step": "3d", "prior": prior.name, "error": error.text_content()}
                 lifted = lifted or page.locator("#status").text_content()  # "lifted N markers over T frames"
-            browser.close()
     markers, frames = (int(word) for word in lifted.split() if word.isdigit())
     return {"drawing": name, "step": "3d", "prior": prior.name, "frames": frames, "markers": markers, **timed}
 
@@ -268,8 +269,6 @@ def bench_keyshapes(footage=None, outlines=None, key_frames=None):
     """The Key-shapes panel's model and capture steps, timed in the page, and the library's."""
     import time
 
-    from playwright.sync_api import sync_playwright
-
     from toonmotion.io.frames import load_frames
     from toonmotion.io.keyshape_json import load_contours
 
@@ -278,12 +277,7 @@ def bench_keyshapes(footage=None, outlines=None, key_frames=None):
         name, clip, keys_file, frames_at = keyshape_inputs(scratch, footage, outlines, key_frames)
         project = Path(scratch) / "project"
         api.save_project(project, api.rig_image(rgba, skeleton=skeleton))
-        with serving(project) as served, sync_playwright() as playwright:
-            browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
-            page = browser.new_page(viewport={"width": 1280, "height": 800})
-            page.goto(served.page)
-            page.wait_for_function("document.getElementById('status').textContent === 'ready'",
-                                   timeout=60_000)
+        with serving(project) as served, editor_page(served) as page:
             sent = send_footage(served, clip)  # as the page sends it (a folder: frame by frame)
             page.click("nav button[data-panel=keyshapes]")
             status = "(t) => document.getElementById('status').textContent.startsWith(t)"
@@ -306,7 +300,6 @@ def bench_keyshapes(footage=None, outlines=None, key_frames=None):
             page.wait_for_function(status, arg="captured", timeout=3_600_000)
             capture_ms = (time.perf_counter() - started) * 1000
             errors = page.evaluate("document.getElementById('error').textContent")
-            browser.close()
         if errors:
             sys.exit(f"the Key-shapes panel said: {errors}")
         frames, _ = load_frames(sent(project))

@@ -187,6 +187,10 @@ def test_a_figure_lower_than_its_prior_tilts_the_camera_unless_the_elevation_is_
     tilted, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, still_camera=True)
     assert np.degrees(np.abs(tilted.camera.extrinsics[:, 1])).max() > 20
     assert any("--hold-elevation" in w for w in lift_warnings(tilted, report))
+    # The editor asks in its own words: the same warning, its remedy replaced.
+    asked = lift_warnings(tilted, report, remedies={"hold": "tick 'Keep the view's elevation'"})
+    assert [w.replace("tick 'Keep the view's elevation'", "give --hold-elevation (with --view AZ,EL)")
+            for w in asked] == lift_warnings(tilted, report)
     held, report = lift(drawn, truth, view=view, focal=FOCAL, size=IMAGE, still_camera=True,
                         hold_elevation=True)
     assert np.all(held.camera.extrinsics[:, 1:3] == 0) and report.reproj_px < 1e-6

@@ -186,7 +186,13 @@ ROLL_DEG = 20.0  # a fitted camera roll (up=None) beyond this tilts the world vi
 TILT_DEG = 20.0  # a camera tilted this far from the view's elevation leans the world's vertical
 
 
-def lift_warnings(proxy: Proxy, report: LiftReport) -> list[str]:
+# What lift_warnings asks the user to give, in the command line's words (the editor has its own).
+LIFT_REMEDIES = {"view": "give --view AZ,EL", "hold": "give --hold-elevation (with --view AZ,EL)",
+                 "level": "give --up 0"}
+
+
+def lift_warnings(proxy: Proxy, report: LiftReport, *,
+                  remedies: Mapping[str, str] | None = None) -> list[str]:
     """One-line warnings about a lift that deserves a second look, each saying what to give.
 
     - the prior moves unlike the drawing (its limbs :data:`POOR_MATCH_DEG` apart on average once
@@ -202,6 +208,9 @@ def lift_warnings(proxy: Proxy, report: LiftReport) -> list[str]:
     proxy : Proxy
     report : LiftReport
         What :func:`lift_proxy` returned.
+    remedies : dict, optional
+        How each remedy is asked for, by key (``view``, ``hold``, ``level``), in place of
+        :data:`LIFT_REMEDIES`' command-line words (the editor asks for its gizmo).
 
     Returns
     -------
@@ -218,12 +227,13 @@ def lift_warnings(proxy: Proxy, report: LiftReport) -> list[str]:
     >>> lift_warnings(proxy, report)  # doctest: +ELLIPSIS
     ['the prior moves unlike the drawing (limbs 18° apart on average once aligned): the view ...']
     """
+    ask = {**LIFT_REMEDIES, **(remedies or {})}
     said = []
     angle = limb_angle(report.view_cost)
     if report.view_found and angle > POOR_MATCH_DEG:
         said.append(f"the prior moves unlike the drawing (limbs {angle:.0f}° apart on average once "
                     f"aligned): the view searched, {report.azimuth:.0f},{report.elevation:.0f}, may be off; "
-                    "check the preview, or give --view AZ,EL or a prior that moves more like it")
+                    f"check the preview, or {ask['view']} or a prior that moves more like it")
     if report.camera_px > CAMERA_FIT_SHARE * report.figure_px:
         said.append(f"no camera sees the prior as drawn: the fit leaves {report.camera_px:.0f} px on a "
                     f"figure {report.figure_px:.0f} px across (proportions or a posture unlike the prior's); "
@@ -231,12 +241,11 @@ def lift_warnings(proxy: Proxy, report: LiftReport) -> list[str]:
     tilt = float(np.degrees(np.abs(proxy.camera.extrinsics[:, 1] - np.radians(report.elevation))).max())
     if tilt > TILT_DEG:
         said.append(f"the camera tilts up to {tilt:.0f}° from the view's elevation to fit the prior, so the "
-                    "world's vertical leans in the picture; give --hold-elevation (with --view AZ,EL) to "
-                    "keep it level")
+                    f"world's vertical leans in the picture; {ask['hold']} to keep it level")
     roll = float(np.degrees(np.abs(proxy.camera.extrinsics[:, 2])).max())
     if report.up is None and roll > ROLL_DEG:
-        said.append(f"the camera rolls up to {roll:.0f}° to fit the prior, tilting the world; give --up 0 to "
-                    "keep it level")
+        said.append(f"the camera rolls up to {roll:.0f}° to fit the prior, tilting the world; {ask['level']} "
+                    "to keep it level")
     return said
 
 

@@ -52,6 +52,10 @@ DRAWN_FRAMES = "frames"
 LIBRARY, UPLOADED = "library", "project"
 
 Progress = Callable[[int, int], None]
+# What the lift's warnings ask for, in the panel's words (api.LIFT_REMEDIES has the command line's).
+PANEL_REMEDIES = {"view": "set the view on the gizmo",
+                  "hold": "tick 'Keep the view's elevation' (the view set on the gizmo)",
+                  "level": "turn the gizmo's up dial to 0"}
 
 
 def priors(editing: Editing) -> list[str]:
@@ -124,7 +128,7 @@ def lift(editing: Editing, message: Lift, progress: Progress) -> dict[str, Any]:
         character, animation, clip, view=message.view, up=message.up, hold_elevation=message.hold_elevation,
         ground=message.ground, segment=message.segment,
         progress=lambda stage, index, count: progress(index, count))
-    warnings = [_in_panel_words(said) for said in api.lift_warnings(proxy, report)]
+    warnings = api.lift_warnings(proxy, report, remedies=PANEL_REMEDIES)
     if report.left_out:
         warnings.append(f"left out {', '.join(report.left_out)}: no joint of the prior matches them")
     folder = editing.path(PROXY_DIR)
@@ -281,20 +285,6 @@ def _keys_digest(editing: Editing) -> str | None:
     """What the key-frames were when the proxy was lifted: a lift is the animation of those."""
     text = editing.keys_text()
     return None if text is None else hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
-# What the lift's warnings ask of the command line, as the 3D panel asks it.
-_PANEL_WORDS = (
-    ("give --hold-elevation (with --view AZ,EL)", "tick 'Keep the view's elevation' (view set on the gizmo)"),
-    ("give --view AZ,EL", "set the view on the gizmo"),
-    ("give --up 0", "turn the gizmo's up dial to 0"),
-)
-
-
-def _in_panel_words(said: str) -> str:
-    for flags, words in _PANEL_WORDS:
-        said = said.replace(flags, words)
-    return said
 
 
 def _rounded(values: Any) -> Any:
